@@ -1,0 +1,30 @@
+# Two entry points do all set-up on a fresh machine:
+#   make run    builds the Fig. 13 scene's FMU and runs it (CSV + PNG under out/)
+#   make test   runs the whole test suite (FMU build, fmpy, libcosim included)
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+SCENE  ?= scenarios/fig13.toml
+
+.PHONY: run test lint figures venv clean
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $@
+
+venv: $(VENV)/.installed
+
+run: venv
+	$(VENV)/bin/contact-fmu run $(SCENE)
+
+test: venv
+	$(PY) -m ruff check .
+	$(PY) -m pytest -q
+
+figures: venv
+	$(PY) -m contact_fmu.figures
+
+clean:
+	rm -rf out reports .pytest_cache .ruff_cache

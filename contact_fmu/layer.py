@@ -1,0 +1,328 @@
+"""Thin compliant layers: the example of Section 4 of Spector & Batra (1995).
+
+Normal contact (Eqs. 32-34): Winkler layers, w^b = k1 p and w^s = -k2 p, give the
+parabolic pressure p = p0 (1 - x^2/a1^2 - y^2/a2^2) on an ellipse.
+
+Tangential contact (Eqs. 31, 35-43): the layers u^b = -kb tau, u^s = ks tau turn the
+steady slip (Eq. 15 without its time derivative) into
+
+    s = v + Vx (kb + ks) d(tau)/dx,
+
+so in the adhesion area tau grows linearly from the leading edge, and in the slip
+area |tau| = mu p. The closed form of the resultant (Eqs. 40-43) is implemented in
+its corrected form: the printed H(beta) of Eq. (42) is half the integral, see
+docs/model.md, section "Resultant frictional force".
+
+Sign convention of Eq. (8): T is the force the body exerts on the substrate; the
+body receives -T. T has the direction of the rigid slip v.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._validate import InputError, finite, nonnegative, positive
+
+FloatArray = NDArray[np.float64]
+
+# beta = alpha / a1 (Eq. 43) at which the adhesion area vanishes: full slip.
+BETA_FULL_SLIP = 2.0
+# Default strip grid for the spin (Omega_z != 0) resultant, see LayerContact.forces.
+SPIN_GRID = (64, 48)
+
+
+def force_fraction(beta: ArrayLike) -> FloatArray:
+    """|T| / (mu P) as a function of beta = alpha/a1 (Eqs. 40-43, corrected).
+
+    h(beta) = (2/pi) H(beta) with the integral over the ellipse
+
+        H(beta) = (1 + beta^2) asin(beta/2) - pi beta^2/2 + beta m (13/6 + beta^2/12),
+        m = (1 - beta^2/4)^(1/2),
+
+    for 0 <= beta <= 2 and h = 1 beyond. This is twice the printed Eq. (42) after
+    asin(m) = pi/2 - asin(beta/2); the form used here has no cancellation at small
+    beta (h ~ 16 beta / (3 pi)). h is C1 at beta = 2 (h'(2) = 0).
+    """
+    beta = np.asarray(beta, dtype=float)
+    b = np.minimum(beta, BETA_FULL_SLIP)
+    m = np.sqrt(1.0 - 0.25 * b * b)
+    H = (1.0 + b * b) * np.arcsin(0.5 * b) - 0.5 * np.pi * b * b + b * m * (13.0 / 6.0 + b * b / 12.0)
+    return np.where(beta >= BETA_FULL_SLIP, 1.0, (2.0 / np.pi) * H)
+
+
+def moment_fraction(beta: ArrayLike) -> FloatArray:
+    """int x |tau| dA / (mu P a1) for rolling in +x (derived in docs/model.md).
+
+    g(beta) = (beta/2) (h(beta) - 1) <= 0: the traction is centred behind the
+    contact centre; g = 0 at full slip, g ~ -beta/2 at small beta.
+    """
+    beta = np.asarray(beta, dtype=float)
+    b = np.minimum(beta, BETA_FULL_SLIP)
+    return 0.5 * b * (force_fraction(b) - 1.0)
+
+
+def adhesion_fraction(beta: ArrayLike) -> FloatArray:
+    """Adhesion area / contact area pi a1 a2: (2 asin m - beta m)/pi, m = (1 - beta^2/4)^(1/2)."""
+    beta = np.asarray(beta, dtype=float)
+    b = np.minimum(beta, BETA_FULL_SLIP)
+    m = np.sqrt(1.0 - 0.25 * b * b)
+    return (2.0 * np.arcsin(m) - b * m) / np.pi
+
+
+@dataclass(frozen=True)
+class TractionField:
+    """Tangential traction on a cell-centred grid over the contact ellipse.
+
+    x (nx,), y (ny,) in m; tau_x, tau_y, p (ny, nx) in Pa, zero outside the contact;
+    ``inside`` and ``slip`` (ny, nx) masks; ``la`` (ny,) the adhesion/slip boundary
+    l_a(y) of Eq. (38) (equal to the leading edge where a strip fully slips).
+    ``weights`` (ny, nx) are the quadrature weights (m^2) of the resultant.
+    """
+
+    x: FloatArray
+    y: FloatArray
+    tau_x: FloatArray
+    tau_y: FloatArray
+    p: FloatArray
+    inside: NDArray[np.bool_]
+    slip: NDArray[np.bool_]
+    la: FloatArray
+    weights: FloatArray = field(repr=False)
+
+    def resultant(self) -> tuple[float, float, float]:
+        """(Tx, Ty, Mz) = int (tau_x, tau_y, x tau_y - y tau_x) dA by the grid quadrature."""
+        X, Y = np.meshgrid(self.x, self.y)
+        w = self.weights
+        Tx = float(np.sum(w * self.tau_x))
+        Ty = float(np.sum(w * self.tau_y))
+        Mz = float(np.sum(w * (X * self.tau_y - Y * self.tau_x)))
+        return Tx, Ty, Mz
+
+
+@dataclass(frozen=True)
+class LayerContact:
+    """Rolling/sliding contact through thin compliant layers (Section 4).
+
+    Parameters (SI): P normal load (N); Rx, Ry radii of curvature of the body (m);
+    k1, k2 normal compliances of the body's and the substrate's layer (m/Pa, Eq. 32);
+    kb, ks tangential compliances (m/Pa, Eq. 31); mu friction coefficient (-).
+    """
+
+    P: float
+    Rx: float
+    Ry: float
+    k1: float
+    k2: float
+    kb: float
+    ks: float
+    mu: float
+
+    def __post_init__(self) -> None:
+        for name in ("P", "Rx", "Ry", "mu"):
+            positive(name, getattr(self, name))
+        for name in ("k1", "k2", "kb", "ks"):
+            nonnegative(name, getattr(self, name))
+        if self.k1 + self.k2 <= 0.0:
+            raise InputError("k1 + k2", self.k1 + self.k2, "> 0 (a Winkler layer carries the load)")
+        if self.kb + self.ks <= 0.0:
+            raise InputError("kb + ks", self.kb + self.ks, "> 0 (tangential layer compliance)")
+
+    # ---- normal contact, Eqs. (32)-(34) -------------------------------------------
+    @cached_property
+    def delta(self) -> float:
+        """Approach of the body and the substrate (m), Eq. (34)."""
+        return math.sqrt(self.P * (self.k1 + self.k2) / math.pi) * (self.Rx * self.Ry) ** -0.25
+
+    @cached_property
+    def a1(self) -> float:
+        """Semi-axis along the rolling direction (m), Eq. (34)."""
+        return math.sqrt(2.0 * self.Rx * self.delta)
+
+    @cached_property
+    def a2(self) -> float:
+        """Lateral semi-axis (m), Eq. (34)."""
+        return math.sqrt(2.0 * self.Ry * self.delta)
+
+    @cached_property
+    def p0(self) -> float:
+        """Peak pressure (Pa), Eq. (34); P = pi p0 a1 a2 / 2."""
+        return self.delta / (self.k1 + self.k2)
+
+    @property
+    def k(self) -> float:
+        """Tangential compliance of the layer pair kb + ks (m/Pa)."""
+        return self.kb + self.ks
+
+    @cached_property
+    def creep_full_slip(self) -> float:
+        """|v|/|Vx| at which full slip sets in (beta = 2): 2 mu p0 (kb + ks)/a1."""
+        return BETA_FULL_SLIP * self.mu * self.p0 * self.k / self.a1
+
+    @cached_property
+    def creep_slope(self) -> float:
+        """dT/d(v/Vx) at zero creep (N): (8/3) a1^2 a2 / (kb + ks), independent of mu."""
+        return 8.0 * self.a1**2 * self.a2 / (3.0 * self.k)
+
+    def pressure(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
+        """p(x, y) of Eq. (33) (Pa), zero outside the ellipse."""
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        r = 1.0 - (x / self.a1) ** 2 - (y / self.a2) ** 2
+        return self.p0 * np.maximum(r, 0.0)
+
+    def with_load(self, P: float) -> LayerContact:
+        """The same layers and body under another normal load P (N)."""
+        if P == self.P:
+            return self
+        return LayerContact(P, self.Rx, self.Ry, self.k1, self.k2, self.kb, self.ks, self.mu)
+
+    # ---- tangential contact, Eqs. (35)-(43) ---------------------------------------
+    def beta(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
+        """beta = alpha/a1 of Eqs. (39), (43): a1 |v| / (mu p0 (kb+ks) |Vx|); inf if Vx = 0 < |v|."""
+        speed = np.hypot(vx, vy)
+        aVx = np.abs(np.asarray(Vx, float))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            b = speed * (BETA_FULL_SLIP / self.creep_full_slip) / aVx
+        return np.where(speed > 0.0, b, 0.0)
+
+    def force(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Resultant frictional force (Tx, Ty) in N for rigid slip (vx, vy) and speed Vx (m/s).
+
+        Eqs. (40)-(41), corrected: T = mu P h(beta) v/|v|. Vectorised over broadcastable
+        arrays. Vx = 0 with v != 0 is pure sliding (|T| = mu P); v = 0 gives T = 0.
+        """
+        Tx, Ty, _ = self.forces(vx, vy, 0.0, Vx)
+        return Tx, Ty
+
+    def forces(
+        self, vx: ArrayLike, vy: ArrayLike, phi: ArrayLike, Vx: ArrayLike
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(Tx, Ty, Mz) for rigid slip (vx, vy) at the contact centre, spin phi = Omega_z.
+
+        Without spin the closed forms hold: T of Eqs. (40)-(41) and Mz = int x tau_y dA
+        = sign(Vx) mu P a1 g(beta) vy/|v| (docs/model.md). With spin the slip varies
+        over the contact (Eq. 3) and the resultant comes from the strip solution of
+        ``traction`` on a SPIN_GRID grid, corrected by the same grid's zero-spin error
+        so that it is continuous at phi -> 0.
+        """
+        vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
+        speed = np.hypot(vx, vy)
+        beta = self.beta(vx, vy, Vx)
+        scale = self.mu * self.P * force_fraction(beta)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ex = np.where(speed > 0.0, vx / speed, 0.0)
+            ey = np.where(speed > 0.0, vy / speed, 0.0)
+        Tx = np.array(scale * ex)
+        Ty = np.array(scale * ey)
+        Mz = np.array(np.sign(Vx) * self.mu * self.P * self.a1 * moment_fraction(beta) * ey)
+        spinning = phi != 0.0
+        if np.any(spinning):
+            for idx in np.argwhere(spinning):
+                i = tuple(idx)
+                args = (vx[i], vy[i], Vx[i])
+                with_spin = self.traction(*args, *SPIN_GRID, phi=phi[i]).resultant()
+                no_spin = self.traction(*args, *SPIN_GRID, phi=0.0).resultant()
+                Tx[i] += with_spin[0] - no_spin[0]
+                Ty[i] += with_spin[1] - no_spin[1]
+                Mz[i] += with_spin[2] - no_spin[2]
+        return Tx, Ty, Mz
+
+    def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
+        """Adhesion area over contact area (-), without spin."""
+        return adhesion_fraction(self.beta(vx, vy, Vx))
+
+    def traction(
+        self, vx: float, vy: float, Vx: float, nx: int = 81, ny: int = 61, phi: float = 0.0
+    ) -> TractionField:
+        """Traction field tau(x, y) (Eqs. 36-37) and adhesion boundary l_a(y) (Eq. 38).
+
+        The field is computed strip by strip (y fixed) from the leading edge, where the
+        material enters unstressed, as tau <- proj_{|tau| <= mu p}(tau + v dx/(|Vx| k)):
+        the discrete form of Eq. (35) capped by the Coulomb conditions (4)-(5). Without
+        spin the slip direction is constant and the nodal values are exact (Eq. 36);
+        with spin (phi = Omega_z, rad/s; v of Eq. 3 varies over the contact) it is the
+        first-order strip scheme of Kalker's FASTSIM with flexibility kb + ks.
+        """
+        nx, ny = int(nx), int(ny)
+        if nx < 2 or ny < 1:
+            raise InputError("nx, ny", (nx, ny), "nx >= 2 and ny >= 1")
+        for name, val in (("vx", vx), ("vy", vy), ("Vx", Vx), ("phi", phi)):
+            finite(name, val)
+        a1, a2 = self.a1, self.a2
+        x = -a1 + (np.arange(nx) + 0.5) * (2.0 * a1 / nx)
+        y = -a2 + (np.arange(ny) + 0.5) * (2.0 * a2 / ny)
+        ell = a1 * np.sqrt(np.maximum(1.0 - (y / a2) ** 2, 0.0))  # Eq. (37)
+        X, Y = np.meshgrid(x, y)
+        p = self.pressure(X, Y)
+        inside = np.abs(X) < ell[:, None]
+        cap = self.mu * p
+        # rigid slip of Eq. (3) at every node
+        rvx = vx - phi * Y
+        rvy = vy + phi * X
+        s = math.copysign(1.0, Vx) if Vx != 0.0 else 0.0
+        if s == 0.0:  # no rolling: every point slides, tau = mu p v/|v| (Eq. 5)
+            mag = np.hypot(rvx, rvy)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                tau_x = np.where(mag > 0, cap * rvx / mag, 0.0)
+                tau_y = np.where(mag > 0, cap * rvy / mag, 0.0)
+            slip = inside & (mag > 0)
+        else:
+            tau_x, tau_y, slip = self._march(x, y, ell, inside, cap, vx, vy, phi, Vx, s)
+        tau_x = np.where(inside, tau_x, 0.0)
+        tau_y = np.where(inside, tau_y, 0.0)
+        weights = _strip_weights(x, ell, inside) * (2.0 * a2 / ny)
+        beta = float(self.beta(vx, vy, Vx))
+        alpha = beta * a1
+        la = np.where(ell > 0.5 * alpha, s * (alpha - ell), s * ell) if s else -ell
+        return TractionField(x, y, tau_x, tau_y, p, inside, slip & inside, la, weights)
+
+    def _march(self, x, y, ell, inside, cap, vx, vy, phi, Vx, s):
+        """Strip march of ``traction``, vectorised over the strips."""
+        ny, nx = inside.shape
+        order = range(nx - 1, -1, -1) if s > 0 else range(nx)
+        gain = 1.0 / (abs(Vx) * self.k)
+        tx = np.zeros(ny)
+        ty = np.zeros(ny)
+        xp = s * ell  # last position marched to: the leading edge
+        rvx = vx - phi * y  # along a strip the x-slip is constant (Eq. 3)
+        tau_x = np.zeros((ny, nx))
+        tau_y = np.zeros((ny, nx))
+        slip = np.zeros((ny, nx), dtype=bool)
+        for j in order:
+            ins = inside[:, j]
+            d = np.abs(xp - x[j])
+            xm = 0.5 * (xp + x[j])
+            trial_x = tx + rvx * d * gain
+            trial_y = ty + (vy + phi * xm) * d * gain
+            mag = np.hypot(trial_x, trial_y)
+            c = cap[:, j]
+            sl = mag > c
+            with np.errstate(divide="ignore", invalid="ignore"):
+                f = np.where(sl, c / mag, 1.0)
+            tx = np.where(ins, trial_x * f, tx)
+            ty = np.where(ins, trial_y * f, ty)
+            xp = np.where(ins, x[j], xp)
+            tau_x[:, j] = tx
+            tau_y[:, j] = ty
+            slip[:, j] = sl & ins
+        return tau_x, tau_y, slip
+
+
+def _strip_weights(x: FloatArray, ell: FloatArray, inside: NDArray[np.bool_]) -> FloatArray:
+    """Trapezoid weights along each strip with tau = 0 at both edges x = -ell, +ell."""
+    dx = x[1] - x[0]
+    w = np.where(inside, dx, 0.0)
+    rows = np.nonzero(inside.any(axis=1))[0]
+    for i in rows:
+        js = np.nonzero(inside[i])[0]
+        j0, j1 = js[0], js[-1]
+        if j0 == j1:
+            w[i, j0] = ell[i]  # one node: two half-segments to the edges
+            continue
+        w[i, j0] = 0.5 * dx + 0.5 * (x[j0] + ell[i])
+        w[i, j1] = 0.5 * dx + 0.5 * (ell[i] - x[j1])
+    return w
