@@ -128,3 +128,7 @@ class Lateral:
     @property
     def dynamic_spin(self) -> bool:
         return self.spin_ratio is None
+
+
+# No lateral slip and no spin: the paper's example with v_y = 0 (Section 4).
+ROLLING_STRAIGHT = Lateral(vy_ratio=0.0, spin_ratio=0.0)

@@ -40,7 +40,8 @@ from numpy.typing import NDArray
 from scipy.optimize import brentq, root
 
 from ._validate import InputError, finite, positive
-from .dynamics import Body, Lateral, Loads
+from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
+from .kinematics import contact_quantities, is_full_slip
 
 FloatArray = NDArray[np.float64]
 
@@ -61,14 +62,24 @@ LoadInput = Loads | Callable[[float], Loads]
 
 
 class ContactLaw(Protocol):
-    """What the integrator needs of a contact law (LayerContact, the half-space table)."""
+    """What the integrator needs of a contact law (LayerContact, the half-space table).
+
+    forces(vx, vy, phi, Vx) -> (Tx, Ty, Mz) in N and N m for rigid slip (vx, vy) at the
+    contact centre (m/s), spin phi = Omega_z (rad/s) and rolling speed Vx (m/s), in the
+    sign convention of Eq. (8): the body receives -T. creep_full_slip is |v|/|Vx| at the
+    onset of full slip; a1, a2, p0 describe the contact ellipse and peak pressure.
+    """
 
     P: float
     mu: float
     a1: float
+    a2: float
+    p0: float
     creep_full_slip: float
 
-    def forces(self, vx, vy, phi, Vx) -> tuple: ...  # (Tx, Ty, Mz), N and N m
+    def forces(self, vx, vy, phi, Vx) -> tuple: ...
+
+    def adhesion_fraction(self, vx, vy, Vx): ...
 
     def with_load(self, P: float) -> ContactLaw: ...
 
@@ -100,7 +111,7 @@ class RollingBody:
         self,
         law: ContactLaw,
         body: Body,
-        lateral: Lateral = Lateral(),
+        lateral: Lateral = ROLLING_STRAIGHT,
         method: str = "full",
         Vx0: float = 0.0,
         Omega_y0: float = 0.0,
@@ -122,7 +133,9 @@ class RollingBody:
         self.y = np.array([Vx0, vx0, finite("Vy0", Vy0), finite("Omega_z0", Omega_z0)])
         self._apply_ratios(self.y)
         # unknowns of the stage solve: indices into y
-        self._idx = [1] + ([2] if lateral.dynamic_vy else []) + ([3] if lateral.dynamic_spin else [])
+        self._idx = (
+            [1] + ([2] if lateral.dynamic_vy else []) + ([3] if lateral.dynamic_spin else [])
+        )
         self.sliding = False
         self.out = self._contact_at(self.y)
 
@@ -151,6 +164,31 @@ class RollingBody:
     def vy(self) -> float:
         """Lateral rigid slip at the contact centre, Eq. (3) at x = 0: Vy."""
         return self.Vy
+
+    def outputs(self) -> dict[str, float]:
+        """Everything a host reads after a step (SI): velocities, forces, contact state."""
+        o = {
+            "Vx": self.Vx,
+            "Vy": self.Vy,
+            "Omega_y": self.Omega_y,
+            "Omega_z": self.Omega_z,
+            "vx": self.vx,
+            "vy": self.vy,
+            "Tx": self.out.Tx,
+            "Ty": self.out.Ty,
+            "Mz": self.out.Mz,
+        }
+        o.update(contact_quantities(self.law, self.Vx, self.vx, self.vy, self.Omega_z))
+        return o
+
+    def snapshot(self) -> tuple:
+        """The whole internal state, for FMU get/set state: restore(snapshot()) is exact."""
+        return (self.y.copy(), self.t, self.sliding, self.out, self.law.P)
+
+    def restore(self, snap: tuple) -> None:
+        y, t, sliding, out, P = snap
+        self.y, self.t, self.sliding, self.out = np.array(y, float), float(t), bool(sliding), out
+        self.law = self.law.with_load(P)
 
     def set_load(self, P: float) -> None:
         """Change the normal load P (N): the contact ellipse follows (Eq. 34)."""
@@ -268,7 +306,11 @@ class RollingBody:
             T = self.law.forces(y[1], y[2], y[3], y[0])
             return np.array([float(T[0]), float(T[1]), float(T[2])])
 
-        act = [0] + ([1] if self.lateral.dynamic_vy else []) + ([2] if self.lateral.dynamic_spin else [])
+        act = (
+            [0]
+            + ([1] if self.lateral.dynamic_vy else [])
+            + ([2] if self.lateral.dynamic_spin else [])
+        )
 
         def residual(u: FloatArray) -> FloatArray:
             return m * (u - u_hat) / hg + forces(state(u))[act] - target
@@ -276,8 +318,9 @@ class RollingBody:
         scale = self._scales(y_hat[0])
         u0 = u_hat.copy()
         if len(idx) == 1:
-            u = self._solve_scalar(lambda s: float(residual(np.array([s]))[0]), u0[0], m[0], hg,
-                                   target[0], scale[0])
+            u = self._solve_scalar(
+                lambda s: float(residual(np.array([s]))[0]), u0[0], m[0], hg, target[0], scale[0]
+            )
             u = np.array([u])
         else:
             u = self._solve_vector(residual, u0, scale[: len(idx)])
@@ -293,7 +336,9 @@ class RollingBody:
         v = self.law.creep_full_slip * max(abs(Vx), V_SCALE_FLOOR)
         return np.array([v, v, v / self.law.a1])
 
-    def _solve_scalar(self, r, u0: float, m: float, hg: float, target: float, scale: float) -> float:
+    def _solve_scalar(
+        self, r, u0: float, m: float, hg: float, target: float, scale: float
+    ) -> float:
         r0 = r(u0)
         if r0 == 0.0:
             return u0
@@ -303,13 +348,13 @@ class RollingBody:
         step = scale
         if m > 0.0:
             step = min(step, hg * (cap + abs(target)) / m * (1.0 + 1e-12) + 1e-300)
-        a, ra = u0, r0
+        a = u0
         for _ in range(60):
             b = a + direction * step
             rb = r(b)
             if np.sign(rb) != np.sign(r0):
                 break
-            a, ra = b, rb
+            a = b
             step *= 4.0
         else:
             raise StageSolveError(
@@ -355,6 +400,5 @@ class RollingBody:
 
 
 def _saturated(law: ContactLaw, y: FloatArray) -> bool:
-    """Gross sliding: the slip is at or beyond the onset of full slip (beta >= 2)."""
-    speed = math.hypot(y[1], y[2])
-    return speed > 0.0 and speed >= law.creep_full_slip * abs(y[0])
+    """Gross sliding at state y: the slip is at or beyond the onset of full slip."""
+    return is_full_slip(law, y[1], y[2], y[0])

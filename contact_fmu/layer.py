@@ -51,7 +51,11 @@ def force_fraction(beta: ArrayLike) -> FloatArray:
     beta = np.asarray(beta, dtype=float)
     b = np.minimum(beta, BETA_FULL_SLIP)
     m = np.sqrt(1.0 - 0.25 * b * b)
-    H = (1.0 + b * b) * np.arcsin(0.5 * b) - 0.5 * np.pi * b * b + b * m * (13.0 / 6.0 + b * b / 12.0)
+    H = (
+        (1.0 + b * b) * np.arcsin(0.5 * b)
+        - 0.5 * np.pi * b * b
+        + b * m * (13.0 / 6.0 + b * b / 12.0)
+    )
     return np.where(beta >= BETA_FULL_SLIP, 1.0, (2.0 / np.pi) * H)
 
 
@@ -182,7 +186,7 @@ class LayerContact:
 
     # ---- tangential contact, Eqs. (35)-(43) ---------------------------------------
     def beta(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
-        """beta = alpha/a1 of Eqs. (39), (43): a1 |v| / (mu p0 (kb+ks) |Vx|); inf if Vx = 0 < |v|."""
+        """beta = alpha/a1 (Eqs. 39, 43) = a1 |v| / (mu p0 (kb+ks) |Vx|); inf if Vx = 0 < |v|."""
         speed = np.hypot(vx, vy)
         aVx = np.abs(np.asarray(Vx, float))
         with np.errstate(divide="ignore", invalid="ignore"):

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._validate import InputError, finite, positive
-from .dynamics import Body, Lateral, Loads
+from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import ContactLaw, LoadInput, RollingBody
 
 FloatArray = NDArray[np.float64]
@@ -48,7 +48,7 @@ def simulate(
     t_end: float,
     dt: float,
     method: str = "full",
-    lateral: Lateral = Lateral(),
+    lateral: Lateral = ROLLING_STRAIGHT,
     Vx0: float = 1.0,
     Omega_y0: float | None = None,
     Vy0: float = 0.0,
