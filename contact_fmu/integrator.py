@@ -303,7 +303,7 @@ class RollingBody:
             return self._apply_ratios(y)
 
         def forces(y: FloatArray) -> FloatArray:
-            T = self.law.forces(y[1], y[2], y[3], y[0])
+            T = self.law.forces(float(y[1]), float(y[2]), float(y[3]), float(y[0]))
             return np.array([float(T[0]), float(T[1]), float(T[2])])
 
         act = (
@@ -318,10 +318,18 @@ class RollingBody:
         scale = self._scales(y_hat[0])
         u0 = u_hat.copy()
         if len(idx) == 1:
-            u = self._solve_scalar(
-                lambda s: float(residual(np.array([s]))[0]), u0[0], m[0], hg, target[0], scale[0]
-            )
-            u = np.array([u])
+            # one unknown (vy, Omega_z held): the same residual in plain floats, as this
+            # is the inner loop of every co-simulation step
+            law, m0, t0, v_hat = self.law, float(m[0]), float(target[0]), float(u_hat[0])
+            k = m_vx / b.M
+            ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
+            Vb = float(Vx_base)
+
+            def r1(vx: float) -> float:
+                Vx = Vb + k * (vx - v_hat)
+                return m0 * (vx - v_hat) / hg + law.forces(vx, ry * Vx, rz * Vx, Vx)[0] - t0
+
+            u = np.array([self._solve_scalar(r1, v_hat, m0, hg, t0, float(scale[0]))])
         else:
             u = self._solve_vector(residual, u0, scale[: len(idx)])
         y = state(u)

@@ -36,6 +36,14 @@ BETA_FULL_SLIP = 2.0
 SPIN_GRID = (64, 48)
 
 
+def _H(b, sqrt, asin):
+    """H(b) of Eq. (42), corrected, for 0 <= b <= 2 with the given sqrt/asin (math or numpy)."""
+    m = sqrt(1.0 - 0.25 * b * b)
+    return (
+        (1.0 + b * b) * asin(0.5 * b) - 0.5 * math.pi * b * b + b * m * (13.0 / 6.0 + b * b / 12.0)
+    )
+
+
 def force_fraction(beta: ArrayLike) -> FloatArray:
     """|T| / (mu P) as a function of beta = alpha/a1 (Eqs. 40-43, corrected).
 
@@ -46,17 +54,19 @@ def force_fraction(beta: ArrayLike) -> FloatArray:
 
     for 0 <= beta <= 2 and h = 1 beyond. This is twice the printed Eq. (42) after
     asin(m) = pi/2 - asin(beta/2); the form used here has no cancellation at small
-    beta (h ~ 16 beta / (3 pi)). h is C1 at beta = 2 (h'(2) = 0).
+    beta (h ~ 16 beta / (3 pi)). h is C1 at beta = 2 (1 - h ~ (2 - beta)^3.5).
     """
     beta = np.asarray(beta, dtype=float)
-    b = np.minimum(beta, BETA_FULL_SLIP)
-    m = np.sqrt(1.0 - 0.25 * b * b)
-    H = (
-        (1.0 + b * b) * np.arcsin(0.5 * b)
-        - 0.5 * np.pi * b * b
-        + b * m * (13.0 / 6.0 + b * b / 12.0)
-    )
-    return np.where(beta >= BETA_FULL_SLIP, 1.0, (2.0 / np.pi) * H)
+    h = (2.0 / np.pi) * _H(np.minimum(beta, BETA_FULL_SLIP), np.sqrt, np.arcsin)
+    # min(., 1): H(2) = pi/2 exactly; rounding must not lift |T| above mu P
+    return np.where(beta >= BETA_FULL_SLIP, 1.0, np.minimum(h, 1.0))
+
+
+def _force_fraction_scalar(beta: float) -> float:
+    """force_fraction for one float (the integrator's inner loop): same formula, math."""
+    if beta >= BETA_FULL_SLIP:
+        return 1.0
+    return min((2.0 / math.pi) * _H(beta, math.sqrt, math.asin), 1.0)
 
 
 def moment_fraction(beta: ArrayLike) -> FloatArray:
@@ -190,7 +200,7 @@ class LayerContact:
         speed = np.hypot(vx, vy)
         aVx = np.abs(np.asarray(Vx, float))
         with np.errstate(divide="ignore", invalid="ignore"):
-            b = speed * (BETA_FULL_SLIP / self.creep_full_slip) / aVx
+            b = speed * self._beta_per_creep / aVx
         return np.where(speed > 0.0, b, 0.0)
 
     def force(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -213,6 +223,8 @@ class LayerContact:
         ``traction`` on a SPIN_GRID grid, corrected by the same grid's zero-spin error
         so that it is continuous at phi -> 0.
         """
+        if phi == 0.0 and isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float):
+            return self._forces_scalar(vx, vy, Vx)
         vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
         speed = np.hypot(vx, vy)
         beta = self.beta(vx, vy, Vx)
@@ -234,6 +246,24 @@ class LayerContact:
                 Ty[i] += with_spin[1] - no_spin[1]
                 Mz[i] += with_spin[2] - no_spin[2]
         return Tx, Ty, Mz
+
+    def _forces_scalar(self, vx: float, vy: float, Vx: float) -> tuple[float, float, float]:
+        """``forces`` without spin for floats, in math instead of numpy (same formulas)."""
+        speed = math.hypot(vx, vy)
+        if speed == 0.0:
+            return 0.0, 0.0, 0.0
+        beta = math.inf if Vx == 0.0 else speed * self._beta_per_creep / abs(Vx)
+        h = _force_fraction_scalar(beta)
+        muP = self.mu * self.P
+        b = min(beta, BETA_FULL_SLIP)
+        g = 0.5 * b * (h - 1.0)
+        Mz = math.copysign(1.0, Vx) * muP * self.a1 * g * vy / speed if Vx != 0.0 else 0.0
+        return muP * h * vx / speed, muP * h * vy / speed, Mz
+
+    @cached_property
+    def _beta_per_creep(self) -> float:
+        """beta per unit creepage |v|/|Vx|: a1 / (mu p0 (kb + ks))."""
+        return BETA_FULL_SLIP / self.creep_full_slip
 
     def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
         """Adhesion area over contact area (-), without spin."""
