@@ -52,6 +52,8 @@ STAGE_C = (GAMMA, 1.0)
 
 # Relative tolerance of the stage solves, on the unknowns (in units of their scale).
 SOLVE_RTOL = 1e-13
+# Relative forward-difference step of the stage Jacobian (about sqrt of the rounding).
+FD_STEP = 1e-7
 # Floor of |Vx| (m/s) for the velocity scales of the stage solver (not the physics).
 V_SCALE_FLOOR = 1e-9
 # Loads within this relative margin of the capacity mu P count as gross sliding in the
@@ -275,6 +277,7 @@ class RollingBody:
         return full[self._idx]
 
     def _apply_ratios(self, y: FloatArray) -> FloatArray:
+        """Impose the held ratios on state(s) y, shape (4,) or (4, k); returns y."""
         if self.lateral.vy_ratio is not None:
             y[2] = self.lateral.vy_ratio * y[0]
         if self.lateral.spin_ratio is not None:
@@ -296,15 +299,17 @@ class RollingBody:
         u_hat = y_hat[self._idx]
         idx = self._idx
 
-        def state(u: FloatArray) -> FloatArray:
-            y = y_hat.copy()
-            y[idx] = u
-            y[0] = Vx_base + (m_vx / b.M) * (u[0] - u_hat[0])
-            return self._apply_ratios(y)
+        def states(U: FloatArray) -> FloatArray:
+            """Stage states (k, 4) for unknowns U (k, n)."""
+            Y = np.tile(y_hat, (U.shape[0], 1))
+            Y[:, idx] = U
+            Y[:, 0] = Vx_base + (m_vx / b.M) * (U[:, 0] - u_hat[0])
+            return self._apply_ratios(Y.T).T
 
-        def forces(y: FloatArray) -> FloatArray:
-            T = self.law.forces(float(y[1]), float(y[2]), float(y[3]), float(y[0]))
-            return np.array([float(T[0]), float(T[1]), float(T[2])])
+        def forces(Y: FloatArray) -> FloatArray:
+            """(Tx, Ty, Mz) for each stage state, (k, 3): one vectorised law call."""
+            T = self.law.forces(Y[:, 1], Y[:, 2], Y[:, 3], Y[:, 0])
+            return np.stack([np.broadcast_to(t, Y.shape[:1]) for t in T], axis=1)
 
         act = (
             [0]
@@ -312,11 +317,10 @@ class RollingBody:
             + ([2] if self.lateral.dynamic_spin else [])
         )
 
-        def residual(u: FloatArray) -> FloatArray:
-            return m * (u - u_hat) / hg + forces(state(u))[act] - target
+        def residuals(U: FloatArray) -> FloatArray:
+            return m * (U - u_hat) / hg + forces(states(U))[:, act] - target
 
         scale = self._scales(y_hat[0])
-        u0 = u_hat.copy()
         if len(idx) == 1:
             # one unknown (vy, Omega_z held): the same residual in plain floats, as this
             # is the inner loop of every co-simulation step
@@ -331,12 +335,16 @@ class RollingBody:
 
             u = np.array([self._solve_scalar(r1, v_hat, m0, hg, t0, float(scale[0]))])
         else:
-            u = self._solve_vector(residual, u0, scale[: len(idx)])
-        y = state(u)
-        T = forces(y)
+            u = self._solve_vector(residuals, u_hat.copy(), scale[: len(idx)])
+        y = states(u[None, :])[0]
+        T = forces(y[None, :])[0]
         # The force that closes the stage balance: equal to T(y) where the law is
-        # smooth, and the right value where it is set-valued (Vx = 0, stick).
+        # smooth, and the right value where it is set-valued (Vx = 0, stick). Its
+        # magnitude is mu P at most; the clip removes the rounding of the difference.
         T[act] = target - m * (u - u_hat) / hg
+        cap = self.law.mu * self.law.P
+        if math.hypot(T[0], T[1]) > cap:
+            T[:2] *= cap / math.hypot(T[0], T[1])
         sliding = _saturated(self.law, y)
         return y, ContactOutputs(float(T[0]), float(T[1]), float(T[2]), sliding)
 
@@ -373,34 +381,36 @@ class RollingBody:
         tol = SOLVE_RTOL * (scale + abs(lo) + abs(hi))
         return float(brentq(r, lo, hi, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
 
-    def _solve_vector(self, residual, u0: FloatArray, scale: FloatArray) -> FloatArray:
+    def _solve_vector(self, residuals, u0: FloatArray, scale: FloatArray) -> FloatArray:
+        """Newton with a forward-difference Jacobian (one batched residual call per
+        iteration) and backtracking; scipy's hybrid method if that stalls."""
+        n = len(u0)
         u = u0.copy()
-        r = residual(u)
+        r = residuals(u[None, :])[0]
         for _ in range(50):
-            J = np.empty((len(u), len(u)))
-            for j in range(len(u)):
-                du = np.zeros_like(u)
-                du[j] = 1e-7 * (abs(u[j]) + scale[j])
-                J[:, j] = (residual(u + du) - r) / du[j]
+            du = FD_STEP * (np.abs(u) + scale)
+            R = residuals(u + np.diag(du))
+            J = (R - r).T / du
             try:
                 step = np.linalg.solve(J, -r)
             except np.linalg.LinAlgError:
                 break
-            lam = 1.0
-            norm0 = np.linalg.norm(r)
-            while lam > 1e-4:
+            lam, norm0 = 1.0, np.linalg.norm(r)
+            while True:
                 u_new = u + lam * step
-                r_new = residual(u_new)
-                if np.linalg.norm(r_new) < norm0 or lam < 2e-4:
+                r_new = residuals(u_new[None, :])[0]
+                if np.linalg.norm(r_new) < norm0 or lam < 1e-4:
                     break
                 lam *= 0.5
             u, r = u_new, r_new
             if np.all(np.abs(lam * step) <= SOLVE_RTOL * (np.abs(u) + scale)):
                 return u
-        sol = root(residual, u, method="hybr", options={"xtol": SOLVE_RTOL})
+        sol = root(
+            lambda v: residuals(v[None, :])[0], u, method="hybr", options={"xtol": SOLVE_RTOL}
+        )
         if not sol.success:
-            raise StageSolveError(f"stage solve failed: {sol.message}")
-        return np.asarray(sol.x)
+            raise StageSolveError(f"stage solve failed after Newton and hybr: {sol.message}")
+        return np.asarray(sol.x).reshape(n)
 
     def _contact_at(self, y: FloatArray) -> ContactOutputs:
         T = self.law.forces(y[1], y[2], y[3], y[0])

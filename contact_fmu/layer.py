@@ -32,6 +32,8 @@ FloatArray = NDArray[np.float64]
 
 # beta = alpha / a1 (Eq. 43) at which the adhesion area vanishes: full slip.
 BETA_FULL_SLIP = 2.0
+# Smallest positive magnitude in the projection of the strip march (guards 0/0).
+TINY = 1e-300
 # Default strip grid for the spin (Omega_z != 0) resultant, see LayerContact.forces.
 SPIN_GRID = (64, 48)
 
@@ -223,7 +225,7 @@ class LayerContact:
         ``traction`` on a SPIN_GRID grid, corrected by the same grid's zero-spin error
         so that it is continuous at phi -> 0.
         """
-        if phi == 0.0 and isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float):
+        if isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float) and phi == 0.0:
             return self._forces_scalar(vx, vy, Vx)
         vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
         speed = np.hypot(vx, vy)
@@ -237,14 +239,17 @@ class LayerContact:
         Mz = np.array(np.sign(Vx) * self.mu * self.P * self.a1 * moment_fraction(beta) * ey)
         spinning = phi != 0.0
         if np.any(spinning):
-            for idx in np.argwhere(spinning):
-                i = tuple(idx)
-                args = (vx[i], vy[i], Vx[i])
-                with_spin = self.traction(*args, *SPIN_GRID, phi=phi[i]).resultant()
-                no_spin = self.traction(*args, *SPIN_GRID, phi=0.0).resultant()
-                Tx[i] += with_spin[0] - no_spin[0]
-                Ty[i] += with_spin[1] - no_spin[1]
-                Mz[i] += with_spin[2] - no_spin[2]
+            # one stacked march for all spinning inputs, with and without their spin
+            v = (vx[spinning], vy[spinning], Vx[spinning])
+            n = v[0].size
+            grid = self._grid(*SPIN_GRID)
+            tau, _ = grid.march(
+                self, *(np.tile(a, 2) for a in v), np.r_[phi[spinning], np.zeros(n)]
+            )
+            dT, dM = (r[:n] - r[n:] for r in grid.resultants(tau, np.tile(np.sign(v[2]), 2)))
+            Tx[spinning] += dT.real
+            Ty[spinning] += dT.imag
+            Mz[spinning] += dM
         return Tx, Ty, Mz
 
     def _forces_scalar(self, vx: float, vy: float, Vx: float) -> tuple[float, float, float]:
@@ -281,69 +286,121 @@ class LayerContact:
         with spin (phi = Omega_z, rad/s; v of Eq. 3 varies over the contact) it is the
         first-order strip scheme of Kalker's FASTSIM with flexibility kb + ks.
         """
+        for name, val in (("vx", vx), ("vy", vy), ("Vx", Vx), ("phi", phi)):
+            finite(name, val)
+        grid = self._grid(nx, ny)
+        tau, slip = grid.march(self, *(np.array([float(a)]) for a in (vx, vy, Vx, phi)))
+        s = math.copysign(1.0, Vx) if Vx != 0.0 else 0.0
+        tau, slip = tau[0], slip[0]
+        if s > 0:  # the march runs against x: back to column order
+            tau, slip = tau[:, ::-1], slip[:, ::-1]
+        ell = grid.ell
+        alpha = float(self.beta(vx, vy, Vx)) * self.a1
+        la = np.where(ell > 0.5 * alpha, s * (alpha - ell), s * ell) if s else -ell
+        return TractionField(
+            grid.x,
+            grid.y,
+            tau.real.copy(),
+            tau.imag.copy(),
+            grid.p,
+            grid.inside,
+            slip,
+            la,
+            grid.weights,
+        )
+
+    def _grid(self, nx: int, ny: int) -> _Grid:
         nx, ny = int(nx), int(ny)
         if nx < 2 or ny < 1:
             raise InputError("nx, ny", (nx, ny), "nx >= 2 and ny >= 1")
-        for name, val in (("vx", vx), ("vy", vy), ("Vx", Vx), ("phi", phi)):
-            finite(name, val)
-        a1, a2 = self.a1, self.a2
-        x = -a1 + (np.arange(nx) + 0.5) * (2.0 * a1 / nx)
-        y = -a2 + (np.arange(ny) + 0.5) * (2.0 * a2 / ny)
+        cache = self.__dict__.setdefault("_grids", {})  # frozen dataclass: cache by hand
+        if (nx, ny) not in cache:
+            cache[(nx, ny)] = _Grid.build(self, nx, ny)
+        return cache[(nx, ny)]
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """Cell-centred grid over the contact ellipse, in the order of the strip march.
+
+    The grid is symmetric in x, so a march from the leading edge x = +l(y) (Vx > 0)
+    visits at step j the node -x[j], one from x = -l(y) (Vx < 0) the node x[j]:
+    ``dist`` (the distance marched, from the leading edge for a strip's first node)
+    and ``mid`` (the midpoints, for Vx < 0) serve both directions.
+    """
+
+    x: FloatArray
+    y: FloatArray
+    ell: FloatArray
+    inside: NDArray[np.bool_]
+    p: FloatArray
+    weights: FloatArray
+    dist: FloatArray
+    mid: FloatArray
+
+    @classmethod
+    def build(cls, c: LayerContact, nx: int, ny: int) -> _Grid:
+        a1, a2 = c.a1, c.a2
+        # cell centres, exactly antisymmetric (x[nx-1-j] = -x[j]): the march reads the
+        # grid backwards for Vx > 0
+        x = (2.0 * np.arange(nx) + 1.0 - nx) * (a1 / nx)
+        y = (2.0 * np.arange(ny) + 1.0 - ny) * (a2 / ny)
         ell = a1 * np.sqrt(np.maximum(1.0 - (y / a2) ** 2, 0.0))  # Eq. (37)
         X, Y = np.meshgrid(x, y)
-        p = self.pressure(X, Y)
         inside = np.abs(X) < ell[:, None]
-        cap = self.mu * p
-        # rigid slip of Eq. (3) at every node
-        rvx = vx - phi * Y
-        rvy = vy + phi * X
-        s = math.copysign(1.0, Vx) if Vx != 0.0 else 0.0
-        if s == 0.0:  # no rolling: every point slides, tau = mu p v/|v| (Eq. 5)
-            mag = np.hypot(rvx, rvy)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                tau_x = np.where(mag > 0, cap * rvx / mag, 0.0)
-                tau_y = np.where(mag > 0, cap * rvy / mag, 0.0)
-            slip = inside & (mag > 0)
-        else:
-            tau_x, tau_y, slip = self._march(x, y, ell, inside, cap, vx, vy, phi, Vx, s)
-        tau_x = np.where(inside, tau_x, 0.0)
-        tau_y = np.where(inside, tau_y, 0.0)
+        prev = np.where(inside, X, np.nan)
+        # previous position on the strip: the node before, or the edge -l for the first
+        prev = np.concatenate([np.full((ny, 1), np.nan), prev[:, :-1]], axis=1)
+        prev = np.where(np.isnan(prev), -ell[:, None], prev)
+        dist = np.where(inside, X - prev, 0.0)
+        mid = np.where(inside, 0.5 * (X + prev), 0.0)
         weights = _strip_weights(x, ell, inside) * (2.0 * a2 / ny)
-        beta = float(self.beta(vx, vy, Vx))
-        alpha = beta * a1
-        la = np.where(ell > 0.5 * alpha, s * (alpha - ell), s * ell) if s else -ell
-        return TractionField(x, y, tau_x, tau_y, p, inside, slip & inside, la, weights)
+        return cls(x, y, ell, inside, c.pressure(X, Y), weights, dist, mid)
 
-    def _march(self, x, y, ell, inside, cap, vx, vy, phi, Vx, s):
-        """Strip march of ``traction``, vectorised over the strips."""
-        ny, nx = inside.shape
-        order = range(nx - 1, -1, -1) if s > 0 else range(nx)
-        gain = 1.0 / (abs(Vx) * self.k)
-        tx = np.zeros(ny)
-        ty = np.zeros(ny)
-        xp = s * ell  # last position marched to: the leading edge
-        rvx = vx - phi * y  # along a strip the x-slip is constant (Eq. 3)
-        tau_x = np.zeros((ny, nx))
-        tau_y = np.zeros((ny, nx))
-        slip = np.zeros((ny, nx), dtype=bool)
-        for j in order:
-            ins = inside[:, j]
-            d = np.abs(xp - x[j])
-            xm = 0.5 * (xp + x[j])
-            trial_x = tx + rvx * d * gain
-            trial_y = ty + (vy + phi * xm) * d * gain
-            mag = np.hypot(trial_x, trial_y)
-            c = cap[:, j]
-            sl = mag > c
-            with np.errstate(divide="ignore", invalid="ignore"):
-                f = np.where(sl, c / mag, 1.0)
-            tx = np.where(ins, trial_x * f, tx)
-            ty = np.where(ins, trial_y * f, ty)
-            xp = np.where(ins, x[j], xp)
-            tau_x[:, j] = tx
-            tau_y[:, j] = ty
-            slip[:, j] = sl & ins
-        return tau_x, tau_y, slip
+    def march(self, c: LayerContact, vx, vy, Vx, phi) -> tuple[NDArray, NDArray]:
+        """Traction (complex tau_x + i tau_y) and slip mask, shape (n, ny, nx), march order.
+
+        tau <- proj_{|tau| <= mu p}(tau + v dx / (|Vx| (kb + ks))) along each strip from
+        the leading edge (Eqs. 35, 4-5); Vx = 0 slides everywhere: tau = mu p v/|v|.
+        """
+        vx, vy, Vx, phi = (np.asarray(a, float)[:, None, None] for a in (vx, vy, Vx, phi))
+        s = np.sign(Vx)
+        X = -np.where(s == 0, -1.0, s) * self.x  # node positions in march order
+        Y = self.y[:, None]
+        cap = c.mu * self.p
+        rolling = s != 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            gain = np.where(rolling, 1.0 / (np.abs(Vx) * c.k), 0.0)
+        # slip of Eq. (3) at the midpoints, times the distance marched
+        inc = gain * self.dist * ((vx - phi * Y) + 1j * (vy - s * phi * self.mid))
+        n, ny, nx = inc.shape[0], self.y.size, self.x.size
+        tau = np.zeros((n, ny, nx), complex)
+        slip = np.zeros((n, ny, nx), bool)
+        t = np.zeros((n, ny), complex)
+        for j in range(nx):
+            trial = t + inc[:, :, j]
+            mag = np.abs(trial)
+            cj = cap[:, j]
+            slip[:, :, j] = mag > cj
+            # projection on |tau| <= mu p; TINY keeps 0/0 (outside the contact) at 0
+            t = trial * np.minimum(1.0, cj / np.maximum(mag, TINY))
+            tau[:, :, j] = t
+        if not np.all(rolling):  # no rolling: every point slides (Eq. 5)
+            v = (vx - phi * Y) + 1j * (vy + phi * X)
+            mag = np.abs(v)
+            sliding = np.divide(cap * v, mag, where=mag > 0, out=np.zeros_like(v))
+            tau = np.where(rolling, tau, sliding)
+            slip = np.where(rolling, slip, mag > 0)
+        return tau, slip & self.inside
+
+    def resultants(self, tau: NDArray, s: FloatArray) -> tuple[NDArray, FloatArray]:
+        """(Tx + i Ty, Mz) of march-ordered fields: int tau dA, int (x tau_y - y tau_x) dA."""
+        w = self.weights  # symmetric in x: valid in march order
+        X = -np.where(s == 0, -1.0, s)[:, None, None] * self.x
+        Y = self.y[:, None]
+        T = np.sum(w * tau, axis=(1, 2))
+        Mz = np.sum(w * (X * tau.imag - Y * tau.real), axis=(1, 2))
+        return T, Mz
 
 
 def _strip_weights(x: FloatArray, ell: FloatArray, inside: NDArray[np.bool_]) -> FloatArray:
