@@ -1,0 +1,268 @@
+"""Rigid-body dynamics (Eqs. 8-11, 20-30) and the two time-stepping methods."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from contact_fmu import InputError
+from contact_fmu import examples as ex
+from contact_fmu.dynamics import Body, Lateral, Loads, load_utilisation
+from contact_fmu.integrator import RollingBody, StageSolveError
+from contact_fmu.simulate import load_history, simulate
+
+C = ex.contact()
+MU_P = C.mu * C.P
+F = ex.force_unit()  # mu p0 a1 a2 (N)
+TC = ex.time_unit()  # T_c of Eq. (13) (s)
+V0 = ex.speed_unit()  # Rx / T_c (m/s)
+
+
+def relaxation_time(body: Body, Vx: float) -> float:
+    """Time constant of the slip equation (20) at small creep: M A2 Vx / (dT/d(v/Vx))."""
+    return body.m_slip * Vx / C.creep_slope
+
+
+def fig13_loads():
+    """Fig. 13: Fx_ex = mu p0 a1 a2, My_ex = 0.2 mu p0 Rx a1 a2 sin(t/T_c)."""
+    return load_history(Fx_ex=F, My_ex=lambda t: 0.2 * F * ex.Rx * math.sin(t / TC))
+
+
+# ---- Eqs. (21), (23), (27) ---------------------------------------------------------------
+def test_A1_A2_of_eq23():
+    for eta in (1.0, 2.5, 10.0):
+        b = ex.body(eta)
+        assert b.eta == pytest.approx(eta, rel=1e-14)
+        assert b.A1 == pytest.approx(eta / (1 + eta), rel=1e-14)
+        assert b.A1 + b.A2 == pytest.approx(1.0, rel=1e-15)
+    ring = ex.body(1.0)  # mass on a ring of radius Rx (Fig. 2)
+    assert ring.A1 == ring.A2 == pytest.approx(0.5)
+    axis = ex.body(math.inf)  # mass on the axis: Iy = 0
+    assert (axis.Iy, axis.A1, axis.A2, axis.m_slip) == (0.0, 1.0, 0.0, 0.0)
+
+
+def test_admissible_region_of_eq27_is_a_strip_and_an_ellipse():
+    b = ex.body(2.5)
+    # Fig. 3: |A2 Fx - A1 My/Rx| = mu P on two parallel lines in (Fx, My)
+    My = np.linspace(-2, 2, 9) * MU_P * ex.Rx
+    Fx_edge = (MU_P + b.A1 * My / ex.Rx) / b.A2
+    np.testing.assert_allclose(load_utilisation(b, C.mu, C.P, Fx_edge, My), 1.0, rtol=1e-14)
+    # Fig. 4: (A2 Fx)^2 + Fy^2 = (mu P)^2 for My = 0
+    th = np.linspace(0, 2 * np.pi, 13)
+    u = load_utilisation(b, C.mu, C.P, MU_P * np.cos(th) / b.A2, 0.0, MU_P * np.sin(th))
+    np.testing.assert_allclose(u, 1.0, rtol=1e-14)
+
+
+# ---- sign of Eq. (9) and energy ------------------------------------------------------------
+@pytest.mark.parametrize("eta", [1.0, 2.5, 10.0])
+def test_friction_reduces_the_slip_and_kinetic_energy_falls_by_the_friction_work(eta):
+    # references.md: with no external loads the kinetic energy falls by exactly the
+    # friction work int T.v dt >= 0. d/dt(M Vx^2/2 + Iy Omega_y^2/2) = -Tx (Vx - Omega_y Rx)
+    # holds with Iy dOmega_y/dt = +Rx Tx (docs/model.md); with the printed -Rx Tx the
+    # slip would grow for eta > 1.
+    b = ex.body(eta)
+    vx0 = 0.8 * C.creep_full_slip * V0
+    tau = relaxation_time(b, V0)
+    n = 400
+    tr = simulate(
+        C, b, Loads(), t_end=20 * tau, dt=20 * tau / n, Vx0=V0, Omega_y0=(V0 - vx0) / ex.Rx
+    )
+    assert np.all(np.diff(tr.vx) < 0) and 0 < tr.vx[-1] < 1e-6 * vx0
+    assert np.all(tr.Tx * tr.vx >= 0)
+    KE = 0.5 * b.M * tr.Vx**2 + 0.5 * b.Iy * tr.Omega_y**2
+    P_fric = tr.Tx * tr.vx
+    work = np.sum(0.5 * (P_fric[1:] + P_fric[:-1]) * np.diff(tr.t))
+    # trapezoid over 400 steps of a decaying exponential (20 time constants): error
+    # (dt/tau)^2/12 ~ 2e-4 relative to the work; the SDIRK2 energy error is smaller
+    assert KE[0] - KE[-1] == pytest.approx(work, rel=5e-4)
+
+
+# ---- quasistationary phase, Eqs. (26), (28) ------------------------------------------------
+@pytest.mark.parametrize("eta", ex.ETA_FIG13)
+def test_full_solution_approaches_eq26_with_the_first_order_lag(eta):
+    # Fig. 13. The slip equation M A2 dvx/dt = -Tx + A2 Fx - A1 My/Rx (Eq. 20) is a
+    # singular perturbation: after the transient, Tx = A2 Fx - A1 My/Rx - M A2 dv_qs/dt
+    # + O((tau/T)^2), v_qs the quasistationary slip of Eq. (28). The remainder is of
+    # relative order tau_r/T_c against the lag term (measured 1.2-1.5 tau_r/T_c; bound 3).
+    b = ex.body(eta)
+    kw = dict(t_end=4 * TC, dt=TC / 200, Vx0=V0)
+    full = simulate(C, b, fig13_loads(), substeps=4, **kw)
+    qs = simulate(C, b, fig13_loads(), method="quasistationary", **kw)
+    target = b.tx_quasistationary(F, 0.2 * F * ex.Rx * np.sin(full.t / TC))
+    # Eq. (26) exactly from the first step on (t = 0 is the given initial state)
+    np.testing.assert_allclose(qs.Tx[1:], target[1:], rtol=0, atol=1e-13 * MU_P)
+    tau = relaxation_time(b, V0)
+    after = full.t > 30 * tau
+    lag = -b.m_slip * np.gradient(qs.vx, qs.t)
+    remainder = np.abs(full.Tx - target - lag)[after].max()
+    assert remainder <= 3 * (tau / TC) * np.abs(lag[after]).max()
+    # and Vx of both methods agree to O(tau_r/T_c)
+    assert np.abs(full.Vx - qs.Vx).max() <= 3 * (tau / TC) * qs.Vx.max()
+
+
+def test_quasistationary_speed_follows_eq28():
+    # Eq. (28): M dVx/dt = A1 (Fx + My/Rx) in the quasistationary phase, so
+    # Vx(t) = Vx(0) + A1/M int (Fx + My/Rx) dt; here in closed form for Fig. 13's loads
+    b = ex.body(3.0)
+    qs = simulate(C, b, fig13_loads(), 4 * TC, TC / 100, method="quasistationary", Vx0=V0)
+    Vx = V0 + b.A1 / b.M * (F * qs.t + 0.2 * F * TC * (1 - np.cos(qs.t / TC)))
+    # SDIRK2 quadrature of a smooth load, 400 steps: O(dt^2) ~ 1e-5 relative
+    np.testing.assert_allclose(qs.Vx, Vx, rtol=1e-5)
+    # the slip is the inverse creep law at the creepage of Eq. (26)
+    np.testing.assert_allclose(C.force(qs.vx, 0.0, qs.Vx)[0], qs.Tx, rtol=1e-10)
+
+
+# ---- the stiff integrator ---------------------------------------------------------------------
+def test_sdirk2_converges_at_second_order():
+    # Alexander's SDIRK2 is second order; the reference at 8x the finest step leaves
+    # 1/64 of the finest error in the observed order (< 0.03)
+    b = ex.body(3.0)
+    kw = dict(t_end=TC, dt=TC / 20, Vx0=V0)
+    ref = simulate(C, b, fig13_loads(), substeps=640, **kw)
+    errs = [
+        np.abs(simulate(C, b, fig13_loads(), substeps=n, **kw).vx - ref.vx).max()
+        for n in (20, 40, 80)
+    ]
+    orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
+    assert np.all((orders > 1.8) & (orders < 2.2)), orders
+
+
+@pytest.mark.parametrize("ratio", [1e2, 1e4, 1e8])
+def test_any_step_size_is_stable_and_damps_the_fast_mode(ratio):
+    # L-stability. Per step the fast mode is multiplied by the stability function
+    # R(z) = (1 + (1 - 2g) z) / (1 - g z)^2 of Alexander's SDIRK2, z = -dt/tau_r, which
+    # tends to -(1 - 2g)/(g^2 |z|): a step of 1e2..1e8 relaxation times lands on the
+    # slow manifold up to that factor (an alternating, geometrically vanishing remnant),
+    # never amplifies it. tau_r grows with Vx; the bound uses tau_r at the step's end.
+    # The reference is the same run with 256 substeps (its own remnant < 1e-12).
+    g = 1 - 0.5 * math.sqrt(2)
+    b = ex.body(3.0)
+    dt = ratio * relaxation_time(b, V0)
+    coarse = simulate(C, b, Loads(Fx_ex=F), t_end=6 * dt, dt=dt, Vx0=V0)
+    fine = simulate(C, b, Loads(Fx_ex=F), t_end=6 * dt, dt=dt, Vx0=V0, substeps=256)
+    creep = fine.vx / fine.Vx
+    dev = coarse.vx / coarse.Vx - creep
+    dev[0] = -creep[1]  # the start: pure rolling, off the slow manifold by the creepage
+    for n in range(len(dev) - 1):
+        z = dt / relaxation_time(b, coarse.Vx[n + 1])
+        bound = 1.2 * (1 - 2 * g) / (g**2 * z) * abs(dev[n]) + 8 * np.finfo(float).eps
+        assert abs(dev[n + 1]) <= bound, (n, dev)
+    assert np.all(np.isfinite(coarse.Tx)) and np.all(np.abs(coarse.Tx) <= MU_P)
+
+
+def test_eta_infinity_is_the_algebraic_limit():
+    # Iy = 0 (Fig. 2, eta = inf): Eq. (9) becomes Rx Tx + My = 0, so Tx = -My/Rx
+    b = ex.body(math.inf)
+    for method in ("full", "quasistationary"):
+        tr = simulate(C, b, fig13_loads(), 2 * TC, TC / 50, method=method, Vx0=V0)
+        np.testing.assert_allclose(tr.Tx, -0.2 * F * np.sin(tr.t / TC), atol=1e-12 * MU_P)
+
+
+def test_eta_infinity_rejects_loads_beyond_mu_P():
+    rb = RollingBody(C, ex.body(math.inf), Vx0=V0, Omega_y0=V0 / ex.Rx)
+    with pytest.raises(StageSolveError, match="eta = inf"):
+        rb.advance(TC / 10, Loads(My_ex=-1.5 * MU_P * ex.Rx))
+    assert rb.t == 0.0 and rb.Vx == V0  # state unchanged
+
+
+# ---- gross sliding --------------------------------------------------------------------------
+@pytest.mark.parametrize("method", ["full", "quasistationary"])
+def test_gross_sliding_in_and_out_without_chattering(method):
+    # A brake beyond mu P (Tx demanded 1.5 mu P) from Tc to 2Tc, then 0.5 mu P. During
+    # sliding |Tx| = mu P against the slip, and the slip grows at (1.5 - 1) mu P / (M A2);
+    # after release it shrinks at the same rate, so rolling resumes near t = 3 Tc.
+    b = ex.body(2.5)
+
+    def brake(t: float) -> float:
+        return -(1.5 if TC <= t < 2 * TC else 0.5) * MU_P * ex.Rx / b.A1
+
+    dt = TC / 100
+    tr = simulate(C, b, load_history(My_ex=brake), 4 * TC, dt, method=method, Vx0=V0)
+    sl = tr.sliding
+    t_in, t_out = tr.t[np.argmax(sl)], tr.t[len(sl) - 1 - np.argmax(sl[::-1])]
+    assert t_in == pytest.approx(TC, abs=2 * dt)
+    # the end moves by the change of the saturation slip creep_full |Vx|: within 3 %
+    assert t_out == pytest.approx(3 * TC, abs=0.03 * TC)
+    assert np.all(sl[(tr.t > TC + 2 * dt) & (tr.t < 3 * TC - 0.03 * TC)])
+    np.testing.assert_allclose(tr.Tx[sl], MU_P, rtol=1e-12)  # |T| = mu P, one sign
+    # back to rolling: Tx returns to the demand 0.5 mu P (full: within the lag)
+    assert tr.Tx[-1] == pytest.approx(0.5 * MU_P, rel=1e-3)
+    assert np.all(np.isfinite(tr.vx)) and np.all(np.abs(tr.Tx) <= MU_P)
+
+
+def test_speed_through_zero_and_reversal():
+    # the constant brake of 0.5 mu P stops the body and drives it backwards: Vx crosses
+    # zero, where the creep law becomes Coulomb's; no NaN, |T| <= mu P, T continuous
+    b = ex.body(2.5)
+    tr = simulate(C, b, Loads(My_ex=-0.5 * MU_P * ex.Rx / b.A1), 8 * TC, TC / 200, Vx0=V0)
+    assert tr.Vx[0] > 0 > tr.Vx[-1]
+    assert np.all(np.isfinite(tr.Tx)) and np.all(np.abs(tr.Tx) <= MU_P)
+    # after the start-up transient (5 steps = 15 relaxation times) the force moves by
+    # less than 1e-3 mu P per step, also where Vx passes zero (measured 3e-4)
+    jumps = np.abs(np.diff(tr.Tx))[5:]
+    assert jumps.max() < 1e-3 * MU_P
+
+
+# ---- lateral dynamics, Eqs. (10)-(11), (29)-(30) ------------------------------------------
+def test_lateral_force_balances_the_load_eq29():
+    b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 3)
+    loads = Loads(Fx_ex=0.5 * F, Fy_ex=0.3 * F)
+    lat = Lateral(vy_ratio=None, spin_ratio=0.0)
+    full = simulate(C, b, loads, TC, TC / 50, lateral=lat, Vx0=V0)
+    qs = simulate(C, b, loads, TC, TC / 50, lateral=lat, Vx0=V0, method="quasistationary")
+    assert qs.Ty[-1] == pytest.approx(0.3 * F, rel=1e-12)  # Eq. (29)
+    assert qs.Tx[-1] == pytest.approx(b.A2 * 0.5 * F, rel=1e-12)  # Eq. (26)
+    # full: lateral relaxation time M Vx / (dT/d(v/Vx)) ~ 3e-3 T_c: within 1e-3 at 1 T_c
+    assert full.Ty[-1] == pytest.approx(0.3 * F, rel=1e-3)
+    assert full.Vy[-1] == pytest.approx(qs.Vy[-1], rel=2e-3)
+
+
+def test_spin_moment_balances_the_load_eq30():
+    # Omega_z from Eq. (11). The spin mode is slow: Iz ~ M Rx^2 against a spin stiffness
+    # of order a^4/k gives a time constant of about 2 T_c here (measured), so the full
+    # method settles over ~12 T_c at constant Vx (Fx_ex = 0); the QS method has Mz = Mz_ex.
+    b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 3, Iz=0.4 * ex.M * ex.Rx**2)
+    loads = Loads(Fy_ex=0.3 * F, Mz_ex=0.0)
+    lat = Lateral(vy_ratio=None, spin_ratio=None)
+    qs = simulate(C, b, loads, TC, TC / 4, lateral=lat, Vx0=V0, method="quasistationary")
+    assert abs(qs.Mz[-1]) < 1e-12 * MU_P * C.a1
+    assert qs.Ty[-1] == pytest.approx(0.3 * F, rel=1e-10)
+    full = simulate(C, b, loads, 12 * TC, TC / 2, lateral=lat, Vx0=V0)
+    # exp(-12/2.1) ~ 3e-3 of the aligning moment is left
+    assert abs(full.Mz[-1]) < 1e-2 * abs(full.Mz[1])
+    assert full.Omega_z[-1] == pytest.approx(qs.Omega_z[-1], rel=1e-2)
+    assert full.Ty[-1] == pytest.approx(0.3 * F, rel=1e-4)
+
+
+def test_held_lateral_creepage_gives_Ty_over_Tx_equal_vy_over_vx():
+    # Fig. 12's setting: Vy/Vx = 0.002 held; the law gives Ty/Tx = vy/vx (Eq. 37)
+    b = ex.body(2.92)
+    tr = simulate(C, b, Loads(Fx_ex=F), TC, TC / 50, lateral=Lateral(vy_ratio=0.002), Vx0=V0)
+    np.testing.assert_allclose(tr.Vy, 0.002 * tr.Vx, rtol=1e-15)
+    np.testing.assert_allclose(tr.Ty[1:] / tr.Tx[1:], tr.vy[1:] / tr.vx[1:], rtol=1e-9)
+
+
+# ---- state handling ---------------------------------------------------------------------------
+def test_snapshot_and_restore_are_exact():
+    rb = RollingBody(C, ex.body(3.0), Vx0=V0, Omega_y0=V0 / ex.Rx)
+    rb.advance(TC / 10, Loads(Fx_ex=F))
+    snap = rb.snapshot()
+    rb.advance(TC / 10, Loads(Fx_ex=F, My_ex=0.1 * F * ex.Rx))
+    first = rb.outputs()
+    rb.restore(snap)
+    rb.advance(TC / 10, Loads(Fx_ex=F, My_ex=0.1 * F * ex.Rx))
+    assert rb.outputs() == first
+
+
+@pytest.mark.parametrize("name", ["Fx_ex", "My_ex"])
+def test_bad_loads_name_the_variable_and_leave_the_state_unchanged(name):
+    rb = RollingBody(C, ex.body(3.0), Vx0=V0, Omega_y0=V0 / ex.Rx)
+    before = rb.outputs()
+    with pytest.raises(InputError) as err:
+        rb.advance(TC / 10, Loads(**{name: math.nan}))
+    assert err.value.name == name
+    assert rb.outputs() == before and rb.t == 0.0
+    with pytest.raises(InputError, match="h = -1"):
+        rb.advance(-1.0, Loads())
