@@ -31,6 +31,13 @@ ETA_FIG3 = (1.0, 2.5, math.inf)
 ETA_FIG6_12 = (10.9, 2.92, 1.7)
 ETA_FIG13 = (1.5, 3.0, 10.0)
 VY_RATIOS = (0.0, 0.002, 0.006)
+# Figs. 6-12 load the body by Fx_ex alone; the paper does not say how much. Three force
+# units (Tx = A2 Fx_ex = 0.16, 0.49, 0.71 mu P for eta = 10.9, 2.92, 1.7) separate the
+# three bodies' adhesion areas as clearly as the paper's figures do.
+FX_FIG6_12_UNITS = 3.0
+# Fig. 13: Fx_ex = 1 force unit, My_ex = 0.2 force units x Rx x sin(t / T_c)
+FX_FIG13_UNITS = 1.0
+MY_FIG13_UNITS = 0.2
 
 
 def contact() -> LayerContact:

@@ -25,6 +25,7 @@ from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import brentq
 
 from ._validate import InputError, finite, nonnegative, positive
 
@@ -269,6 +270,29 @@ class LayerContact:
     def _beta_per_creep(self) -> float:
         """beta per unit creepage |v|/|Vx|: a1 / (mu p0 (kb + ks))."""
         return BETA_FULL_SLIP / self.creep_full_slip
+
+    def inverse_creep(self, Tx: float, xi_y: float = 0.0) -> float:
+        """Longitudinal creepage xi_x = vx/Vx with Tx(xi_x Vx, xi_y Vx, Vx) = Tx (N).
+
+        The inverse T_x^{-1} of Eq. (28), for a held lateral creepage xi_y = vy/Vx.
+        |Tx| must be below the capacity (mu P; reached only asymptotically when
+        xi_y != 0).
+        """
+        Tx, xi_y = finite("Tx", Tx), finite("xi_y", xi_y)
+        cap = self.mu * self.P
+        if abs(Tx) >= cap * (1.0 if xi_y == 0.0 else 1.0 - 1e-15):
+            raise InputError("Tx", Tx, f"|Tx| < mu P = {cap:.6g} N")
+        if Tx == 0.0:
+            return 0.0
+        sign = math.copysign(1.0, Tx)
+
+        def gap(xi: float) -> float:
+            return float(self.force(sign * xi, xi_y, 1.0)[0]) * sign - abs(Tx)
+
+        hi = self.creep_full_slip
+        while gap(hi) <= 0.0:  # beyond full slip only with lateral creep
+            hi *= 2.0
+        return sign * brentq(gap, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
 
     def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
         """Adhesion area over contact area (-), without spin."""
