@@ -312,6 +312,17 @@ def test_pure_spin_at_standstill_gives_the_coulomb_moment():
     assert Mz == pytest.approx(8 / 15 * c.mu * c.P * c.a1, rel=1e-2)
 
 
+def test_inverse_creep_law_of_eq28():
+    # T_x^{-1}: the creepage whose force is the given Tx, with and without lateral creep
+    for xi_y in (0.0, 0.002, 0.006):
+        for frac in (-0.9, -0.3, 1e-6, 0.5, 0.99):
+            Tx = frac * MU_P
+            xi = C.inverse_creep(Tx, xi_y)
+            assert float(C.force(xi * VX, xi_y * VX, VX)[0]) == pytest.approx(Tx, rel=1e-12)
+    with pytest.raises(InputError, match="Tx"):
+        C.inverse_creep(1.01 * MU_P)
+
+
 # ---- bad input --------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "name,value",
