@@ -1,6 +1,22 @@
 """Rolling/sliding contact of an elastic body on an elastic substrate (Spector & Batra 1995)."""
 
 from ._validate import InputError
+from .dynamics import Body, Lateral, Loads, load_utilisation
+from .integrator import RollingBody, StageSolveError
 from .layer import LayerContact, TractionField
+from .simulate import Trajectory, load_history, simulate
 
-__all__ = ["InputError", "LayerContact", "TractionField"]
+__all__ = [
+    "Body",
+    "InputError",
+    "Lateral",
+    "LayerContact",
+    "Loads",
+    "RollingBody",
+    "StageSolveError",
+    "TractionField",
+    "Trajectory",
+    "load_history",
+    "load_utilisation",
+    "simulate",
+]
