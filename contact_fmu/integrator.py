@@ -223,8 +223,8 @@ class RollingBody:
     def _step(self, t_n: float, h: float, load_at: Callable[[float], Loads]) -> None:
         y_n = self.y
         hg = h * GAMMA
-        L1 = load_at(t_n + STAGE_C[0] * h)
-        L2 = load_at(t_n + h)
+        L1 = _checked(load_at(t_n + STAGE_C[0] * h))
+        L2 = _checked(load_at(t_n + h))
         admissible = self._admissible(L1) and self._admissible(L2)
         if self.method == "quasistationary" and not admissible:
             self.sliding = True
@@ -234,12 +234,13 @@ class RollingBody:
                 f"{abs(self._targets(L2)[0]):.6g} N reaches mu P = {self.law.mu * self.law.P:.6g} N"
             )
         qs = self.method == "quasistationary" and not self.sliding
-        y1, _ = self._stage(y_n.copy(), hg, L1, algebraic=qs)
+        stage = self._stage_scalar if len(self._idx) == 1 else self._stage_vector
+        y1, _ = stage(y_n, hg, L1, qs)
         k1 = (y1 - y_n) / hg
         y_hat = y_n + h * A21 * k1
         if qs:
             y_hat[self._idx] = y1[self._idx]  # fast variables carry no memory in the QS limit
-        y2, out2 = self._stage(y_hat, hg, L2, algebraic=qs)
+        y2, out2 = stage(y_hat, hg, L2, qs)
         self.y = y2  # stiffly accurate: y_{n+1} is the last stage
         self.out = out2
         if self.method == "quasistationary":
@@ -256,11 +257,14 @@ class RollingBody:
             self.sliding = True
 
     def _admissible(self, L: Loads) -> bool:
-        target = self._targets(L)
-        cap = self.law.mu * self.law.P * (1.0 - CAPACITY_MARGIN)
-        return float(np.hypot(target[0], target[1] if len(target) > 1 else 0.0)) < cap
+        """Eq. (27): the demanded force (Tx[, Ty]) is inside the capacity mu P."""
+        b = self.body
+        Tx = b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx
+        Ty = L.Fy_ex if self.lateral.dynamic_vy else 0.0
+        return math.hypot(Tx, Ty) < self.law.mu * self.law.P * (1.0 - CAPACITY_MARGIN)
 
     def _targets(self, L: Loads) -> FloatArray:
+        """Forces the stage balances demand: Eqs. (26), (29), (30) in the QS limit."""
         b = self.body
         t = [b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx]
         if self.lateral.dynamic_vy:
@@ -284,13 +288,39 @@ class RollingBody:
             y[3] = self.lateral.spin_ratio * y[0]
         return y
 
-    def _stage(
+    def _stage_scalar(
+        self, y_hat: FloatArray, hg: float, L: Loads, algebraic: bool
+    ) -> tuple[FloatArray, ContactOutputs]:
+        """Stage with one unknown, vx (Vy and Omega_z held): plain floats, as this is
+        the inner loop of every co-simulation step. See ``_stage_vector``."""
+        b, law = self.body, self.law
+        ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
+        target = b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx
+        m = 0.0 if algebraic else b.m_slip
+        v_hat = float(y_hat[1])
+        # Vx in terms of vx, T eliminated between Eqs. (8) and (20)
+        Vb = float(y_hat[0]) + hg * b.A1 * (L.Fx_ex + L.My_ex / b.Rx) / b.M
+        k = m / b.M
+
+        def r(vx: float) -> float:
+            Vx = Vb + k * (vx - v_hat)
+            return m * (vx - v_hat) / hg + law.forces(vx, ry * Vx, rz * Vx, Vx)[0] - target
+
+        scale = law.creep_full_slip * max(abs(Vb), V_SCALE_FLOOR)
+        vx = self._solve_scalar(r, v_hat, m, hg, target, scale)
+        Vx = Vb + k * (vx - v_hat)
+        _, Ty, Mz = law.forces(vx, ry * Vx, rz * Vx, Vx)
+        # the force that closes the stage balance (see _stage_vector), |Tx| <= mu P
+        cap = law.mu * law.P
+        Tx = min(max(target - m * (vx - v_hat) / hg, -cap), cap)
+        y = np.array([Vx, vx, ry * Vx, rz * Vx])
+        return y, ContactOutputs(Tx, float(Ty), float(Mz), _saturated(law, y))
+
+    def _stage_vector(
         self, y_hat: FloatArray, hg: float, L: Loads, algebraic: bool
     ) -> tuple[FloatArray, ContactOutputs]:
         """Solve M (y - y_hat) = hg (B T(y) + F) for the stage value y."""
         b = self.body
-        for name, val in zip(Loads._fields, L, strict=True):
-            finite(name, val)
         target = self._targets(L)
         m = self._masses(algebraic)
         # Vx in terms of vx, T eliminated between Eqs. (8) and (20):
@@ -311,31 +341,15 @@ class RollingBody:
             T = self.law.forces(Y[:, 1], Y[:, 2], Y[:, 3], Y[:, 0])
             return np.stack([np.broadcast_to(t, Y.shape[:1]) for t in T], axis=1)
 
-        act = (
-            [0]
-            + ([1] if self.lateral.dynamic_vy else [])
-            + ([2] if self.lateral.dynamic_spin else [])
-        )
+        act = [0] + [
+            i for i, dyn in ((1, self.lateral.dynamic_vy), (2, self.lateral.dynamic_spin)) if dyn
+        ]
 
         def residuals(U: FloatArray) -> FloatArray:
             return m * (U - u_hat) / hg + forces(states(U))[:, act] - target
 
-        scale = self._scales(y_hat[0])
-        if len(idx) == 1:
-            # one unknown (vy, Omega_z held): the same residual in plain floats, as this
-            # is the inner loop of every co-simulation step
-            law, m0, t0, v_hat = self.law, float(m[0]), float(target[0]), float(u_hat[0])
-            k = m_vx / b.M
-            ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
-            Vb = float(Vx_base)
-
-            def r1(vx: float) -> float:
-                Vx = Vb + k * (vx - v_hat)
-                return m0 * (vx - v_hat) / hg + law.forces(vx, ry * Vx, rz * Vx, Vx)[0] - t0
-
-            u = np.array([self._solve_scalar(r1, v_hat, m0, hg, t0, float(scale[0]))])
-        else:
-            u = self._solve_vector(residuals, u_hat.copy(), scale[: len(idx)])
+        scale = self._scales(y_hat[0])[: len(idx)]
+        u = self._solve_vector(residuals, u_hat.copy(), scale)
         y = states(u[None, :])[0]
         T = forces(y[None, :])[0]
         # The force that closes the stage balance: equal to T(y) where the law is
@@ -368,7 +382,7 @@ class RollingBody:
         for _ in range(60):
             b = a + direction * step
             rb = r(b)
-            if np.sign(rb) != np.sign(r0):
+            if (rb > 0.0) != (r0 > 0.0):
                 break
             a = b
             step *= 4.0
@@ -415,6 +429,14 @@ class RollingBody:
     def _contact_at(self, y: FloatArray) -> ContactOutputs:
         T = self.law.forces(y[1], y[2], y[3], y[0])
         return ContactOutputs(float(T[0]), float(T[1]), float(T[2]), _saturated(self.law, y))
+
+
+def _checked(L: Loads) -> Loads:
+    """Loads with finite values, or InputError naming the first bad one."""
+    if not math.isfinite(sum(L)):
+        for name, val in zip(Loads._fields, L, strict=True):
+            finite(name, val)
+    return L
 
 
 def _saturated(law: ContactLaw, y: FloatArray) -> bool:
