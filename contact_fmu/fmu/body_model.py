@@ -1,0 +1,102 @@
+"""Body mode: the FMU owns the rigid-body dynamics (Eqs. 8-11) and the contact law.
+
+The stepper (``integrator.RollingBody`` for the steady phase) is driven through its
+small interface: ``set_load(P)``, ``advance(h, loads, substeps)``, ``outputs()``,
+``snapshot()``/``restore()``. A communication step h is split into
+ceil(h / h_max) stepper steps with the loads held constant (zero-order hold); the stiff
+slip equation is handled by the stepper's L-stable scheme, so any h is stable and
+h_max only sets the accuracy of the slow dynamics.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from .._validate import InputError
+from ..dynamics import Body, Lateral, Loads
+from ..integrator import RollingBody
+from .config import ModelConfig
+from .laws import make_law
+
+# Most stepper steps per communication step: beyond, h_max is enlarged for that step
+# (the scheme stays stable; only the accuracy of the slow dynamics drops) so that one
+# doStep cannot take unbounded time.
+MAX_SUBSTEPS = 10_000
+# h / h_max within this relative margin of an integer does not add a step.
+SUBSTEP_SLACK = 1e-9
+
+
+def substeps(h: float, h_max: float) -> int:
+    """ceil(h / h_max), at least 1, at most MAX_SUBSTEPS."""
+    n = math.ceil(h / h_max * (1.0 - SUBSTEP_SLACK))
+    return min(max(n, 1), MAX_SUBSTEPS)
+
+
+def make_stepper(cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float) -> Any:
+    """The stepper of the configured phase, law and method at the initial state."""
+    if cfg.phase != "steady":  # ModelConfig admits only implemented phases
+        raise InputError("phase", cfg.phase, '"steady"')
+    law = make_law(cfg.contact_law, p, P)
+    body = Body(M=p["M"], Rx=p["Rx"], Iy=p["Iy"], Iz=p.get("Iz"))
+    vy_ratio = {"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy]
+    spin_ratio = {"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin]
+    return RollingBody(
+        law,
+        body,
+        Lateral(vy_ratio=vy_ratio, spin_ratio=spin_ratio),
+        method=p.get("method", cfg.methods[0]),
+        Vx0=p["Vx0"],
+        Omega_y0=p["Omega_y0"],
+        Vy0=p.get("Vy0", 0.0),
+        Omega_z0=p.get("Omega_z0", 0.0),
+        t0=t0,
+    )
+
+
+class BodyModel:
+    """The body of the body-mode FMU: outputs are states, no direct feedthrough."""
+
+    feedthrough = False
+
+    def __init__(self, stepper: Any, h_max: float, P: float) -> None:
+        self.stepper = stepper
+        self.h_max = h_max
+        self.P = P
+
+    def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
+        P = inputs["P"]
+        if P != self.P:
+            self.stepper.set_load(P)
+            self.P = P
+        loads = Loads(*(inputs.get(k, 0.0) for k in Loads._fields))
+        n = substeps(h, self.h_max)
+        self.stepper.advance(h, loads, n)
+        if n == MAX_SUBSTEPS and h / self.h_max > MAX_SUBSTEPS:
+            return (
+                f"communication step h = {h:g} s exceeds {MAX_SUBSTEPS} internal steps of "
+                f"h_max = {self.h_max:g} s: taken in {MAX_SUBSTEPS} steps of {h / n:g} s"
+            )
+        return None
+
+    def evaluate(self, inputs: Mapping[str, float]) -> None:  # no feedthrough
+        return None
+
+    def outputs(self) -> dict[str, float]:
+        return self.stepper.outputs()
+
+    def snapshot(self) -> Any:
+        return (self.stepper.snapshot(), self.P)
+
+    def restore(self, snap: Any) -> None:
+        stepper_snap, self.P = snap
+        self.stepper.restore(stepper_snap)
+
+
+def build(
+    cfg: ModelConfig, params: Mapping[str, Any], inputs: Mapping[str, float], t0: float
+) -> BodyModel:
+    """The body model from the FMU's parameters and inputs at the start time t0 (s)."""
+    P = inputs["P"]
+    return BodyModel(make_stepper(cfg, params, P, t0), params["h_max"], P)

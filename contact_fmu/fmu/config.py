@@ -1,0 +1,169 @@
+"""Which model a built FMU holds: mode, contact law, stepper, lateral parts, variables.
+
+A ``ModelConfig`` is plain data (JSON through ``to_dict``/``from_dict``): the build
+writes it into the generated FMU script, and the adapter reads it back. Values that
+later issues add to the scene schema (``contact_law = "halfspace"``, ``phase =
+"transient"``) are recognised and refused here with a clear error until implemented.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from .._validate import InputError
+from . import variables as fv
+
+# Implemented choices, and the module that implements each (relative to the package).
+MODEL_MODULES = {
+    "body": "fmu.body_model",
+    "contact": "fmu.contact_model",
+    "rigid_body": "fmu.rigid_body",
+}
+LAW_MODULES = {"layer": "layer"}
+PHASES = ("steady",)
+METHODS = ("full", "quasistationary")
+# Recognised scene values that later issues implement.
+PLANNED = {"contact_law": ("halfspace",), "phase": ("transient",)}
+
+VY_MODES = ("zero", "ratio", "eq10")
+SPIN_MODES = ("zero", "ratio", "eq11")
+
+
+def _choice(name: str, value: object, allowed: tuple[str, ...]) -> str:
+    if value in allowed:
+        return str(value)
+    planned = PLANNED.get(name, ())
+    if value in planned:
+        raise InputError(name, value, f"one of {allowed}: {value!r} is not implemented yet")
+    raise InputError(name, value, f"one of {allowed}")
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """The structure of one FMU.
+
+    ``methods``: the steppers the FMU offers (body mode); with more than one, the
+    string parameter ``method`` chooses. ``vy``/``spin``: how Vy and Omega_z follow
+    (body mode): "zero" (held at 0, no lateral variables), "ratio" (held ratio to Vx,
+    parameters vy_ratio/spin_ratio) or Eqs. (10)/(11). ``starts``: start values that
+    replace the declared defaults. ``experiment``: (start, stop, step) in s, or None.
+    """
+
+    name: str
+    mode: str
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    contact_law: str = "layer"
+    phase: str = "steady"
+    methods: tuple[str, ...] = ("full",)
+    vy: str = "zero"
+    spin: str = "zero"
+    starts: dict[str, Any] = field(default_factory=dict)
+    experiment: tuple[float, float, float] | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.name.isidentifier():
+            raise InputError("name", self.name, "a Python identifier (letters, digits, _)")
+        _choice("mode", self.mode, tuple(MODEL_MODULES))
+        _choice("contact_law", self.contact_law, tuple(LAW_MODULES))
+        _choice("phase", self.phase, PHASES)
+        if not self.methods:
+            raise InputError("method", self.methods, f"at least one of {METHODS}")
+        for m in self.methods:
+            _choice("method", m, METHODS)
+        _choice("vy", self.vy, VY_MODES)
+        _choice("spin", self.spin, SPIN_MODES)
+        if self.mode != "body" and (self.vy, self.spin, self.methods) != (
+            "zero",
+            "zero",
+            ("full",),
+        ):
+            raise InputError("mode", self.mode, 'body for lateral parts and "method"')
+        self._check_names("input", self.inputs, fv.INPUT)
+        self._check_names("output", self.outputs, fv.OUTPUT)
+        required = {"body": ("P",), "contact": ("P", "Vx", "Omega_y"), "rigid_body": ("Tx",)}
+        for name in required[self.mode]:
+            if name not in self.inputs:
+                raise InputError(
+                    "inputs", list(self.inputs), f"to include {name} in {self.mode} mode"
+                )
+        for name, value in self.starts.items():
+            var = fv.BY_NAME.get(name)
+            if var is None or not fv.applicable(var, self):
+                raise InputError(name, value, f"a variable of this {self.mode}-mode model")
+            problem = var.check(value)
+            if problem is not None:
+                raise InputError(name, value, problem)
+        if "method" in self.starts and self.starts["method"] not in self.methods:
+            raise InputError("method", self.starts["method"], f"one of {self.methods}")
+
+    def _check_names(self, what: str, names: tuple[str, ...], causality: str) -> None:
+        allowed = fv.available(self, causality)
+        for n in names:
+            if n not in allowed:
+                raise InputError(f"{what}s", n, f"one of {allowed} in this {self.mode}-mode model")
+        if len(set(names)) != len(names):
+            raise InputError(f"{what}s", list(names), "without repetitions")
+
+    # ---- derived ---------------------------------------------------------------------
+    @property
+    def variables(self) -> list[fv.Var]:
+        """The FMU's variables in value-reference order."""
+        return fv.select(self, self.inputs, self.outputs)
+
+    def start(self, var: fv.Var) -> Any:
+        """Start value of ``var``: the configured one, else the declared default."""
+        if var.name == "method":
+            return self.starts.get("method", self.methods[0])
+        return self.starts.get(var.name, var.start)
+
+    @property
+    def model_module(self) -> str:
+        return MODEL_MODULES[self.mode]
+
+    @property
+    def law_module(self) -> str | None:
+        return LAW_MODULES[self.contact_law] if self.mode != "rigid_body" else None
+
+    # ---- plain data --------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        for k in ("inputs", "outputs", "methods"):
+            d[k] = list(d[k])
+        d["experiment"] = list(self.experiment) if self.experiment else None
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> ModelConfig:
+        d = dict(d)
+        for k in ("inputs", "outputs", "methods"):
+            d[k] = tuple(d[k])
+        if d.get("experiment") is not None:
+            d["experiment"] = tuple(float(x) for x in d["experiment"])
+        return cls(**d)
+
+    @classmethod
+    def full(cls, mode: str) -> ModelConfig:
+        """The full FMU of a mode: every variable, Eqs. (10)-(11), both steppers."""
+        body = mode == "body"
+        skeleton = cls(
+            name=f"full_{mode}",
+            mode=mode,
+            inputs={"body": ("P",), "contact": ("P", "Vx", "Omega_y"), "rigid_body": ("Tx",)}[mode],
+            outputs=(),
+            methods=METHODS if body else ("full",),
+            vy="eq10" if body else "zero",
+            spin="eq11" if body else "zero",
+        )
+        return cls(
+            name=skeleton.name,
+            mode=mode,
+            inputs=tuple(fv.available(skeleton, fv.INPUT)),
+            outputs=tuple(fv.available(skeleton, fv.OUTPUT)),
+            methods=skeleton.methods,
+            vy=skeleton.vy,
+            spin=skeleton.spin,
+            description=f"Full {mode}-mode FMU: every variable and model part",
+        )

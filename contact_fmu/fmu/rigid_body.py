@@ -1,0 +1,54 @@
+"""The rigid body of Eqs. (8)-(9) alone, driven by the contact force Tx of another FMU.
+
+    M  dVx/dt      = Fx_ex - Tx
+    Iy dOmega_y/dt = My_ex + Rx Tx      (the + sign of Eq. 9, see dynamics.py)
+
+With the inputs held over a communication step the right-hand sides are constant, so
+the update Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx Tx)/Iy is exact. Coupled
+to a contact-mode FMU through a master, the creep force is exchanged explicitly; that
+is stable only for steps below the slip relaxation time (see tests/test_cosim*.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from .._validate import finite, positive
+from .config import ModelConfig
+
+
+class RigidBody:
+    feedthrough = False
+
+    def __init__(self, M: float, Rx: float, Iy: float, Vx0: float, Omega_y0: float) -> None:
+        self.M = positive("M", M)
+        self.Rx = positive("Rx", Rx)
+        self.Iy = positive("Iy", Iy)
+        self.Vx = finite("Vx0", Vx0)
+        self.Omega_y = finite("Omega_y0", Omega_y0)
+
+    def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
+        Tx = inputs["Tx"]
+        self.Vx += h * (inputs.get("Fx_ex", 0.0) - Tx) / self.M
+        self.Omega_y += h * (inputs.get("My_ex", 0.0) + self.Rx * Tx) / self.Iy
+        return None
+
+    def evaluate(self, inputs: Mapping[str, float]) -> None:  # no feedthrough
+        return None
+
+    def outputs(self) -> dict[str, float]:
+        return {"Vx": self.Vx, "Omega_y": self.Omega_y}
+
+    def snapshot(self) -> Any:
+        return (self.Vx, self.Omega_y)
+
+    def restore(self, snap: Any) -> None:
+        self.Vx, self.Omega_y = snap
+
+
+def build(
+    cfg: ModelConfig, params: Mapping[str, Any], inputs: Mapping[str, float], t0: float
+) -> RigidBody:
+    p = params
+    return RigidBody(p["M"], p["Rx"], p["Iy"], p["Vx0"], p["Omega_y0"])

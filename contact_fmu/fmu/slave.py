@@ -1,0 +1,289 @@
+"""The pythonfmu adapter: the only module of the project that imports pythonfmu.
+
+``ContactSlave`` is one generic FMI 2.0 co-simulation slave. A built FMU subclasses it
+with a ``CONFIG`` (a ``ModelConfig`` as plain data); the variables it registers and
+the model it runs follow from that configuration and from ``variables.VARIABLES``.
+
+Error handling. pythonfmu 0.7.0 answers fmi2Fatal for any Python exception and
+fmi2Discard only when ``do_step`` returns False; setReal cannot answer anything but
+fmi2OK or fmi2Fatal. So nothing here raises to pythonfmu:
+
+- an inadmissible value (NaN/inf input, P <= 0, a parameter out of its range) is
+  accepted by setReal with a logged message naming the variable and the value; while
+  it is held, every doStep answers fmi2Discard with the same message and leaves the
+  state untouched; once the value is corrected the instance steps normally;
+- doStep with a non-positive or non-finite step, or one that does not start at the
+  FMU's time, answers fmi2Discard;
+- a failing step (stage solve, non-finite result) restores the state taken before it
+  and answers fmi2Discard;
+- parameters are fixed: once the model is set up, setting one is ignored with a
+  logged error; while it cannot be set up (bad parameters) they may still be set.
+
+FMU state (get/set) holds everything: the model's snapshot, parameter and input values,
+outputs, time and flags; get state, step, set state, step again repeats bit for bit.
+"""
+
+from __future__ import annotations
+
+import copy
+import importlib
+import math
+from typing import Any, ClassVar
+
+from pythonfmu import (
+    DefaultExperiment,
+    Fmi2Causality,
+    Fmi2Initial,
+    Fmi2Slave,
+    Fmi2Variability,
+    Integer,
+    Real,
+    String,
+)
+from pythonfmu.enums import Fmi2Status
+
+from . import variables as fv
+from .config import ModelConfig
+
+# Relative tolerance between doStep's currentCommunicationPoint and the FMU's time
+# (masters convert integer nanoseconds or accumulate steps: rounding only).
+TIME_RTOL = 1e-9
+
+_CAUSALITY = {
+    fv.PARAMETER: Fmi2Causality.parameter,
+    fv.INPUT: Fmi2Causality.input,
+    fv.OUTPUT: Fmi2Causality.output,
+}
+_TYPES = {"Real": Real, "Integer": Integer, "String": String}
+
+
+class ContactSlave(Fmi2Slave):
+    """Rolling/sliding contact after Spector & Batra (1995); the model follows CONFIG."""
+
+    CONFIG: ClassVar[dict[str, Any]] = {}
+    author = "contact_fmu"
+    license = "MIT"
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        cfg = ModelConfig.from_dict(self.CONFIG)
+        self.cfg = cfg
+        self.description = cfg.description or f"Spector & Batra (1995) contact, {cfg.mode} mode"
+        if cfg.experiment is not None:
+            start, stop, step = cfg.experiment
+            self.default_experiment = DefaultExperiment(start, stop, step_size=step)
+        self._vars = {v.name: v for v in cfg.variables}
+        self._causality = {n: v.causality[cfg.mode] for n, v in self._vars.items()}
+        self._values: dict[str, Any] = {
+            n: cfg.start(v) for n, v in self._vars.items() if self._causality[n] != fv.OUTPUT
+        }
+        self._out: dict[str, float] = {
+            n: float(v.start) for n, v in self._vars.items() if self._causality[n] == fv.OUTPUT
+        }
+        self._bad: dict[str, str] = {}  # inadmissible values held: name -> message
+        self._model: Any = None
+        self._model_params: dict[str, Any] | None = None
+        self._time = 0.0
+        self._dirty = True  # inputs changed since the outputs were computed
+        for v in self._vars.values():
+            self.register_variable(self._fmi_variable(v))
+
+    # ---- registration ------------------------------------------------------------------
+    def _fmi_variable(self, v: fv.Var) -> Any:
+        c = self._causality[v.name]
+        if c == fv.PARAMETER:
+            variability, initial = Fmi2Variability.fixed, None
+        elif c == fv.INPUT:
+            variability, initial = Fmi2Variability.continuous, None
+        else:
+            variability = (
+                Fmi2Variability.continuous if v.type == "Real" else Fmi2Variability.discrete
+            )
+            initial = Fmi2Initial.calculated
+        return _TYPES[v.type](
+            v.name,
+            causality=_CAUSALITY[c],
+            variability=variability,
+            initial=initial,
+            description=v.description,
+            getter=lambda n=v.name: self._get(n),
+            setter=lambda value, n=v.name: self._set(n, value),
+        )
+
+    # ---- get/set -------------------------------------------------------------------------
+    def _get(self, name: str) -> Any:
+        var = self._vars[name]
+        if self._causality[name] == fv.OUTPUT:
+            if self._dirty and self._model is not None and self._model.feedthrough:
+                self._refresh()
+            value = self._out[name]
+        else:
+            value = self._values[name]
+        if var.type == "Integer":
+            return int(value)
+        if var.type == "String":
+            return str(value)
+        return float(value)
+
+    def _set(self, name: str, value: Any) -> None:
+        c = self._causality[name]
+        if c == fv.OUTPUT:
+            self._error(f"{name} is an output of this FMU: the value {value!r} set is ignored")
+            return
+        if c == fv.PARAMETER and self._model is not None:
+            self._error(
+                f"{name} is a fixed parameter and the model is initialised: "
+                f"{name} = {value!r} is ignored ({name} stays {self._values[name]!r})"
+            )
+            return
+        var = self._vars[name]
+        problem = var.check(value)
+        self._values[name] = (
+            value if var.type == "String" or problem == "a number" else float(value)
+        )
+        if problem is None:
+            self._bad.pop(name, None)
+        else:
+            msg = f"{name} = {value!r} is invalid: must be {problem}"
+            self._bad[name] = msg
+            self.log(f"{msg}; doStep answers fmi2Discard until it is corrected", Fmi2Status.error)
+        if c == fv.INPUT:
+            self._dirty = True
+
+    def _inputs(self) -> dict[str, float]:
+        return {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+
+    def _params(self) -> dict[str, Any]:
+        return {n: v for n, v in self._values.items() if self._causality[n] == fv.PARAMETER}
+
+    def _error(self, msg: str) -> None:
+        self.log(msg, Fmi2Status.error)
+
+    def _discard(self, msg: str) -> bool:
+        self.log(msg, Fmi2Status.discard)
+        return False
+
+    # ---- model -----------------------------------------------------------------------------
+    def _build(self) -> bool:
+        """Set the model up from the current parameters and inputs; False with a message."""
+        if self._bad:
+            for msg in self._bad.values():
+                self._error(f"cannot initialise the model: {msg}")
+            return False
+        try:
+            module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
+            model = module.build(self.cfg, self._params(), self._inputs(), self._time)
+            out = self._collect(model.outputs())
+        except Exception as e:  # an exception reaching pythonfmu would be fmi2Fatal
+            self._error(f"cannot initialise the model: {_describe(e)}")
+            return False
+        self._model, self._model_params, self._out, self._dirty = model, self._params(), out, False
+        return True
+
+    def _collect(self, outputs: dict[str, float]) -> dict[str, float]:
+        """The declared outputs, checked finite."""
+        out = {}
+        for name in self._out:
+            value = float(outputs[name])
+            if not math.isfinite(value):
+                raise FloatingPointError(f"output {name} = {value!r} is not finite")
+            out[name] = value
+        return out
+
+    def _refresh(self) -> None:
+        """Direct feedthrough: outputs for the current inputs (kept while inputs are bad)."""
+        if any(self._causality[n] == fv.INPUT for n in self._bad):
+            return
+        snap = self._model.snapshot()
+        try:
+            self._model.evaluate(self._inputs())
+            self._out = self._collect(self._model.outputs())
+            self._dirty = False
+        except Exception as e:
+            self._model.restore(snap)
+            self._error(f"outputs not updated for the new inputs: {_describe(e)}")
+
+    # ---- FMI calls --------------------------------------------------------------------------
+    def setup_experiment(
+        self, start_time: float, stop_time: float | None = None, tolerance: float | None = None
+    ) -> None:
+        start = float(start_time)
+        if math.isfinite(start):
+            self._time = start
+        else:
+            self._error(f"startTime = {start_time!r} is invalid: must be finite; using 0")
+
+    def exit_initialization_mode(self) -> None:
+        self._build()
+
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        try:
+            return self._do_step(float(current_time), float(step_size))
+        except Exception as e:  # never let an exception reach pythonfmu (fmi2Fatal)
+            return self._discard(f"doStep discarded: {_describe(e)}")
+
+    def _do_step(self, t: float, h: float) -> bool:
+        if not (math.isfinite(h) and h > 0.0):
+            return self._discard(
+                f"communicationStepSize = {h!r} is invalid: must be > 0 and finite"
+            )
+        if not math.isfinite(t) or abs(t - self._time) > TIME_RTOL * max(1.0, abs(t), h):
+            return self._discard(
+                f"currentCommunicationPoint = {t!r} is invalid: must be the FMU's time "
+                f"{self._time!r}"
+            )
+        if self._model is None and not self._build():
+            return self._discard(f"doStep at t = {t!r} discarded: the model is not initialised")
+        if self._bad:
+            return self._discard(
+                f"doStep at t = {t!r} discarded, state unchanged: " + "; ".join(self._bad.values())
+            )
+        snap = self._model.snapshot()
+        try:
+            note = self._model.step(h, self._inputs())
+            out = self._collect(self._model.outputs())
+        except Exception as e:
+            self._model.restore(snap)
+            return self._discard(
+                f"doStep at t = {t!r} with h = {h!r} discarded, state unchanged: {_describe(e)}"
+            )
+        self._out, self._time, self._dirty = out, t + h, False
+        if note:
+            self.log(note, Fmi2Status.warning)
+        return True
+
+    # ---- FMU state ---------------------------------------------------------------------------
+    def _get_fmu_state(self) -> dict[str, Any]:
+        model = None
+        if self._model is not None:
+            model = (dict(self._model_params), self._model.snapshot())
+        return copy.deepcopy(
+            {
+                "time": self._time,
+                "values": self._values,
+                "bad": self._bad,
+                "out": self._out,
+                "dirty": self._dirty,
+                "model": model,
+            }
+        )
+
+    def _set_fmu_state(self, state: dict[str, Any]) -> None:
+        s = copy.deepcopy(state)
+        self._time, self._values, self._bad = s["time"], s["values"], s["bad"]
+        if s["model"] is None:
+            self._model = self._model_params = None
+        else:
+            params, snap = s["model"]
+            if self._model is None or params != self._model_params:
+                module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
+                self._model = module.build(self.cfg, params, self._inputs(), self._time)
+                self._model_params = params
+            self._model.restore(snap)
+        self._out, self._dirty = s["out"], s["dirty"]
+
+
+def _describe(e: Exception) -> str:
+    """The message of an exception, with its type unless it is a plain input error."""
+    name = type(e).__name__
+    return str(e) if name == "InputError" else f"{name}: {e}"

@@ -1,0 +1,399 @@
+"""Every FMU variable, declared once: name, causality per mode, unit, description, start, range.
+
+Both the pythonfmu registration (``slave``) and the post-processing of
+modelDescription.xml (units, min/max, ModelStructure; ``fmu_build``) read this table,
+so the two can never disagree. Names follow Spector & Batra (1995); units are SI.
+
+Modes: ``body`` (the FMU owns the rigid-body dynamics, Eqs. 8-11), ``contact`` (a
+force element: kinematics in, contact forces out) and ``rigid_body`` (Eqs. 8-9 alone,
+driven by Tx from a contact-mode FMU; used to couple two FMUs in a master).
+
+Default start values are the parameter set of ``contact_fmu.examples`` (the paper's
+figures) with eta = 3; tests check that they agree.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Protocol
+
+MODES = ("body", "contact", "rigid_body")
+PARAMETER, INPUT, OUTPUT = "parameter", "input", "output"
+
+# SI base-unit exponents of every unit used (FMI 2.0 UnitDefinitions/BaseUnit).
+UNITS: dict[str, dict[str, int]] = {
+    "1": {},
+    "1/m": {"m": -1},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "rad/s": {"rad": 1, "s": -1},
+    "s": {"s": 1},
+    "kg": {"kg": 1},
+    "kg.m2": {"kg": 1, "m": 2},
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "N.m": {"kg": 1, "m": 2, "s": -2},
+    "Pa": {"kg": 1, "m": -1, "s": -2},
+    "m/Pa": {"kg": -1, "m": 2, "s": 2},
+}
+
+# Contact-mode inputs that the contact forces depend on directly (direct feedthrough).
+_KIN = ("P", "Vx", "Vy", "Omega_y", "Omega_z")
+
+
+class Structure(Protocol):
+    """What decides which variables a model has (``config.ModelConfig`` provides it)."""
+
+    mode: str
+    vy: str  # "zero" | "ratio" | "eq10"
+    spin: str  # "zero" | "ratio" | "eq11"
+    methods: tuple[str, ...]
+
+
+# Conditions on the structure, by name (only the body mode has optional parts).
+CONDITIONS = {
+    "vy": lambda s: s.vy != "zero",
+    "vy_eq10": lambda s: s.vy == "eq10",
+    "vy_ratio": lambda s: s.vy == "ratio",
+    "spin": lambda s: s.spin != "zero",
+    "spin_eq11": lambda s: s.spin == "eq11",
+    "spin_ratio": lambda s: s.spin == "ratio",
+    "lateral": lambda s: s.vy != "zero" or s.spin != "zero",
+    "methods": lambda s: len(s.methods) > 1,
+}
+
+
+@dataclass(frozen=True)
+class Var:
+    """One FMU variable.
+
+    ``causality`` maps each mode that has the variable to "parameter", "input" or
+    "output". ``min``/``max`` are inclusive bounds written to the model description;
+    ``open_min`` excludes the lower bound itself (FMI has no exclusive bound, so the
+    FMU checks it and the description says so). ``needs`` names a CONDITIONS entry
+    that must hold in body mode. ``feedthrough``: the contact-mode inputs an output
+    depends on directly (ModelStructure/Outputs dependencies).
+    """
+
+    name: str
+    unit: str | None
+    description: str
+    causality: Mapping[str, str]
+    start: float | str = 0.0
+    min: float | None = None
+    max: float | None = None
+    open_min: bool = False
+    type: str = "Real"
+    needs: str | None = None
+    feedthrough: tuple[str, ...] = field(default=())
+
+    def check(self, value: object) -> str | None:
+        """None if ``value`` is admissible, else the requirement it violates."""
+        if self.type == "String":
+            return None if isinstance(value, str) else "a string"
+        try:
+            v = float(value)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            return "a number"
+        if v != v or v in (float("inf"), float("-inf")):
+            return "finite"
+        if self.min is not None and (v < self.min or (self.open_min and v == self.min)):
+            return f"{'>' if self.open_min else '>='} {self.min:g}"
+        if self.max is not None and v > self.max:
+            return f"<= {self.max:g}"
+        return None
+
+
+def _p(name, unit, desc, start, modes=("body", "contact"), **kw) -> Var:
+    return Var(name, unit, desc, {m: PARAMETER for m in modes}, start, **kw)
+
+
+_BODY = ("body",)
+_BODY_RB = ("body", "rigid_body")
+_ALL = ("body", "contact", "rigid_body")
+
+VARIABLES: tuple[Var, ...] = (
+    # ---- parameters ------------------------------------------------------------------
+    _p("mu", "1", "Coefficient of friction (> 0)", 0.3, min=0.0, open_min=True),
+    _p(
+        "Rx",
+        "m",
+        "Radius of the body in the rolling plane: rolling radius and curvature radius (> 0)",
+        0.05,
+        modes=_ALL,
+        min=0.0,
+        open_min=True,
+    ),
+    _p("Ry", "m", "Lateral radius of curvature of the body (> 0)", 0.10, min=0.0, open_min=True),
+    _p("k1", "m/Pa", "Normal compliance of the body's layer, Eq. (32)", 5.0e-13, min=0.0),
+    _p("k2", "m/Pa", "Normal compliance of the substrate's layer, Eq. (32)", 5.0e-13, min=0.0),
+    _p("kb", "m/Pa", "Tangential compliance of the body's layer, Eq. (31)", 3.2e-13, min=0.0),
+    _p("ks", "m/Pa", "Tangential compliance of the substrate's layer, Eq. (31)", 3.2e-13, min=0.0),
+    _p("M", "kg", "Mass of the body (> 0)", 1.0, modes=_BODY_RB, min=0.0, open_min=True),
+    _p(
+        "Iy",
+        "kg.m2",
+        "Moment of inertia about the axle; eta = M Rx^2/Iy, Iy = 0 is eta = inf",
+        0.05**2 / 3.0,
+        modes=_BODY_RB,
+        min=0.0,
+    ),
+    _p(
+        "Iz",
+        "kg.m2",
+        "Moment of inertia about the vertical axis, Eq. (11) (> 0)",
+        1.0e-3,
+        modes=_BODY,
+        min=0.0,
+        open_min=True,
+        needs="spin_eq11",
+    ),
+    _p(
+        "vy_ratio",
+        "1",
+        "Held lateral slip ratio Vy/Vx (instead of Eq. 10)",
+        0.0,
+        modes=_BODY,
+        needs="vy_ratio",
+    ),
+    _p(
+        "spin_ratio",
+        "1/m",
+        "Held spin ratio Omega_z/Vx (instead of Eq. 11)",
+        0.0,
+        modes=_BODY,
+        needs="spin_ratio",
+    ),
+    _p("Vx0", "m/s", "Initial speed of the centre of mass", 5.6418958354775635, modes=_BODY_RB),
+    _p(
+        "Omega_y0",
+        "rad/s",
+        "Initial angular velocity about the axle (Vx0/Rx: pure rolling)",
+        112.83791670955127,
+        modes=_BODY_RB,
+    ),
+    _p("Vy0", "m/s", "Initial lateral speed, Eq. (10)", 0.0, modes=_BODY, needs="vy_eq10"),
+    _p(
+        "Omega_z0",
+        "rad/s",
+        "Initial angular velocity about the vertical, Eq. (11)",
+        0.0,
+        modes=_BODY,
+        needs="spin_eq11",
+    ),
+    _p(
+        "h_max",
+        "s",
+        "Largest internal step of the stiff integrator: a communication step h "
+        "is split into ceil(h/h_max) steps (> 0)",
+        1.0e-4,
+        modes=_BODY,
+        min=0.0,
+        open_min=True,
+    ),
+    Var(
+        "method",
+        None,
+        'Stepper: "full" (stiff slip equation, Eq. 20) or "quasistationary" (Eqs. 26, 28-30)',
+        {"body": PARAMETER},
+        "full",
+        type="String",
+        needs="methods",
+    ),
+    # ---- inputs ----------------------------------------------------------------------
+    Var(
+        "P",
+        "N",
+        "Normal load (> 0)",
+        {"body": INPUT, "contact": INPUT},
+        1000.0,
+        min=0.0,
+        open_min=True,
+    ),
+    Var(
+        "Fx_ex",
+        "N",
+        "External force on the body along the rolling direction",
+        {"body": INPUT, "rigid_body": INPUT},
+    ),
+    Var(
+        "Fy_ex",
+        "N",
+        "External lateral force on the body, Eq. (10)",
+        {"body": INPUT},
+        needs="vy_eq10",
+    ),
+    Var(
+        "My_ex",
+        "N.m",
+        "External moment about the axle (driving > 0, braking < 0)",
+        {"body": INPUT, "rigid_body": INPUT},
+    ),
+    Var(
+        "Mz_ex",
+        "N.m",
+        "External moment about the vertical axis, Eq. (11)",
+        {"body": INPUT},
+        needs="spin_eq11",
+    ),
+    # ---- kinematics: outputs of the body, inputs of the force element ---------------------
+    Var(
+        "Vx",
+        "m/s",
+        "Speed of the centre of mass along the rolling direction",
+        {"body": OUTPUT, "contact": INPUT, "rigid_body": OUTPUT},
+        5.6418958354775635,
+    ),
+    Var(
+        "Vy",
+        "m/s",
+        "Lateral speed of the centre of mass",
+        {"body": OUTPUT, "contact": INPUT},
+        needs="vy",
+    ),
+    Var(
+        "Omega_y",
+        "rad/s",
+        "Angular velocity about the axle",
+        {"body": OUTPUT, "contact": INPUT, "rigid_body": OUTPUT},
+        112.83791670955127,
+    ),
+    Var(
+        "Omega_z",
+        "rad/s",
+        "Angular velocity about the vertical axis (spin)",
+        {"body": OUTPUT, "contact": INPUT},
+        needs="spin",
+    ),
+    # ---- contact outputs (the force is an input of the rigid body) -------------------------
+    Var(
+        "Tx",
+        "N",
+        "Resultant frictional force along x that the body exerts on the substrate "
+        "(the body receives -Tx)",
+        {"body": OUTPUT, "contact": OUTPUT, "rigid_body": INPUT},
+        feedthrough=_KIN,
+    ),
+    Var(
+        "Ty",
+        "N",
+        "Lateral resultant frictional force on the substrate",
+        {"body": OUTPUT, "contact": OUTPUT},
+        needs="lateral",
+        feedthrough=_KIN,
+    ),
+    Var(
+        "Mz",
+        "N.m",
+        "Frictional moment about the vertical axis on the substrate",
+        {"body": OUTPUT, "contact": OUTPUT},
+        needs="lateral",
+        feedthrough=_KIN,
+    ),
+    Var(
+        "vx",
+        "m/s",
+        "Longitudinal rigid slip at the contact centre, Vx - Omega_y Rx (Eq. 3)",
+        {"body": OUTPUT, "contact": OUTPUT},
+        feedthrough=("Vx", "Omega_y"),
+    ),
+    Var(
+        "vy",
+        "m/s",
+        "Lateral rigid slip at the contact centre, Vy (Eq. 3)",
+        {"body": OUTPUT, "contact": OUTPUT},
+        needs="vy",
+        feedthrough=("Vy",),
+    ),
+    Var(
+        "xi_x",
+        "1",
+        "Longitudinal creepage vx/|Vx|",
+        {"body": OUTPUT, "contact": OUTPUT},
+        feedthrough=("Vx", "Omega_y"),
+    ),
+    Var(
+        "xi_y",
+        "1",
+        "Lateral creepage vy/|Vx|",
+        {"body": OUTPUT, "contact": OUTPUT},
+        needs="vy",
+        feedthrough=("Vx", "Vy"),
+    ),
+    Var(
+        "xi_sp",
+        "1/m",
+        "Spin creepage Omega_z/|Vx|",
+        {"body": OUTPUT, "contact": OUTPUT},
+        needs="spin",
+        feedthrough=("Vx", "Omega_z"),
+    ),
+    Var(
+        "a1",
+        "m",
+        "Semi-axis of the contact ellipse along x, Eq. (34)",
+        {"body": OUTPUT, "contact": OUTPUT},
+        feedthrough=("P",),
+    ),
+    Var(
+        "a2",
+        "m",
+        "Lateral semi-axis of the contact ellipse, Eq. (34)",
+        {"body": OUTPUT, "contact": OUTPUT},
+        feedthrough=("P",),
+    ),
+    Var(
+        "p0",
+        "Pa",
+        "Peak contact pressure, Eq. (34)",
+        {"body": OUTPUT, "contact": OUTPUT},
+        feedthrough=("P",),
+    ),
+    Var(
+        "adhesion",
+        "1",
+        "Adhesion area over contact area",
+        {"body": OUTPUT, "contact": OUTPUT},
+        feedthrough=("P", "Vx", "Vy", "Omega_y"),
+    ),
+    Var(
+        "regime",
+        None,
+        "0: rolling with partial slip (an adhesion area exists), 1: gross sliding",
+        {"body": OUTPUT, "contact": OUTPUT},
+        0,
+        type="Integer",
+        feedthrough=("P", "Vx", "Vy", "Omega_y"),
+    ),
+)
+
+BY_NAME: dict[str, Var] = {v.name: v for v in VARIABLES}
+
+
+def applicable(var: Var, s: Structure) -> bool:
+    """Whether the model ``s`` can have ``var`` at all."""
+    if s.mode not in var.causality:
+        return False
+    return s.mode != "body" or var.needs is None or CONDITIONS[var.needs](s)
+
+
+def available(s: Structure, causality: str) -> list[str]:
+    """Names of every variable of the given causality that the model ``s`` can have."""
+    return [v.name for v in VARIABLES if applicable(v, s) and v.causality[s.mode] == causality]
+
+
+def select(s: Structure, inputs: tuple[str, ...], outputs: tuple[str, ...]) -> list[Var]:
+    """The variables of a built FMU, in value-reference order.
+
+    Every applicable parameter (the model reads them all), then the requested inputs
+    and outputs in declaration order.
+    """
+    wanted = set(inputs) | set(outputs)
+    chosen = []
+    for v in VARIABLES:
+        if not applicable(v, s):
+            continue
+        c = v.causality[s.mode]
+        if c == PARAMETER or v.name in wanted:
+            chosen.append(v)
+    return chosen

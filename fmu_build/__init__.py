@@ -1,0 +1,140 @@
+"""Build FMUs from model configurations: ``python -m fmu_build`` (see __main__).
+
+``build(cfg)`` packages one FMU with pythonfmu: the adapter of ``contact_fmu.fmu`` and
+only the modules the configured model imports, vendored under a package name of the
+FMU's own, a generated script whose module and class names are unique, and a completed
+model description (units, ranges, ModelStructure). Builds are cached by content: the
+configuration, every vendored source file, this package's own sources and the pythonfmu
+version make a SHA-256 key, and an FMU whose key exists is not built again.
+
+This package only packages: it runs pythonfmu's command line in a subprocess and never
+imports pythonfmu itself.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+from contact_fmu.fmu.config import ModelConfig
+
+from . import model_description, script, sources
+
+DEFAULT_OUT = Path("out") / "fmu"
+# Bump when the layout of built FMUs changes without a change of the sources.
+FORMAT = "contact_fmu-fmu-1"
+HERE = Path(__file__).resolve().parent
+
+
+class BuildError(RuntimeError):
+    """pythonfmu failed to build an FMU; the message carries its output."""
+
+
+@dataclass(frozen=True)
+class Built:
+    """A built FMU: its file, identity and whether it came from the cache."""
+
+    path: Path
+    key: str
+    module: str
+    class_name: str
+    package: str
+    modules: tuple[str, ...]
+    cached: bool
+
+
+def roots(cfg: ModelConfig) -> list[str]:
+    """The modules an FMU of ``cfg`` starts from (dotted, relative to contact_fmu)."""
+    r = ["fmu.slave", cfg.model_module]
+    if cfg.law_module:
+        r.append(cfg.law_module)
+    return r
+
+
+def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
+    """(content key, vendored modules) of the FMU for ``cfg``."""
+    modules = sources.closure(roots(cfg))
+    h = hashlib.sha256()
+    h.update(FORMAT.encode())
+    h.update(metadata.version("pythonfmu").encode())
+    h.update(json.dumps(cfg.to_dict(), sort_keys=True).encode())
+    for rel, src in sources.files(modules):
+        h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
+    for own in sorted(HERE.glob("*.py")):
+        h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
+    return h.hexdigest(), modules
+
+
+def names(cfg: ModelConfig, key: str) -> tuple[str, str, str]:
+    """(module, class, package) names, unique per content key."""
+    short = key[:12]
+    return (
+        f"{cfg.name.lower()}_{short}",
+        f"{cfg.name[0].upper()}{cfg.name[1:]}_{short}",
+        f"cfmu_{short}",
+    )
+
+
+def build(cfg: ModelConfig, out_dir: str | Path = DEFAULT_OUT, force: bool = False) -> Built:
+    """The FMU for ``cfg`` under ``out_dir`` (built unless cached)."""
+    out_dir = Path(out_dir).resolve()
+    key, modules = identity(cfg)
+    module, class_name, package = names(cfg, key)
+    target = out_dir / f"{cfg.name}-{key[:12]}.fmu"
+    info = Built(target, key, module, class_name, package, tuple(modules), cached=True)
+    if target.is_file() and not force and zipfile.is_zipfile(target):
+        return info
+    out_dir.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".build-{cfg.name}-", dir=out_dir))
+    try:
+        stage = work / "stage"
+        sources.vendor(modules, stage / package)
+        script_file = stage / f"{module}.py"
+        script_file.write_text(script.render(cfg, package, class_name))
+        cmd = [
+            sys.executable,
+            "-m",
+            "pythonfmu",
+            "build",
+            "-f",
+            str(script_file),
+            "-d",
+            str(work / "dist"),
+            str(stage / package),
+            "--handle-state",
+        ]
+        env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
+        proc = subprocess.run(cmd, cwd=work, capture_output=True, text=True, env=env)
+        raw = work / "dist" / f"{class_name}.fmu"
+        if proc.returncode != 0 or not raw.is_file():
+            raise BuildError(
+                f"pythonfmu build of {cfg.name} failed ({proc.returncode}):\n"
+                f"{proc.stdout}\n{proc.stderr}"
+            )
+        final = work / "final.fmu"
+        _finish(raw, final, cfg)
+        os.replace(final, target)  # atomic: concurrent builds of one key are harmless
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return Built(target, key, module, class_name, package, tuple(modules), cached=False)
+
+
+def _finish(raw: Path, final: Path, cfg: ModelConfig) -> None:
+    """Copy pythonfmu's FMU with the completed model description, compressed."""
+    with zipfile.ZipFile(raw) as zin, zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = model_description.patch(data, cfg)
+            if "__pycache__" in item.filename:
+                continue
+            zout.writestr(item.filename, data)
