@@ -1,0 +1,157 @@
+"""Command line: ``contact-fmu <command>``.
+
+contact-fmu run scenarios/fig13.toml     build the scene's FMU (cached), simulate it
+                                         with fmpy, write CSV and PNG, compare with
+                                         the references; exit 1 on a mismatch
+contact-fmu run --all                    every scene of scenarios/
+contact-fmu references scenarios/x.toml  rewrite a scene's stored references from
+                                         their independent source (no FMU involved)
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+DEFAULT_SCENES = Path("scenarios")
+DEFAULT_OUT = Path("out")
+
+
+def _scene_paths(args: argparse.Namespace) -> list[Path]:
+    from .scenario import discover
+
+    paths = list(args.scenes)
+    if args.all:
+        paths += discover(args.scenarios)
+    if not paths:
+        raise SystemExit("no scene given (a TOML file, or --all)")
+    return paths
+
+
+def run_scene(path: Path, out: Path, rebuild: bool = False, make_plot: bool = True) -> bool:
+    """Build, simulate, write and compare one scene; True when it matches its references."""
+    import fmu_build
+
+    from .scenario import load, runner
+
+    scene = load(path)
+    t0 = time.perf_counter()
+    built = fmu_build.build(scene.config, out / "fmu", force=rebuild)
+    t_build = time.perf_counter() - t0
+    n_vars = len(scene.config.variables)
+    size = built.path.stat().st_size
+    print(f"{scene.name}: {scene.title}")
+    state = "cached" if built.cached else f"built in {t_build:.1f} s"
+    print(f"  FMU  {built.path} ({state}; {n_vars} variables, {size / 1024:.0f} KiB)")
+    t0 = time.perf_counter()
+    results = runner.simulate(built.path, scene)
+    wall = time.perf_counter() - t0
+    print(
+        f"  ran  {len(results)} case(s) x {scene.n_steps} steps of {scene.step:g} s in {wall:.2f} s"
+    )
+    for r in results:
+        if r.error:
+            print(f"  case {r.case}: FAILED: {r.error}")
+            continue
+        last = ", ".join(f"{n} = {r.columns[n][-1]:.6g}" for n in scene.outputs[:4])
+        print(f"  case {r.case}: at t = {r.columns['time'][-1]:.6g} s: {last}")
+    checks = runner.compare(scene, results)
+    for c in checks:
+        status = "ok" if c.ok else "MISMATCH"
+        print(
+            f"  ref  {c.reference}: {c.variable:8s} {c.case:16s} max|err| = "
+            f"{c.max_error:.3g} (tol {c.tolerance:.3g}, {c.points} points) {status}"
+        )
+    scene_dir = out / "scenes" / scene.name
+    runner.write_csv(scene_dir / f"{scene.name}.csv", scene, results)
+    print(f"  CSV  {scene_dir / (scene.name + '.csv')}")
+    if make_plot:
+        from .scenario.plot import plot
+
+        print(f"  PNG  {plot(scene, results, scene_dir / (scene.name + '.png'))}")
+    ok = all(not r.error for r in results) and all(c.ok for c in checks)
+    print(f"  {'PASS' if ok else 'FAIL'}")
+    return ok
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .scenario import ScenarioError
+
+    failed = []
+    for path in _scene_paths(args):
+        try:
+            ok = run_scene(path, args.out, rebuild=args.rebuild, make_plot=not args.no_plot)
+        except (ScenarioError, OSError, RuntimeError) as e:
+            print(f"{path}: ERROR: {e}", file=sys.stderr)
+            ok = False
+        if not ok:
+            failed.append(str(path))
+    if failed:
+        print(f"{len(failed)} scene(s) failed: {', '.join(failed)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _references(args: argparse.Namespace) -> int:
+    from .scenario import load
+    from .scenario.references import discretisation_error, regenerate
+
+    for path in _scene_paths(args):
+        scene = load(path)
+        if args.estimate:
+            for ref in scene.references:
+                if ref.source in ("simulate", "traction"):
+                    est = discretisation_error(scene, ref)
+                    print(
+                        f"{ref.file.name}: discretisation error estimate "
+                        + ", ".join(
+                            f"{k} {v:.3g} (tol {ref.tolerance[k]:.3g})" for k, v in est.items()
+                        )
+                    )
+            continue
+        for written in regenerate(scene):
+            print(written)
+    return 0
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="contact-fmu",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    def scenes_args(p: argparse.ArgumentParser) -> None:
+        p.add_argument("scenes", nargs="*", type=Path, help="scene files (TOML)")
+        p.add_argument("--all", action="store_true", help="every scene of --scenarios")
+        p.add_argument("--scenarios", type=Path, default=DEFAULT_SCENES)
+
+    run = sub.add_parser("run", help="build and run scenes, compare with references")
+    scenes_args(run)
+    run.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (out/)")
+    run.add_argument("--rebuild", action="store_true", help="ignore the FMU cache")
+    run.add_argument("--no-plot", action="store_true", help="skip the PNG")
+    run.set_defaults(func=_run)
+
+    refs = sub.add_parser("references", help="rewrite stored references from their source")
+    scenes_args(refs)
+    refs.add_argument(
+        "--estimate",
+        action="store_true",
+        help="print the Richardson error estimates that justify the "
+        "tolerances ('simulate', 'traction') instead of writing",
+    )
+    refs.set_defaults(func=_references)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,200 @@
+"""Reference results of the scenes, produced without the FMU.
+
+Each ``[[reference]]`` of a scene names its ``source``; this module reproduces it from
+the scene's data on a path that does not go through the FMU, its adapter or fmpy:
+
+- ``quasistationary``: the closed form Tx = A2 Fx_ex - A1 My_ex / Rx of Eq. (26)
+  (dimensional; ``dynamics.Body.tx_quasistationary``), valid in rolling after the slip
+  transient, with regime = 0;
+- ``full_slip``: Coulomb's law in gross sliding, Tx = sign mu P and regime = 1, over a
+  window the scene asserts to be sliding;
+- ``simulate``: the pure-numerics ``simulate.simulate`` with ``refine`` times more
+  internal steps than the FMU takes (h_max / refine);
+- ``traction``: contact mode; the resultant of the traction field marched strip by
+  strip (``LayerContact.traction``) on an ``nx`` x ``ny`` grid, integrated numerically:
+  independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates.
+
+All of them see the inputs as the FMU does: sampled on the communication grid and held
+over each step (``signals.held``), so that the value at t_k uses the inputs of the step
+ending at t_k.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..dynamics import Body, Lateral, Loads
+from ..kinematics import rigid_slip
+from ..layer import LayerContact
+from ..simulate import simulate
+from .runner import write_reference
+from .schema import Case, Reference, Scene
+from .signals import held
+
+FloatArray = NDArray[np.float64]
+# Grid index of the step containing time s: tolerance (in steps) for rounding of s.
+STEP_FUZZ = 1e-6
+
+
+def _law(p: dict, P: float) -> LayerContact:
+    return LayerContact(P, p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"], p["mu"])
+
+
+def _body(p: dict) -> Body:
+    return Body(p["M"], p["Rx"], p["Iy"], p.get("Iz"))
+
+
+def _samples(scene: Scene, ref: Reference) -> NDArray[np.int_]:
+    """Grid indices of the reference points: t_from <= t <= t_to, every n-th."""
+    o = ref.options
+    t = scene.grid
+    t_from, t_to = float(o.get("t_from", 0.0)), float(o.get("t_to", scene.stop_time))
+    every = int(o.get("every", 1))
+    idx = np.flatnonzero((t >= t_from - 1e-12) & (t <= t_to + 1e-12))
+    return idx[:: max(every, 1)]
+
+
+def _held_inputs(scene: Scene, case: Case) -> dict[str, FloatArray]:
+    t = scene.grid
+    return {
+        n: held(case.inputs[n](t)) if n in case.inputs else np.zeros(t.size)
+        for n in ("P", "Fx_ex", "Fy_ex", "My_ex", "Mz_ex", "Vx", "Vy", "Omega_y", "Omega_z")
+    }
+
+
+def quasistationary(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
+    k = _samples(scene, ref)
+    u = _held_inputs(scene, case)
+    Tx = _body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
+    return {"time": scene.grid[k], "Tx": Tx, "regime": np.zeros(k.size)}
+
+
+def full_slip(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
+    k = _samples(scene, ref)
+    u = _held_inputs(scene, case)
+    sign = float(ref.options["sign"])
+    Tx = sign * case.parameters["mu"] * u["P"][k]
+    return {"time": scene.grid[k], "Tx": Tx, "regime": np.ones(k.size)}
+
+
+def _held_loads(scene: Scene, case: Case) -> Callable[[float], Loads]:
+    """Loads(s) of the step containing s (left-continuous hold of the grid samples)."""
+    t = scene.grid
+    vals = np.array(
+        [case.inputs[n](t) if n in case.inputs else np.zeros(t.size) for n in Loads._fields]
+    )
+    h, n = scene.step, t.size - 1
+
+    def loads(s: float) -> Loads:
+        i = min(max(math.ceil(s / h - STEP_FUZZ) - 1, 0), n - 1)
+        return Loads(*(float(v) for v in vals[:, i]))
+
+    return loads
+
+
+def by_simulation(
+    scene: Scene, ref: Reference, case: Case, refine: int | None = None
+) -> dict[str, FloatArray]:
+    cfg, p = scene.config, case.parameters
+    P = case.inputs["P"](scene.grid)
+    if np.ptp(P) != 0.0:
+        raise ValueError(f"{scene.name}: source 'simulate' needs a constant P")
+    lateral = Lateral(
+        vy_ratio={"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy],
+        spin_ratio={"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin],
+    )
+    refine = int(ref.options["refine"]) if refine is None else refine
+    substeps = refine * max(1, math.ceil(scene.step / p["h_max"] - 1e-9))
+    tr = simulate(
+        _law(p, float(P[0])),
+        _body(p),
+        _held_loads(scene, case),
+        t_end=scene.stop_time,
+        dt=scene.step,
+        method=case.method,
+        lateral=lateral,
+        Vx0=p["Vx0"],
+        Omega_y0=p["Omega_y0"],
+        Vy0=p.get("Vy0", 0.0),
+        Omega_z0=p.get("Omega_z0", 0.0),
+        substeps=substeps,
+    )
+    k = _samples(scene, ref)
+    out = {"time": scene.grid[k]}
+    for var in ref.tolerance:
+        out[var] = tr.sliding[k].astype(float) if var == "regime" else getattr(tr, var)[k]
+    return out
+
+
+def by_traction(scene: Scene, ref: Reference, case: Case, refine: int = 1) -> dict[str, FloatArray]:
+    nx, ny = (refine * int(n) - (refine - 1) for n in ref.options["grid"])
+    p = case.parameters
+    u = _held_inputs(scene, case)
+    k = _samples(scene, ref)
+    rows: dict[str, list[float]] = {"Tx": [], "Ty": [], "Mz": [], "xi_x": []}
+    for i in k:
+        if u["Omega_z"][i] != 0.0:
+            raise ValueError(f"{scene.name}: source 'traction' is without spin")
+        vx, vy = rigid_slip(u["Vx"][i], u["Omega_y"][i], u["Vy"][i], p["Rx"])
+        field = _law(p, u["P"][i]).traction(vx, vy, u["Vx"][i], nx, ny)
+        for name, value in zip(("Tx", "Ty", "Mz"), field.resultant(), strict=True):
+            rows[name].append(value)
+        rows["xi_x"].append(vx / abs(u["Vx"][i]))  # for plots; not compared
+    out = {"time": scene.grid[k], "xi_x": np.asarray(rows["xi_x"])}
+    out.update({n: np.asarray(rows[n]) for n in ref.tolerance if n in rows})
+    return out
+
+
+SOURCES: dict[str, Callable[[Scene, Reference, Case], dict[str, FloatArray]]] = {
+    "quasistationary": quasistationary,
+    "full_slip": full_slip,
+    "simulate": by_simulation,
+    "traction": by_traction,
+}
+
+
+def generate(scene: Scene, ref: Reference) -> dict[str, dict[str, FloatArray]]:
+    """{case: {time, variables}} of one reference, from its source."""
+    if ref.source not in SOURCES:
+        raise ValueError(f"{scene.path}: unknown reference source {ref.source!r}")
+    return {c: SOURCES[ref.source](scene, ref, scene.case(c)) for c in ref.cases}
+
+
+def discretisation_error(scene: Scene, ref: Reference) -> dict[str, float]:
+    """Richardson estimate of a discretisation error that a tolerance must cover.
+
+    ``simulate``: the FMU's time-stepping error; SDIRK2 is second order, so at the
+    FMU's internal step h_max it is about (4/3) |y(h_max) - y(h_max/2)|.
+    ``traction``: the quadrature error of the reference itself on its grid, second
+    order in the spacing: (4/3) |T(grid) - T(grid refined twice)|.
+    The maximum over the reference's cases and points is returned per variable. It
+    justifies the stored tolerances (see the scene files).
+    """
+    paths = {"simulate": (by_simulation, 1, 2), "traction": (by_traction, 1, 2)}
+    if ref.source not in paths:
+        raise ValueError(f"no discretisation error for source {ref.source!r}")
+    path, a, b = paths[ref.source]
+    est: dict[str, float] = {}
+    for c in ref.cases:
+        case = scene.case(c)
+        coarse = path(scene, ref, case, refine=a)
+        fine = path(scene, ref, case, refine=b)
+        for var in ref.tolerance:
+            e = float(np.max(np.abs(coarse[var] - fine[var]))) * 4.0 / 3.0
+            est[var] = max(est.get(var, 0.0), e)
+    return est
+
+
+def regenerate(scene: Scene, out_dir: Path | None = None) -> list[Path]:
+    """Write every reference of the scene (to its own file, or under ``out_dir``)."""
+    written = []
+    for ref in scene.references:
+        path = ref.file if out_dir is None else Path(out_dir) / ref.file.name
+        write_reference(path, generate(scene, ref))
+        written.append(path)
+    return written
