@@ -9,23 +9,30 @@ The state is y = (Vx, vx, Vy, Omega_z), with Omega_y = (Vx - vx)/Rx. In mass-mat
     Iz      dOmega_z/dt = -Mz + Mz_ex                 (or Omega_z = spin_ratio Vx)
 
 with T = T(vx, Vy, Omega_z, Vx) from the contact law. The slip equation is stiff: its
-relaxation time M A2 Vx / (dT/d(v/Vx)) is of order epsilon times the body's time
-scale (Section 3b). It is integrated with Alexander's two-stage SDIRK method, L-stable
-and stiffly accurate, order 2 (Hairer & Wanner, Solving ODEs II, IV.6): stable for
-any step, no oscillation of the fast mode, and exact on the slow manifold.
+relaxation time tau_r = M A2 Vx / (dT/d(v/Vx)) is of order epsilon times the body's
+time scale (Section 3b). Two implicit Runge-Kutta schemes, both order 2, L-stable and
+stiffly accurate (Hairer & Wanner, Solving ODEs II, IV.3-6):
 
-``method="quasistationary"`` is the same scheme applied to the reduced system of
-Section 3c (Eqs. 26, 28-30): the masses of the fast variables vx (and Vy, Omega_z)
-are set to zero, so every stage solves the algebraic Eq. (26) for the slip by
-inverting the creep law, and Vx follows the slow Eq. (8). eta = inf (Iy = 0) makes
-the slip equation algebraic in the full method too; the stiffly accurate scheme
-handles both as index-1 DAEs.
+- "lobatto3c" (default), Lobatto IIIC with two stages: its stability function
+  R(z) = 1/(1 - z + z^2/2) lies in (0, 1) for every z < 0, so the fast mode decays
+  monotonically for any step: no overshoot, no step-to-step alternation;
+- "sdirk2", Alexander's SDIRK2 (gamma = 1 - 1/sqrt 2): a quarter of Lobatto's error
+  constant, but R(z) < 0 for z < -2.41 (minimum -0.21 at z = -8.5), so a step of a few
+  tau_r after a load jump overshoots and the remnant alternates while it decays.
 
-Each stage is reduced to the unknowns u = (vx[, Vy][, Omega_z]): eliminating T
-between the Vx and vx equations gives Vx explicitly in vx, so the stage equation is
-r(u) = m (u - u_hat)/(h gamma) + T_active(u) - target = 0, monotone in u. One
-unknown: bracketed root finding (scipy's brentq); more: Newton with a finite-
-difference Jacobian and backtracking, scipy's hybrid method as fallback.
+``method="quasistationary"`` applies the same scheme to the reduced system of
+Section 3c (Eqs. 26, 28-30): the masses of the fast variables vx (and Vy, Omega_z) are
+set to zero, so a stage solves the algebraic Eq. (26) by inverting the creep law, and
+Vx follows the slow Eq. (8). eta = inf (Iy = 0) makes the slip equation algebraic in
+the full method too; stiffly accurate schemes treat both as index-1 DAEs.
+
+Each stage is reduced to the unknowns u = (vx[, Vy][, Omega_z]): eliminating T between
+Eqs. (8) and (20) gives Vx explicitly,
+
+    M (V_i - V_n) = h sum_j a_ij A1 (Fx_j + My_j/Rx) + M A2 (vx_i - vx_n),
+
+so with one unknown every stage equation is one increasing scalar function (Lobatto's
+two coupled stages included, see ``_lobatto_scalar``): bracketed root finding.
 """
 
 from __future__ import annotations
@@ -37,30 +44,36 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import brentq, root
 
 from ._validate import InputError, finite, positive
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .kinematics import contact_quantities, is_full_slip
+from .solvers import StageSolveError, increasing_root, newton
 
 FloatArray = NDArray[np.float64]
 
+SCHEMES = ("lobatto3c", "sdirk2")
 # Alexander's SDIRK2: gamma = 1 - 1/sqrt(2); c = (gamma, 1); b = last row of A.
 GAMMA = 1.0 - 0.5 * math.sqrt(2.0)
-A21 = 1.0 - GAMMA
-STAGE_C = (GAMMA, 1.0)
+# Lobatto IIIC, two stages: A = [[1/2, -1/2], [1/2, 1/2]], c = (0, 1), b = last row.
+STAGE_TIMES = {"sdirk2": (GAMMA, 1.0), "lobatto3c": (0.0, 1.0)}
 
-# Relative tolerance of the stage solves, on the unknowns (in units of their scale).
-SOLVE_RTOL = 1e-13
-# Relative forward-difference step of the stage Jacobian (about sqrt of the rounding).
-FD_STEP = 1e-7
+# |Vx| (m/s) below which the contact law is evaluated at this speed: the creep law's
+# Vx -> 0 limit is Coulomb's set-valued law; the floor keeps every stage equation
+# single-valued (at rest the body "creeps" at v ~ 1e-2 x 1e-9 m/s). docs/model.md.
+V_STANDSTILL = 1e-9
 # Floor of |Vx| (m/s) for the velocity scales of the stage solver (not the physics).
 V_SCALE_FLOOR = 1e-9
+# Lobatto IIIC with a vanishing slip mass: beyond this stiffness h dT/dv / (M A2) the
+# stage is solved in its algebraic limit (relative difference 1/z, below rounding).
+Z_ALGEBRAIC = 1e13
 # Loads within this relative margin of the capacity mu P count as gross sliding in the
 # quasistationary method (the inverse creep law runs to infinity there).
 CAPACITY_MARGIN = 1e-9
 # Load history: a function of time returning Loads, or constant Loads.
 LoadInput = Loads | Callable[[float], Loads]
+
+__all__ = ["ContactLaw", "ContactOutputs", "LoadInput", "RollingBody", "StageSolveError"]
 
 
 class ContactLaw(Protocol):
@@ -68,8 +81,9 @@ class ContactLaw(Protocol):
 
     forces(vx, vy, phi, Vx) -> (Tx, Ty, Mz) in N and N m for rigid slip (vx, vy) at the
     contact centre (m/s), spin phi = Omega_z (rad/s) and rolling speed Vx (m/s), in the
-    sign convention of Eq. (8): the body receives -T. creep_full_slip is |v|/|Vx| at the
-    onset of full slip; a1, a2, p0 describe the contact ellipse and peak pressure.
+    sign convention of Eq. (8): the body receives -T. Floats in, floats out must work
+    (the integrator's inner loop); arrays in, arrays out too. creep_full_slip is |v|/|Vx|
+    at the onset of full slip; a1, a2, p0 describe the contact ellipse.
     """
 
     P: float
@@ -86,10 +100,6 @@ class ContactLaw(Protocol):
     def with_load(self, P: float) -> ContactLaw: ...
 
 
-class StageSolveError(RuntimeError):
-    """A stage equation has no solution (loads beyond mu P with eta = inf)."""
-
-
 @dataclass
 class ContactOutputs:
     """Contact quantities at the end of a step (SI)."""
@@ -104,9 +114,10 @@ class RollingBody:
     """The rolling body of Eqs. (8)-(11) on a contact law, advanced in time.
 
     ``method``: "full" (stiff slip equation, Eq. 20) or "quasistationary" (Eqs. 26,
-    28-30 with gross sliding handled by the full equations while it lasts).
-    Initial conditions Vx0 (m/s), Omega_y0 (rad/s), Vy0 (m/s), Omega_z0 (rad/s); the
-    held ratios of ``lateral`` override Vy0 and Omega_z0.
+    28-30, gross sliding handled by the full equations while it lasts). ``scheme``:
+    "lobatto3c" or "sdirk2" (module docstring). Initial conditions Vx0 (m/s), Omega_y0
+    (rad/s), Vy0 (m/s), Omega_z0 (rad/s); the held ratios of ``lateral`` override Vy0
+    and Omega_z0.
     """
 
     def __init__(
@@ -120,26 +131,30 @@ class RollingBody:
         Vy0: float = 0.0,
         Omega_z0: float = 0.0,
         t0: float = 0.0,
+        scheme: str = "lobatto3c",
     ) -> None:
         if method not in ("full", "quasistationary"):
             raise InputError("method", method, '"full" or "quasistationary"')
+        if scheme not in SCHEMES:
+            raise InputError("scheme", scheme, " or ".join(f'"{s}"' for s in SCHEMES))
         if lateral.dynamic_spin and body.Iz is None:
             raise InputError("Iz", None, "given when Omega_z follows Eq. (11)")
         self.law = law
         self.body = body
         self.lateral = lateral
         self.method = method
+        self.scheme = scheme
         self.t = finite("t0", t0)
         Vx0 = finite("Vx0", Vx0)
         vx0 = Vx0 - finite("Omega_y0", Omega_y0) * body.Rx
         self.y = np.array([Vx0, vx0, finite("Vy0", Vy0), finite("Omega_z0", Omega_z0)])
         self._apply_ratios(self.y)
-        # unknowns of the stage solve: indices into y
-        self._idx = (
-            [1] + ([2] if lateral.dynamic_vy else []) + ([3] if lateral.dynamic_spin else [])
-        )
+        # unknowns of the stage solve: indices into y, and into (Tx, Ty, Mz)
+        self._act = [0] + [i for i, d in ((1, lateral.dynamic_vy), (2, lateral.dynamic_spin)) if d]
+        self._idx = [i + 1 for i in self._act]
         self.sliding = False
-        self.out = self._contact_at(self.y)
+        T = self._forces(self.y[None, :])[0]
+        self.out = ContactOutputs(*map(float, T), _saturated(law, self.y))
 
     # ---- public -----------------------------------------------------------------
     @property
@@ -197,7 +212,7 @@ class RollingBody:
         self.law = self.law.with_load(positive("P", P))
 
     def advance(self, h: float, loads: LoadInput, substeps: int = 1) -> None:
-        """Advance by h (s) in ``substeps`` equal SDIRK steps under the load history.
+        """Advance by h (s) in ``substeps`` equal steps under the load history.
 
         Constant ``loads`` are held over the interval (zero-order hold, as a
         co-simulation master provides them); a callable is sampled at stage times.
@@ -211,20 +226,17 @@ class RollingBody:
         try:
             dt = h / substeps
             for k in range(substeps):
-                t_n = saved[1] + k * dt
-                self._step(t_n, dt, load_at)
-                self.t = t_n + dt
+                self._step(saved[1] + k * dt, dt, load_at)
             self.t = saved[1] + h
         except Exception:
             self.y, self.t, self.sliding, self.out = saved
             raise
 
-    # ---- one SDIRK2 step ---------------------------------------------------------
+    # ---- one step ------------------------------------------------------------------
     def _step(self, t_n: float, h: float, load_at: Callable[[float], Loads]) -> None:
-        y_n = self.y
-        hg = h * GAMMA
-        L1 = _checked(load_at(t_n + STAGE_C[0] * h))
-        L2 = _checked(load_at(t_n + h))
+        c1, c2 = STAGE_TIMES[self.scheme]
+        L1 = _checked(load_at(t_n + c1 * h))
+        L2 = _checked(load_at(t_n + c2 * h))
         admissible = self._admissible(L1) and self._admissible(L2)
         if self.method == "quasistationary" and not admissible:
             self.sliding = True
@@ -233,16 +245,17 @@ class RollingBody:
                 "eta = inf (Iy = 0) admits no gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = "
                 f"{abs(self._targets(L2)[0]):.6g} N reaches mu P = {self.law.mu * self.law.P:.6g} N"
             )
-        qs = self.method == "quasistationary" and not self.sliding
-        stage = self._stage_scalar if len(self._idx) == 1 else self._stage_vector
-        y1, _ = stage(y_n, hg, L1, qs)
-        k1 = (y1 - y_n) / hg
-        y_hat = y_n + h * A21 * k1
-        if qs:
-            y_hat[self._idx] = y1[self._idx]  # fast variables carry no memory in the QS limit
-        y2, out2 = stage(y_hat, hg, L2, qs)
-        self.y = y2  # stiffly accurate: y_{n+1} is the last stage
-        self.out = out2
+        algebraic = self.method == "quasistationary" and not self.sliding
+        one = len(self._idx) == 1
+        if self.scheme == "lobatto3c":
+            step = self._lobatto_scalar if one else self._lobatto_vector
+        else:
+            step = self._sdirk_scalar if one else self._sdirk_vector
+        self.y, T = step(h, L1, L2, algebraic)
+        cap = self.law.mu * self.law.P
+        if math.hypot(T[0], T[1]) > cap:  # rounding of an implied force at mu P
+            T[:2] *= cap / math.hypot(T[0], T[1])
+        self.out = ContactOutputs(*map(float, T), _saturated(self.law, self.y))
         if self.method == "quasistationary":
             self._update_regime(L2)
 
@@ -250,8 +263,7 @@ class RollingBody:
         """Quasistationary method: leave gross sliding when the slip law is unsaturated
         and the loads are admissible again (Eq. 27); enter it when they are not."""
         if self.sliding:
-            beta_ok = not _saturated(self.law, self.y)
-            if beta_ok and self._admissible(L):
+            if not _saturated(self.law, self.y) and self._admissible(L):
                 self.sliding = False
         elif self.out.sliding:
             self.sliding = True
@@ -264,21 +276,20 @@ class RollingBody:
         return math.hypot(Tx, Ty) < self.law.mu * self.law.P * (1.0 - CAPACITY_MARGIN)
 
     def _targets(self, L: Loads) -> FloatArray:
-        """Forces the stage balances demand: Eqs. (26), (29), (30) in the QS limit."""
+        """Forces the stages balance: Eqs. (26), (29), (30) in the QS limit."""
         b = self.body
-        t = [b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx]
-        if self.lateral.dynamic_vy:
-            t.append(L.Fy_ex)
-        if self.lateral.dynamic_spin:
-            t.append(L.Mz_ex)
-        return np.array(t)
+        return np.array([b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx, L.Fy_ex, L.Mz_ex])[self._act]
+
+    def _drive(self, L: Loads) -> float:
+        """A1 (Fx_ex + My_ex/Rx): the force that accelerates Vx once T is eliminated."""
+        b = self.body
+        return b.A1 * (L.Fx_ex + L.My_ex / b.Rx)
 
     def _masses(self, algebraic: bool) -> FloatArray:
         if algebraic:
             return np.zeros(len(self._idx))
         b = self.body
-        full = np.array([b.M, b.m_slip, b.M, b.Iz if b.Iz is not None else 0.0])
-        return full[self._idx]
+        return np.array([b.m_slip, b.M, b.Iz if b.Iz is not None else 0.0])[self._act]
 
     def _apply_ratios(self, y: FloatArray) -> FloatArray:
         """Impose the held ratios on state(s) y, shape (4,) or (4, k); returns y."""
@@ -288,147 +299,159 @@ class RollingBody:
             y[3] = self.lateral.spin_ratio * y[0]
         return y
 
-    def _stage_scalar(
-        self, y_hat: FloatArray, hg: float, L: Loads, algebraic: bool
-    ) -> tuple[FloatArray, ContactOutputs]:
-        """Stage with one unknown, vx (Vy and Omega_z held): plain floats, as this is
-        the inner loop of every co-simulation step. See ``_stage_vector``."""
-        b, law = self.body, self.law
-        ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
-        target = b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx
+    def _law(self, vx: float, Vx: float) -> tuple:
+        """The law at slip vx and speed Vx with the held lateral ratios (floats)."""
+        V = Vx if abs(Vx) >= V_STANDSTILL else math.copysign(V_STANDSTILL, Vx)
+        return self.law.forces(vx, self.lateral.vy_ratio * Vx, self.lateral.spin_ratio * Vx, V)
+
+    def _forces(self, Y: FloatArray) -> FloatArray:
+        """(Tx, Ty, Mz) at states Y (k, 4), shape (k, 3): one vectorised law call."""
+        Vx = Y[:, 0]
+        V = np.where(np.abs(Vx) >= V_STANDSTILL, Vx, np.copysign(V_STANDSTILL, Vx))
+        T = self.law.forces(Y[:, 1], Y[:, 2], Y[:, 3], V)
+        return np.stack([np.broadcast_to(t, Vx.shape) for t in T], axis=1)
+
+    def _scale(self, Vx: float) -> FloatArray:
+        """Scales of the unknowns (vx, Vy, Omega_z) for the solvers."""
+        v = self.law.creep_full_slip * max(abs(Vx), V_SCALE_FLOOR)
+        return np.array([v, v, v / self.law.a1])[self._act]
+
+    # ---- Lobatto IIIC ------------------------------------------------------------------
+    def _lobatto_scalar(self, h: float, L1: Loads, L2: Loads, algebraic: bool):
+        """Stages Y1, Y2 with one unknown (vx). With m = M A2 and a = Fe - T the stage
+        forces, Lobatto IIIC reads m (v1 - vn) = h (a1 - a2)/2, m (v2 - vn) = h (a1 + a2)/2,
+        i.e. T2 = Fe2 - m (v2 - v1)/h and T1 = Fe1 - m (v1 + v2 - 2 vn)/h. The first gives
+        v1 explicitly from v2 (increasing in v2), so the second is one increasing
+        function of v2. In the algebraic limit (m = 0) only T2 = Fe2 remains."""
+        b = self.body
+        Vn, vn = float(self.y[0]), float(self.y[1])
+        G1, G2 = self._drive(L1), self._drive(L2)
+        Fe1, Fe2 = float(self._targets(L1)[0]), float(self._targets(L2)[0])
+        V1b = Vn + 0.5 * h * (G1 - G2) / b.M
+        V2b = Vn + 0.5 * h * (G1 + G2) / b.M
+        scale = float(self._scale(V2b)[0])
         m = 0.0 if algebraic else b.m_slip
-        v_hat = float(y_hat[1])
-        # Vx in terms of vx, T eliminated between Eqs. (8) and (20)
-        Vb = float(y_hat[0]) + hg * b.A1 * (L.Fx_ex + L.My_ex / b.Rx) / b.M
+        slope = self.law.mu * self.law.P / scale  # dT/dv at the saturation scale
+        if m == 0.0 or h * slope / m > Z_ALGEBRAIC:
+            m = 0.0
+            v2 = increasing_root(lambda v: self._law(v, V2b)[0] - Fe2, vn, scale)
+            T = self._law(v2, V2b)
+            return self._state(V2b, v2), np.array([Fe2, float(T[1]), float(T[2])])
         k = m / b.M
 
-        def r(vx: float) -> float:
-            Vx = Vb + k * (vx - v_hat)
-            return m * (vx - v_hat) / hg + law.forces(vx, ry * Vx, rz * Vx, Vx)[0] - target
+        def v1_of(v2: float) -> float:
+            return v2 - h * (Fe2 - self._law(v2, V2b + k * (v2 - vn))[0]) / m
 
-        scale = law.creep_full_slip * max(abs(Vb), V_SCALE_FLOOR)
-        vx = self._solve_scalar(r, v_hat, m, hg, target, scale)
-        Vx = Vb + k * (vx - v_hat)
-        _, Ty, Mz = law.forces(vx, ry * Vx, rz * Vx, Vx)
-        # the force that closes the stage balance (see _stage_vector), |Tx| <= mu P
-        cap = law.mu * law.P
-        Tx = min(max(target - m * (vx - v_hat) / hg, -cap), cap)
-        y = np.array([Vx, vx, ry * Vx, rz * Vx])
-        return y, ContactOutputs(Tx, float(Ty), float(Mz), _saturated(law, y))
+        def g(v2: float) -> float:
+            v1 = v1_of(v2)
+            return self._law(v1, V1b + k * (v1 - vn))[0] - Fe1 + m * (v1 + v2 - 2 * vn) / h
 
-    def _stage_vector(
-        self, y_hat: FloatArray, hg: float, L: Loads, algebraic: bool
-    ) -> tuple[FloatArray, ContactOutputs]:
-        """Solve M (y - y_hat) = hg (B T(y) + F) for the stage value y."""
-        b = self.body
-        target = self._targets(L)
+        # |T| <= mu P bounds both stage slips: |v - vn| <= h (|Fe1| + |Fe2| + 2 mu P)/m
+        bound = h * (abs(Fe1) + abs(Fe2) + 2 * self.law.mu * self.law.P) / m
+        v2 = increasing_root(g, vn, scale, max_step=bound)
+        V2 = V2b + k * (v2 - vn)
+        return self._state(V2, v2), np.array([float(t) for t in self._law(v2, V2)])
+
+    def _lobatto_vector(self, h: float, L1: Loads, L2: Loads, algebraic: bool):
+        """Lobatto IIIC with several unknowns u (vx, Vy and/or Omega_z): Newton on
+        R1 = m (u1 + u2 - 2 un)/h + T(u1) - F1, R2 = m (u2 - u1)/h + T(u2) - F2."""
+        b, n = self.body, len(self._idx)
+        un = self.y[self._idx]
+        F1, F2 = self._targets(L1), self._targets(L2)
+        G1, G2 = self._drive(L1), self._drive(L2)
         m = self._masses(algebraic)
-        # Vx in terms of vx, T eliminated between Eqs. (8) and (20):
-        m_vx = 0.0 if algebraic else b.m_slip
-        Vx_base = y_hat[0] + hg * b.A1 * (L.Fx_ex + L.My_ex / b.Rx) / b.M
-        u_hat = y_hat[self._idx]
-        idx = self._idx
+        Vb = self.y[0] + 0.5 * h * np.array([G1 - G2, G1 + G2]) / b.M
+        scale = self._scale(Vb[1])
 
-        def states(U: FloatArray) -> FloatArray:
-            """Stage states (k, 4) for unknowns U (k, n)."""
-            Y = np.tile(y_hat, (U.shape[0], 1))
-            Y[:, idx] = U
-            Y[:, 0] = Vx_base + (m_vx / b.M) * (U[:, 0] - u_hat[0])
+        def states(U: FloatArray, stage: int) -> FloatArray:
+            Y = np.tile(self.y, (U.shape[0], 1))
+            Y[:, self._idx] = U
+            Y[:, 0] = Vb[stage] + (m[0] / b.M) * (U[:, 0] - un[0])
             return self._apply_ratios(Y.T).T
 
-        def forces(Y: FloatArray) -> FloatArray:
-            """(Tx, Ty, Mz) for each stage state, (k, 3): one vectorised law call."""
-            T = self.law.forces(Y[:, 1], Y[:, 2], Y[:, 3], Y[:, 0])
-            return np.stack([np.broadcast_to(t, Y.shape[:1]) for t in T], axis=1)
+        if not np.any(m):  # algebraic: T(u2) = F2
+            u2 = newton(lambda U: self._forces(states(U, 1))[:, self._act] - F2, un, scale)
+            Y2 = states(u2[None, :], 1)
+            T = self._forces(Y2)[0]
+            T[self._act] = F2
+            return Y2[0], T
 
-        act = [0] + [
-            i for i, dyn in ((1, self.lateral.dynamic_vy), (2, self.lateral.dynamic_spin)) if dyn
-        ]
+        def residuals(UU: FloatArray) -> FloatArray:
+            U1, U2 = UU[:, :n], UU[:, n:]
+            Y = np.concatenate([states(U1, 0), states(U2, 1)])
+            T = self._forces(Y)[:, self._act]
+            k = UU.shape[0]
+            R1 = m * (U1 + U2 - 2 * un) / h + T[:k] - F1
+            R2 = m * (U2 - U1) / h + T[k:] - F2
+            return np.concatenate([R1, R2], axis=1)
 
-        def residuals(U: FloatArray) -> FloatArray:
-            return m * (U - u_hat) / hg + forces(states(U))[:, act] - target
+        UU = newton(residuals, np.concatenate([un, un]), np.concatenate([scale, scale]))
+        Y2 = states(UU[None, n:], 1)
+        return Y2[0], self._forces(Y2)[0]
 
-        scale = self._scales(y_hat[0])[: len(idx)]
-        u = self._solve_vector(residuals, u_hat.copy(), scale)
-        y = states(u[None, :])[0]
-        T = forces(y[None, :])[0]
-        # The force that closes the stage balance: equal to T(y) where the law is
-        # smooth, and the right value where it is set-valued (Vx = 0, stick). Its
-        # magnitude is mu P at most; the clip removes the rounding of the difference.
-        T[act] = target - m * (u - u_hat) / hg
+    # ---- SDIRK2 ------------------------------------------------------------------------
+    def _sdirk_scalar(self, h: float, L1: Loads, L2: Loads, algebraic: bool):
+        """Two sequential stages m (v_i - v_hat_i)/(h gamma) + T(v_i) - Fe_i = 0, with
+        v_hat_1 = vn, v_hat_2 = vn + (1 - gamma)/gamma (v1 - vn). The reported force
+        closes the stage balance (Fe - m (v - v_hat)/(h gamma))."""
+        b = self.body
+        hg = h * GAMMA
+        Vn, vn = float(self.y[0]), float(self.y[1])
+        G1, G2 = self._drive(L1), self._drive(L2)
+        m = 0.0 if algebraic else b.m_slip
+        k = m / b.M
         cap = self.law.mu * self.law.P
-        if math.hypot(T[0], T[1]) > cap:
-            T[:2] *= cap / math.hypot(T[0], T[1])
-        sliding = _saturated(self.law, y)
-        return y, ContactOutputs(float(T[0]), float(T[1]), float(T[2]), sliding)
+        v_hat, V_hat = vn, Vn
+        for i, (L, G) in enumerate(((L1, G1), (L2, G2))):
+            Fe = float(self._targets(L)[0])
+            Vb = V_hat + hg * G / b.M
 
-    def _scales(self, Vx: float) -> FloatArray:
-        v = self.law.creep_full_slip * max(abs(Vx), V_SCALE_FLOOR)
-        return np.array([v, v, v / self.law.a1])
+            def r(v: float, Vb=Vb, Fe=Fe, v_hat=v_hat) -> float:
+                return m * (v - v_hat) / hg + self._law(v, Vb + k * (v - v_hat))[0] - Fe
 
-    def _solve_scalar(
-        self, r, u0: float, m: float, hg: float, target: float, scale: float
-    ) -> float:
-        r0 = r(u0)
-        if r0 == 0.0:
-            return u0
-        cap = self.law.mu * self.law.P
-        direction = -1.0 if r0 > 0 else 1.0
-        # r is increasing in u; the mass term bounds the root when m > 0
-        step = scale
-        if m > 0.0:
-            step = min(step, hg * (cap + abs(target)) / m * (1.0 + 1e-12) + 1e-300)
-        a = u0
-        for _ in range(60):
-            b = a + direction * step
-            rb = r(b)
-            if (rb > 0.0) != (r0 > 0.0):
-                break
-            a = b
-            step *= 4.0
-        else:
-            raise StageSolveError(
-                f"no slip velocity satisfies the stage equation (target force {target:.6g} N "
-                f"against mu P = {cap:.6g} N)"
-            )
-        lo, hi = (a, b) if a < b else (b, a)
-        tol = SOLVE_RTOL * (scale + abs(lo) + abs(hi))
-        return float(brentq(r, lo, hi, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
+            scale = float(self._scale(Vb)[0])
+            bound = hg * (cap + abs(Fe)) / m if m > 0 else np.inf
+            v = increasing_root(r, v_hat, scale, max_step=bound * (1 + 1e-12))
+            V = Vb + k * (v - v_hat)
+            if i == 0:  # the explicit part of stage 2 from stage 1's slope
+                V_hat = Vn + (1 - GAMMA) / GAMMA * (V - Vn)
+                v_hat = vn + (1 - GAMMA) / GAMMA * (v - vn) if m > 0 else v
+        T = self._law(v, V)
+        return self._state(V, v), np.array([Fe - m * (v - v_hat) / hg, float(T[1]), float(T[2])])
 
-    def _solve_vector(self, residuals, u0: FloatArray, scale: FloatArray) -> FloatArray:
-        """Newton with a forward-difference Jacobian (one batched residual call per
-        iteration) and backtracking; scipy's hybrid method if that stalls."""
-        n = len(u0)
-        u = u0.copy()
-        r = residuals(u[None, :])[0]
-        for _ in range(50):
-            du = FD_STEP * (np.abs(u) + scale)
-            R = residuals(u + np.diag(du))
-            J = (R - r).T / du
-            try:
-                step = np.linalg.solve(J, -r)
-            except np.linalg.LinAlgError:
-                break
-            lam, norm0 = 1.0, np.linalg.norm(r)
-            while True:
-                u_new = u + lam * step
-                r_new = residuals(u_new[None, :])[0]
-                if np.linalg.norm(r_new) < norm0 or lam < 1e-4:
-                    break
-                lam *= 0.5
-            u, r = u_new, r_new
-            if np.all(np.abs(lam * step) <= SOLVE_RTOL * (np.abs(u) + scale)):
-                return u
-        sol = root(
-            lambda v: residuals(v[None, :])[0], u, method="hybr", options={"xtol": SOLVE_RTOL}
-        )
-        if not sol.success:
-            raise StageSolveError(f"stage solve failed after Newton and hybr: {sol.message}")
-        return np.asarray(sol.x).reshape(n)
+    def _sdirk_vector(self, h: float, L1: Loads, L2: Loads, algebraic: bool):
+        """SDIRK2 stages with several unknowns, Newton on each stage in turn."""
+        b = self.body
+        hg = h * GAMMA
+        m = self._masses(algebraic)
+        y_hat = self.y.copy()
+        for i, L in enumerate((L1, L2)):
+            target = self._targets(L)
+            Vb = y_hat[0] + hg * self._drive(L) / b.M
+            u_hat = y_hat[self._idx]
 
-    def _contact_at(self, y: FloatArray) -> ContactOutputs:
-        T = self.law.forces(y[1], y[2], y[3], y[0])
-        return ContactOutputs(float(T[0]), float(T[1]), float(T[2]), _saturated(self.law, y))
+            def states(U: FloatArray, y_hat=y_hat, Vb=Vb, u_hat=u_hat) -> FloatArray:
+                Y = np.tile(y_hat, (U.shape[0], 1))
+                Y[:, self._idx] = U
+                Y[:, 0] = Vb + (m[0] / b.M) * (U[:, 0] - u_hat[0])
+                return self._apply_ratios(Y.T).T
+
+            def residuals(U: FloatArray, states=states, target=target, u_hat=u_hat):
+                return m * (U - u_hat) / hg + self._forces(states(U))[:, self._act] - target
+
+            u = newton(residuals, u_hat, self._scale(Vb))
+            y = states(u[None, :])[0]
+            if i == 0:
+                y_hat = self.y + (1 - GAMMA) / GAMMA * (y - self.y)
+                if algebraic:
+                    y_hat[self._idx] = y[self._idx]  # no memory in the QS limit
+        T = self._forces(y[None, :])[0]
+        T[self._act] = target - m * (u - u_hat) / hg
+        return y, T
+
+    def _state(self, Vx: float, vx: float) -> FloatArray:
+        y = np.array([Vx, vx, 0.0, 0.0])
+        return self._apply_ratios(y)
 
 
 def _checked(L: Loads) -> Loads:

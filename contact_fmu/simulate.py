@@ -54,13 +54,15 @@ def simulate(
     Vy0: float = 0.0,
     Omega_z0: float = 0.0,
     substeps: int = 1,
+    scheme: str = "lobatto3c",
 ) -> Trajectory:
     """Integrate Eqs. (8)-(11) from t = 0 to t_end with output step dt.
 
     ``method="full"``: the stiff slip equation (Eq. 20) with the creep law of ``law``;
     ``"quasistationary"``: Eqs. (26), (28)-(30). ``loads`` is Loads or a function of t
     returning Loads (see ``load_history``). Omega_y0 defaults to pure rolling, Vx0/Rx.
-    ``substeps`` SDIRK steps are taken per output step.
+    ``substeps`` steps of ``scheme`` ("lobatto3c" or "sdirk2", see integrator) are taken
+    per output step.
     """
     t_end = positive("t_end", t_end)
     dt = positive("dt", dt)
@@ -68,7 +70,7 @@ def simulate(
     if n < 1 or abs(n * dt - t_end) > 1e-9 * t_end:
         raise InputError("t_end/dt", t_end / dt, "a whole number >= 1")
     Omega_y0 = finite("Vx0", Vx0) / body.Rx if Omega_y0 is None else Omega_y0
-    rb = RollingBody(law, body, lateral, method, Vx0, Omega_y0, Vy0, Omega_z0)
+    rb = RollingBody(law, body, lateral, method, Vx0, Omega_y0, Vy0, Omega_z0, scheme=scheme)
     names = ("Vx", "Omega_y", "Vy", "Omega_z", "vx", "vy", "Tx", "Ty", "Mz")
     rec = {k: np.empty(n + 1) for k in names}
     sliding = np.zeros(n + 1, dtype=bool)

@@ -1,0 +1,86 @@
+"""Root finders for the stage equations of the integrator (scipy underneath)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import brentq, root
+
+FloatArray = NDArray[np.float64]
+
+# Relative tolerance of the stage solves, on the unknowns (in units of their scale).
+SOLVE_RTOL = 1e-13
+# Relative forward-difference step of the Newton Jacobian (about sqrt of the rounding).
+FD_STEP = 1e-7
+# Bracket search: the step grows by this factor, at most this many times.
+EXPAND = 4.0
+MAX_EXPANSIONS = 60
+
+
+class StageSolveError(RuntimeError):
+    """A stage equation has no solution (e.g. loads beyond mu P with eta = inf)."""
+
+
+def increasing_root(
+    r: Callable[[float], float], u0: float, scale: float, max_step: float = np.inf
+) -> float:
+    """Root of an increasing function r, searched from the guess u0.
+
+    The bracket grows from u0 in steps scale, EXPAND*scale, ... (the first one capped
+    at max_step, a bound on the distance to the root when one is known), then scipy's
+    brentq closes it to SOLVE_RTOL relative to the scale.
+    """
+    r0 = r(u0)
+    if r0 == 0.0:
+        return u0
+    direction = -1.0 if r0 > 0.0 else 1.0
+    step = min(scale, max_step)
+    a = u0
+    for _ in range(MAX_EXPANSIONS):
+        b = a + direction * step
+        if (r(b) > 0.0) != (r0 > 0.0):
+            break
+        a = b
+        step *= EXPAND
+    else:
+        raise StageSolveError("no root: the stage residual keeps its sign (loads beyond mu P?)")
+    lo, hi = (a, b) if a < b else (b, a)
+    tol = SOLVE_RTOL * (scale + abs(lo) + abs(hi))
+    return float(brentq(r, lo, hi, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
+
+
+def newton(
+    residuals: Callable[[FloatArray], FloatArray], u0: FloatArray, scale: FloatArray
+) -> FloatArray:
+    """Solve residuals(u) = 0, u of shape (n,).
+
+    ``residuals`` takes a batch U (k, n) and returns (k, n), so that the
+    forward-difference Jacobian costs one call. Newton with backtracking on |r|;
+    scipy's hybrid method if that stalls.
+    """
+    n = len(u0)
+    u = np.array(u0, float)
+    r = residuals(u[None, :])[0]
+    for _ in range(50):
+        du = FD_STEP * (np.abs(u) + scale)
+        J = (residuals(u + np.diag(du)) - r).T / du
+        try:
+            step = np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            break
+        lam, norm0 = 1.0, np.linalg.norm(r)
+        while True:
+            u_new = u + lam * step
+            r_new = residuals(u_new[None, :])[0]
+            if np.linalg.norm(r_new) < norm0 or lam < 1e-4:
+                break
+            lam *= 0.5
+        u, r = u_new, r_new
+        if np.all(np.abs(lam * step) <= SOLVE_RTOL * (np.abs(u) + scale)):
+            return u
+    sol = root(lambda v: residuals(v[None, :])[0], u, method="hybr", options={"xtol": SOLVE_RTOL})
+    if not sol.success:
+        raise StageSolveError(f"stage solve failed after Newton and hybr: {sol.message}")
+    return np.asarray(sol.x).reshape(n)
