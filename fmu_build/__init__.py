@@ -69,7 +69,7 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
     h.update(json.dumps(cfg.to_dict(), sort_keys=True).encode())
     for rel, src in sources.files(modules):
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
-    for own in sorted(HERE.glob("*.py")):
+    for own in sorted(p for p in HERE.glob("*.py") if p.name != "__main__.py"):
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
     return h.hexdigest(), modules
 

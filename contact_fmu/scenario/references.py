@@ -8,8 +8,8 @@ the scene's data on a path that does not go through the FMU, its adapter or fmpy
   transient, with regime = 0;
 - ``full_slip``: Coulomb's law in gross sliding, Tx = sign mu P and regime = 1, over a
   window the scene asserts to be sliding;
-- ``simulate``: the pure-numerics ``simulate.simulate`` with ``refine`` times more
-  internal steps than the FMU takes (h_max / refine);
+- ``simulate``: the pure-numerics stepper of ``simulate.simulate`` (RollingBody) with
+  ``refine`` times more internal steps than the FMU takes (h_max / refine);
 - ``traction``: contact mode; the resultant of the traction field marched strip by
   strip (``LayerContact.traction``) on an ``nx`` x ``ny`` grid, integrated numerically:
   independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates.
@@ -29,16 +29,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..dynamics import Body, Lateral, Loads
+from ..integrator import RollingBody
 from ..kinematics import rigid_slip
 from ..layer import LayerContact
-from ..simulate import simulate
 from .runner import write_reference
 from .schema import Case, Reference, Scene
 from .signals import held
 
 FloatArray = NDArray[np.float64]
-# Grid index of the step containing time s: tolerance (in steps) for rounding of s.
-STEP_FUZZ = 1e-6
 
 
 def _law(p: dict, P: float) -> LayerContact:
@@ -82,26 +80,19 @@ def full_slip(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]
     return {"time": scene.grid[k], "Tx": Tx, "regime": np.ones(k.size)}
 
 
-def _held_loads(scene: Scene, case: Case) -> Callable[[float], Loads]:
-    """Loads(s) of the step containing s (left-continuous hold of the grid samples)."""
-    t = scene.grid
-    vals = np.array(
-        [case.inputs[n](t) if n in case.inputs else np.zeros(t.size) for n in Loads._fields]
-    )
-    h, n = scene.step, t.size - 1
-
-    def loads(s: float) -> Loads:
-        i = min(max(math.ceil(s / h - STEP_FUZZ) - 1, 0), n - 1)
-        return Loads(*(float(v) for v in vals[:, i]))
-
-    return loads
-
-
 def by_simulation(
     scene: Scene, ref: Reference, case: Case, refine: int | None = None
 ) -> dict[str, FloatArray]:
+    """The stepper of ``simulate`` driven step by step with the held loads.
+
+    ``simulate()`` samples a load function at stage times, and a stage on a
+    communication point (Lobatto IIIC's first stage, c = 0) cannot tell which step's
+    held value applies; so the same loop as ``simulate()`` is written out here, with
+    the loads of each communication step passed as constants.
+    """
     cfg, p = scene.config, case.parameters
-    P = case.inputs["P"](scene.grid)
+    t = scene.grid
+    P = case.inputs["P"](t)
     if np.ptp(P) != 0.0:
         raise ValueError(f"{scene.name}: source 'simulate' needs a constant P")
     lateral = Lateral(
@@ -110,25 +101,27 @@ def by_simulation(
     )
     refine = int(ref.options["refine"]) if refine is None else refine
     substeps = refine * max(1, math.ceil(scene.step / p["h_max"] - 1e-9))
-    tr = simulate(
-        _law(p, float(P[0])),
-        _body(p),
-        _held_loads(scene, case),
-        t_end=scene.stop_time,
-        dt=scene.step,
-        method=case.method,
-        lateral=lateral,
-        Vx0=p["Vx0"],
-        Omega_y0=p["Omega_y0"],
-        Vy0=p.get("Vy0", 0.0),
-        Omega_z0=p.get("Omega_z0", 0.0),
-        substeps=substeps,
-    )
+    rb = RollingBody(
+        _law(p, float(P[0])), _body(p), lateral, case.method, Vx0=p["Vx0"],
+        Omega_y0=p["Omega_y0"], Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0),
+    )  # fmt: skip
+    loads = np.array([case.inputs[n](t) if n in case.inputs else np.zeros(t.size)
+                      for n in Loads._fields])  # fmt: skip
+    names = [v for v in ref.tolerance if v != "regime"]
+    rec = {v: np.empty(t.size) for v in [*names, "regime"]}
+
+    def record(i: int) -> None:
+        o = rb.outputs()
+        for v in names:
+            rec[v][i] = o[v]
+        rec["regime"][i] = float(rb.out.sliding)
+
+    record(0)
+    for i in range(t.size - 1):
+        rb.advance(scene.step, Loads(*(float(x) for x in loads[:, i])), substeps)
+        record(i + 1)
     k = _samples(scene, ref)
-    out = {"time": scene.grid[k]}
-    for var in ref.tolerance:
-        out[var] = tr.sliding[k].astype(float) if var == "regime" else getattr(tr, var)[k]
-    return out
+    return {"time": t[k], **{v: rec[v][k] for v in ref.tolerance}}
 
 
 def by_traction(scene: Scene, ref: Reference, case: Case, refine: int = 1) -> dict[str, FloatArray]:

@@ -1,0 +1,130 @@
+"""One FMU instance driven call by call through fmpy, with its log messages kept.
+
+``simulate_fmu`` runs a whole experiment; masters that iterate (state get/set), feed
+inputs step by step, or need the status of each call use this instead. Variables are
+addressed by name; ``step`` returns the FMI status instead of raising.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from ctypes import byref
+from pathlib import Path
+from typing import Any
+
+import fmpy
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+
+OK, WARNING, DISCARD, ERROR, FATAL = range(5)
+
+
+class Instance:
+    """An instantiated, initialised co-simulation FMU (a context manager)."""
+
+    def __init__(
+        self,
+        fmu: str | Path,
+        name: str = "instance",
+        start_values: dict[str, Any] | None = None,
+        start_time: float = 0.0,
+        unzip_dir: str | Path | None = None,
+    ) -> None:
+        self._own_dir = unzip_dir is None
+        self.dir = Path(unzip_dir or tempfile.mkdtemp(prefix="fmu-"))
+        if self._own_dir:
+            fmpy.extract(str(fmu), str(self.dir))
+        self.md = fmpy.read_model_description(str(self.dir))
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.messages: list[tuple[int, str]] = []
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+        try:
+            from fmpy.logging import addLoggerProxy
+
+            addLoggerProxy(byref(self._callbacks))
+        except ImportError:  # pragma: no cover - fmpy without its C logger proxy
+            pass
+        self.fmu = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=str(self.dir),
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
+        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
+        self.time = start_time
+        self.fmu.setupExperiment(startTime=start_time)
+        self.fmu.enterInitializationMode()
+        for k, v in (start_values or {}).items():
+            self.set(k, v)
+        self.fmu.exitInitializationMode()
+
+    def _log(self, env, instance, status, category, message) -> None:
+        self.messages.append((int(status), message.decode(errors="replace") if message else ""))
+
+    # ---- values ----------------------------------------------------------------------
+    def set(self, name: str, value: Any) -> None:
+        v = self.vars[name]
+        if v.type == "Real":
+            self.fmu.setReal([v.valueReference], [float(value)])
+        elif v.type == "Integer":
+            self.fmu.setInteger([v.valueReference], [int(value)])
+        elif v.type == "String":
+            self.fmu.setString([v.valueReference], [str(value)])
+        else:
+            raise TypeError(f"{name}: type {v.type} not supported")
+
+    def get(self, name: str) -> Any:
+        v = self.vars[name]
+        if v.type == "Integer":
+            return self.fmu.getInteger([v.valueReference])[0]
+        if v.type == "String":
+            return self.fmu.getString([v.valueReference])[0].decode()
+        return self.fmu.getReal([v.valueReference])[0]
+
+    def outputs(self) -> dict[str, Any]:
+        return {n: self.get(n) for n, v in self.vars.items() if v.causality == "output"}
+
+    # ---- stepping ---------------------------------------------------------------------
+    def step(self, h: float, time: float | None = None) -> int:
+        """doStep from ``time`` (default: the instance's time) by h; the FMI status."""
+        t = self.time if time is None else time
+        try:
+            self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        except FMICallException as e:
+            return int(e.status)
+        self.time = t + h
+        return OK
+
+    def get_state(self) -> Any:
+        return (self.fmu.getFMUstate(), self.time)
+
+    def set_state(self, state: Any) -> None:
+        s, self.time = state
+        self.fmu.setFMUstate(s)
+
+    def free_state(self, state: Any) -> None:
+        self.fmu.freeFMUstate(state[0])
+
+    def close(self) -> None:
+        try:
+            self.fmu.terminate()
+        finally:
+            self.fmu.freeInstance()
+            if self._own_dir:
+                shutil.rmtree(self.dir, ignore_errors=True)
+
+    def __enter__(self) -> Instance:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

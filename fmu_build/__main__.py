@@ -1,0 +1,65 @@
+"""python -m fmu_build: build the FMUs of scenes, or the full FMU of a mode.
+
+python -m fmu_build scenarios/fig13.toml        the scene's FMU (only what it uses)
+python -m fmu_build --all                       every scene of scenarios/
+python -m fmu_build --full body                 every variable of a mode (body,
+                                                contact, rigid_body, or all)
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from contact_fmu.fmu.config import MODEL_MODULES, ModelConfig
+from contact_fmu.scenario import ScenarioError, discover, load
+
+from . import DEFAULT_OUT, BuildError, build
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m fmu_build",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument("scenes", nargs="*", type=Path, help="scene files (TOML)")
+    ap.add_argument("--all", action="store_true", help="every scene of --scenarios")
+    ap.add_argument("--scenarios", type=Path, default=Path("scenarios"))
+    ap.add_argument(
+        "--full",
+        action="append",
+        default=[],
+        choices=[*MODEL_MODULES, "all"],
+        help="the full FMU of a mode",
+    )
+    ap.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (out/fmu)")
+    ap.add_argument("--force", action="store_true", help="rebuild even if cached")
+    args = ap.parse_args(argv)
+
+    configs = []
+    try:
+        for path in [*args.scenes, *(discover(args.scenarios) if args.all else [])]:
+            configs.append(load(path).config)
+    except ScenarioError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    for mode in args.full:
+        modes = list(MODEL_MODULES) if mode == "all" else [mode]
+        configs += [ModelConfig.full(m) for m in modes]
+    if not configs:
+        ap.error("nothing to build: give scene files, --all or --full MODE")
+    for cfg in configs:
+        try:
+            built = build(cfg, args.out, force=args.force)
+        except BuildError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
+        state = "cached" if built.cached else "built"
+        print(f"{built.path}  ({state}; {len(cfg.variables)} variables; class {built.class_name})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
