@@ -1,0 +1,155 @@
+"""Building the FMUs: validation, model description, what each FMU holds, the cache."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import fmpy
+import pytest
+from fmpy.validation import validate_fmu
+
+import fmu_build
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.scenario import discover, load
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+SCENES = {p.stem: load(p) for p in discover(ROOT / "scenarios")}
+FULL = {f"full_{m}": ModelConfig.full(m) for m in ("body", "contact", "rigid_body")}
+CONFIGS = {**{k: s.config for k, s in SCENES.items()}, **FULL}
+
+
+@pytest.fixture(scope="session")
+def built() -> dict[str, fmu_build.Built]:
+    """Every FMU the project builds (cached under out/fmu by content)."""
+    return {name: fmu_build.build(cfg, OUT) for name, cfg in CONFIGS.items()}
+
+
+def test_scene_set_is_the_one_the_issue_asks_for():
+    assert set(SCENES) == {"fig13", "fig12", "railway", "brake", "sweep"}
+
+
+def test_every_built_fmu_passes_fmpy_validate(built):
+    for name, b in built.items():
+        assert validate_fmu(str(b.path)) == [], name
+        # the command line a user runs: `fmpy validate X.fmu`
+        proc = subprocess.run(
+            [sys.executable, "-m", "fmpy", "validate", str(b.path)],
+            capture_output=True, text=True,
+        )  # fmt: skip
+        assert proc.returncode == 0 and "No problems found" in proc.stdout, (name, proc.stdout)
+
+
+def test_model_description_has_units_ranges_and_complete_structure(built):
+    for name, b in built.items():
+        cfg = CONFIGS[name]
+        md = fmpy.read_model_description(str(b.path), validate=False)
+        units = {u.name for u in md.unitDefinitions}
+        variables = {v.name: v for v in md.modelVariables}
+        assert list(variables) == [v.name for v in cfg.variables], name
+        for decl in cfg.variables:
+            v = variables[decl.name]
+            assert v.description == decl.description
+            if decl.type == "Real":
+                assert v.unit == decl.unit and v.unit in units, (name, v.name)
+            if decl.min is not None:
+                assert float(v.min) == decl.min
+        assert md.coSimulation.canGetAndSetFMUstate
+        outputs = [v for v in md.modelVariables if v.causality == "output"]
+        assert [u.variable for u in md.outputs] == outputs
+        assert [u.variable for u in md.initialUnknowns] == outputs
+        inputs = {v.name for v in md.modelVariables if v.causality == "input"}
+        for u in md.outputs:
+            deps = {d.name for d in u.dependencies}
+            if cfg.mode == "contact":  # force element: direct feedthrough from the kinematics
+                assert deps and deps <= inputs, (name, u.variable.name)
+            else:  # outputs are states
+                assert deps == set(), (name, u.variable.name)
+
+
+def test_exact_start_values_in_the_model_description(built):
+    md = fmpy.read_model_description(str(built["fig13"].path), validate=False)
+    starts = {v.name: v.start for v in md.modelVariables}
+    assert float(starts["Vx0"]) == 5.6418958354775635  # 17 digits survive
+    assert float(starts["Fx_ex"]) == 190.98593171027443
+
+
+def _vendored(b: fmu_build.Built) -> set[str]:
+    with zipfile.ZipFile(b.path) as z:
+        prefix = f"resources/{b.package}/"
+        return {n[len(prefix) :] for n in z.namelist() if n.startswith(prefix)}
+
+
+def test_scene_fmu_holds_only_the_variables_it_uses(built):
+    fig13 = {v.name for v in CONFIGS["fig13"].variables}
+    full = {v.name for v in CONFIGS["full_body"].variables}
+    lateral = {"Vy", "Omega_z", "Fy_ex", "Mz_ex", "Ty", "Mz", "vy", "xi_y", "xi_sp", "Iz",
+               "Vy0", "Omega_z0", "method"}  # fmt: skip
+    assert not fig13 & lateral
+    assert lateral <= full
+    assert len(fig13) < len(full)
+    # fig12 holds vy/Vx: the ratio and the lateral force, but not Eq. (10)'s input
+    fig12 = {v.name for v in CONFIGS["fig12"].variables}
+    assert {"vy_ratio", "Ty", "vy"} <= fig12 and not fig12 & {"Fy_ex", "Vy0", "Iz"}
+    # only the railway scene switches steppers, so only it has the method parameter
+    assert [n for n, c in CONFIGS.items() if any(v.name == "method" for v in c.variables)] == [
+        "railway", "full_body"
+    ]  # fmt: skip
+
+
+def test_fmu_carries_only_the_model_parts_it_imports(built):
+    body, contact, rigid = (_vendored(built[n]) for n in ("fig13", "sweep", "full_rigid_body"))
+    assert {"integrator.py", "dynamics.py", "layer.py", "fmu/body_model.py"} <= body
+    assert "fmu/contact_model.py" not in body and "fmu/rigid_body.py" not in body
+    assert {"layer.py", "kinematics.py", "fmu/contact_model.py"} <= contact
+    assert not contact & {"integrator.py", "dynamics.py", "fmu/body_model.py"}
+    assert "layer.py" not in rigid and "integrator.py" not in rigid
+    for files in (body, contact, rigid):
+        assert "simulate.py" not in files and "examples.py" not in files
+        assert "fmu/slave.py" in files
+
+
+def test_every_fmu_has_its_own_module_class_and_package(built):
+    modules, classes, packages = set(), set(), set()
+    for b in built.values():
+        with zipfile.ZipFile(b.path) as z:
+            module = z.read("resources/slavemodule.txt").decode().strip()
+            assert f"resources/{module}.py" in z.namelist()
+            script = z.read(f"resources/{module}.py").decode()
+        assert f"class {b.class_name}(ContactSlave)" in script
+        assert f"from {b.package}.fmu.slave import" in script
+        modules.add(module)
+        classes.add(b.class_name)
+        packages.add(b.package)
+    assert len(modules) == len(classes) == len(packages) == len(built)
+
+
+def test_build_is_cached_by_content(built, tmp_path):
+    cfg = CONFIGS["sweep"]
+    first = fmu_build.build(cfg, tmp_path)
+    assert not first.cached
+    mtime = first.path.stat().st_mtime_ns
+    again = fmu_build.build(cfg, tmp_path)
+    assert again.cached and again.path == first.path
+    assert again.path.stat().st_mtime_ns == mtime
+    changed = ModelConfig.from_dict({**cfg.to_dict(), "starts": {**cfg.starts, "mu": 0.25}})
+    other = fmu_build.build(changed, tmp_path)
+    assert other.key != first.key and other.class_name != first.class_name
+
+
+def test_build_command_line(built, tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "fmu_build", str(ROOT / "scenarios" / "sweep.toml"),
+         "--full", "rigid_body", "--out", str(tmp_path)],
+        capture_output=True, text=True, cwd=ROOT,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert len(list(tmp_path.glob("*.fmu"))) == 2
+    bad = subprocess.run(
+        [sys.executable, "-m", "fmu_build", str(tmp_path / "missing.toml")],
+        capture_output=True, text=True, cwd=ROOT,
+    )  # fmt: skip
+    assert bad.returncode == 2 and "missing.toml" in bad.stderr

@@ -1,0 +1,187 @@
+"""The built FMUs through fmpy, call by call: FMU state, bad input, step sizes, two FMUs.
+
+Every status here is the one fmpy receives from the FMU binary (pythonfmu's C layer),
+and every message the one its logger callback receives.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fmu_build
+from contact_fmu import examples as ex
+from contact_fmu.dynamics import Body
+from contact_fmu.scenario import load, runner
+from contact_fmu.scenario.instance import DISCARD, FATAL, OK, Instance
+from contact_fmu.simulate import load_history, simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+F = ex.force_unit()
+MU_P = ex.mu * ex.P
+
+
+@pytest.fixture(scope="session")
+def scenes():
+    return {n: load(ROOT / "scenarios" / f"{n}.toml") for n in ("fig13", "railway", "sweep")}
+
+
+@pytest.fixture(scope="session")
+def fmus(scenes) -> dict[str, Path]:
+    return {n: fmu_build.build(s.config, OUT).path for n, s in scenes.items()}
+
+
+def body(fmus, **params) -> Instance:
+    """The Fig. 13 FMU (body mode, eta = 3) under Fx_ex = F, My_ex = -0.1 F Rx."""
+    inst = Instance(fmus["fig13"], "body", params)
+    inst.set("Fx_ex", F)
+    inst.set("My_ex", -0.1 * F * ex.Rx)
+    return inst
+
+
+def test_fmu_state_get_step_set_step_is_bit_identical(fmus):
+    with body(fmus) as b:
+        for _ in range(4):
+            assert b.step(1.75e-4) == OK
+        state = b.get_state()
+        for _ in range(3):
+            assert b.step(1.75e-4) == OK
+        first = b.outputs()
+        b.set_state(state)
+        for _ in range(3):
+            assert b.step(1.75e-4) == OK
+        assert b.outputs() == first
+        b.free_state(state)
+
+
+def test_fmu_state_in_contact_mode(fmus):
+    with Instance(fmus["sweep"], "contact") as c:
+        c.set("Omega_y", ex.speed_unit() / ex.Rx * 0.998)
+        assert c.step(2e-3) == OK
+        state = c.get_state()
+        before = c.outputs()
+        c.set("Omega_y", ex.speed_unit() / ex.Rx * 1.004)
+        assert c.step(2e-3) == OK and c.outputs() != before
+        c.set_state(state)
+        assert c.outputs() == before
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "requirement"),
+    [
+        ("Fx_ex", math.nan, "finite"),
+        ("My_ex", math.inf, "finite"),
+        ("P", 0.0, "> 0"),
+        ("P", -5.0, "> 0"),
+    ],
+)
+def test_bad_input_gives_discard_a_named_message_and_recovery(fmus, name, value, requirement):
+    with body(fmus) as b:
+        assert b.step(1.75e-4) == OK
+        good, before = b.get(name), b.outputs()
+        b.set(name, value)
+        assert b.step(1.75e-4) == DISCARD
+        text = f"{name} = {value!r} is invalid: must be {requirement}"
+        assert any(text in m for s, m in b.messages if s == DISCARD), b.messages
+        after = b.outputs()
+        assert after == before and all(math.isfinite(v) for v in after.values())
+        b.set(name, good)
+        assert b.step(1.75e-4) == OK
+        assert all(s < FATAL for s, _ in b.messages)
+
+
+@pytest.mark.parametrize("h", [0.0, -1.75e-4])
+def test_zero_or_negative_step_gives_discard(fmus, h):
+    with body(fmus) as b:
+        assert b.step(h) == DISCARD
+        assert f"communicationStepSize = {h!r} is invalid" in b.messages[-1][1]
+        assert b.step(1.75e-4) == OK
+
+
+def test_bad_parameter_gives_discard_until_corrected(fmus):
+    with body(fmus, mu=-0.3) as b:
+        assert b.step(1.75e-4) == DISCARD
+        assert any("mu = -0.3 is invalid: must be > 0" in m for _, m in b.messages)
+        b.set("mu", 0.3)
+        assert b.step(1.75e-4) == OK
+        assert abs(b.get("Tx")) <= MU_P
+
+
+@pytest.mark.parametrize("h", [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0])
+def test_any_step_from_1e_6_to_1_s_gives_bounded_outputs(fmus, h):
+    """Traction beyond the adhesion limit and back, for every communication step.
+
+    h_max = 1e-2 s keeps a 1 s step at 100 internal steps; the L-stable scheme needs no
+    step limit for the stiff slip, so every h yields |Tx| <= mu P and finite values.
+    """
+    with body(fmus, h_max=1e-2) as b:
+        for My in (-0.1 * F * ex.Rx, 3.0 * MU_P * ex.Rx, 0.0):  # rolling, sliding, rolling
+            b.set("My_ex", My)
+            for _ in range(3):
+                assert b.step(h) == OK, b.messages[-1:]
+                out = b.outputs()
+                assert all(math.isfinite(v) for v in out.values()), out
+                assert abs(out["Tx"]) <= MU_P * (1 + 1e-12)
+
+
+def test_result_converges_as_the_communication_step_shrinks(fmus, scenes):
+    """Fig. 13 loads (sine moment) held over each step: first-order convergence in h.
+
+    One internal step per communication step (h_max = h), so h is the only resolution.
+    The reference is simulate() with the continuous loads and 16 times finer steps than
+    the finest h; errors in Vx and Tx at t = 0.014 s must fall by >= 1.6 per halving of
+    h (order 1 of the zero-order hold would give 2).
+    """
+    case = scenes["fig13"].case("eta = 3")
+    t_end, Iy = 0.014, case.parameters["Iy"]
+    My = case.inputs["My_ex"]
+    loads = load_history(Fx_ex=F, My_ex=lambda t: float(My(np.array([t]))[0]))
+    ref = simulate(ex.contact(), Body(ex.M, ex.Rx, Iy), loads, t_end, t_end / 1280,
+                   Vx0=ex.speed_unit())  # fmt: skip
+    errors = []
+    for n in (20, 40, 80, 160):
+        h = t_end / n
+        with Instance(fmus["fig13"], "conv", {"Iy": Iy, "h_max": h}) as b:
+            b.set("Fx_ex", F)
+            for k in range(n):
+                b.set("My_ex", float(My(np.array([k * h]))[0]))
+                assert b.step(h) == OK
+            errors.append((abs(b.get("Vx") - ref.Vx[-1]), abs(b.get("Tx") - ref.Tx[-1])))
+    errors = np.array(errors)
+    ratios = errors[:-1] / errors[1:]
+    assert np.all(ratios >= 1.6), (errors, ratios)
+    assert errors[-1, 1] < 0.01 * F
+
+
+def test_two_scene_fmus_in_one_process_each_give_their_own_results(fmus, scenes):
+    """Fig. 13 and railway FMUs, plus two instances of one FMU, stepped interleaved."""
+    fig13, railway = scenes["fig13"], scenes["railway"]
+    alone = {
+        "fig13": runner.simulate(fmus["fig13"], fig13),
+        "railway": runner.simulate(fmus["railway"], railway),
+    }
+    n = 30
+    jobs = [
+        ("fig13", fig13, fig13.case("eta = 1.5"), 0),
+        ("railway", railway, railway.case("full"), 1),
+        ("fig13", fig13, fig13.case("eta = 10"), 2),
+    ]
+    insts = [Instance(fmus[k], f"i{i}", runner.start_values(s, c)) for k, s, c, i in jobs]
+    try:
+        tables = [runner.input_table(s, c) for _, s, c, _ in jobs]
+        for k in range(n):
+            for inst, (_, scene, _, _), table in zip(insts, jobs, tables, strict=True):
+                for name in scene.inputs:
+                    inst.set(name, float(table[name][k]))
+                assert inst.step(scene.step) == OK
+        for inst, (key, scene, case, _) in zip(insts, jobs, strict=True):
+            own = alone[key][[c.name for c in scene.cases].index(case.name)]
+            for name in scene.outputs:
+                assert inst.get(name) == own.columns[name][n], (key, case.name, name)
+    finally:
+        for inst in insts:
+            inst.close()

@@ -1,0 +1,280 @@
+"""The adapter class in-process (no FMU binary): state, bad input, error handling.
+
+pythonfmu answers fmi2Discard when do_step returns False and fmi2Fatal when anything
+raises, so every check here is that do_step returns False (never raises), that the log
+names the variable and the value, that the state is untouched and that the instance
+steps normally, bit for bit like a fresh one, once the input is corrected.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from contact_fmu import examples as ex
+from contact_fmu.fmu.body_model import MAX_SUBSTEPS, substeps
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.fmu.slave import ContactSlave
+from contact_fmu.kinematics import rigid_slip
+
+F = ex.force_unit()
+H = 1.75e-4  # s, the communication step of the Fig. 13 scene
+
+BODY = ModelConfig(
+    name="body",
+    mode="body",
+    inputs=("P", "Fx_ex", "My_ex"),
+    outputs=("Vx", "Omega_y", "vx", "Tx", "adhesion", "regime"),
+    starts={"h_max": H / 4},
+)
+CONTACT = ModelConfig(
+    name="contact", mode="contact", inputs=("P", "Vx", "Vy", "Omega_y"),
+    outputs=("Tx", "Ty", "Mz", "vx", "adhesion", "regime"),
+)  # fmt: skip
+RIGID = ModelConfig(name="rigid", mode="rigid_body", inputs=("Tx", "Fx_ex", "My_ex"),
+                    outputs=("Vx", "Omega_y"))  # fmt: skip
+
+
+class Slave:
+    """A ContactSlave for a configuration, addressed by variable name."""
+
+    def __init__(self, cfg: ModelConfig, **params: float) -> None:
+        cls = type("Model", (ContactSlave,), {"CONFIG": cfg.to_dict()})
+        self.s = cls(instance_name="test")
+        self.vr = {v.name: k for k, v in self.s.vars.items()}
+        self.t = 0.0
+        self.s.setup_experiment(0.0)
+        self.s.enter_initialization_mode()
+        for k, v in params.items():
+            self.set(k, v)
+        self.s.exit_initialization_mode()
+
+    def set(self, name: str, value: float) -> None:
+        self.s.set_real([self.vr[name]], [value])
+
+    def get(self, name: str) -> float:
+        var = self.s.vars[self.vr[name]]
+        if type(var).__name__ == "Integer":
+            return self.s.get_integer([self.vr[name]])[0]
+        return self.s.get_real([self.vr[name]])[0]
+
+    def outputs(self) -> dict[str, float]:
+        return {n: self.get(n) for n in self.s.cfg.outputs}
+
+    def step(self, h: float = H) -> bool:
+        ok = self.s.do_step(self.t, h)
+        if ok:
+            self.t += h
+        return ok
+
+    @property
+    def messages(self) -> list[str]:
+        return [m.msg for m in self.s.log_queue]
+
+
+def loaded_body(**params: float) -> Slave:
+    b = Slave(BODY, **params)
+    b.set("Fx_ex", F)
+    b.set("My_ex", -0.1 * F * ex.Rx)
+    return b
+
+
+def test_fmu_state_restore_repeats_a_body_step_bit_for_bit():
+    b = loaded_body()
+    for _ in range(5):
+        assert b.step()
+    state = b.s._get_fmu_state()
+    assert b.step() and b.step()
+    first = b.outputs()
+    b.s._set_fmu_state(state)
+    b.t -= 2 * H
+    assert b.step() and b.step()
+    assert b.outputs() == first  # exact equality: the whole state came back
+
+
+def test_fmu_state_restore_covers_inputs_and_parameters_too():
+    b = loaded_body()
+    assert b.step()
+    state = b.s._get_fmu_state()
+    b.set("Fx_ex", 0.5 * F)  # an input changed after the state was taken
+    assert b.step()
+    b.s._set_fmu_state(state)
+    b.t -= H
+    assert b.get("Fx_ex") == F
+    assert b.step()
+    reference = loaded_body()
+    assert reference.step() and reference.step()
+    assert b.outputs() == reference.outputs()
+
+
+def test_fmu_state_restore_in_contact_and_rigid_body_modes():
+    c = Slave(CONTACT)
+    c.set("Omega_y", ex.speed_unit() / ex.Rx * 0.999)
+    assert c.step()
+    state = c.s._get_fmu_state()
+    before = c.outputs()
+    c.set("Omega_y", ex.speed_unit() / ex.Rx * 0.99)
+    assert c.step() and c.outputs() != before
+    c.s._set_fmu_state(state)
+    assert c.outputs() == before
+
+    r = Slave(RIGID, Iy=1e-3)
+    r.set("Tx", 10.0)
+    assert r.step()
+    state = r.s._get_fmu_state()
+    assert r.step()
+    after = r.outputs()
+    r.s._set_fmu_state(state)
+    r.t -= H
+    assert r.step() and r.outputs() == after
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "requirement"),
+    [
+        ("Fx_ex", math.nan, "finite"),
+        ("My_ex", math.inf, "finite"),
+        ("My_ex", -math.inf, "finite"),
+        ("P", 0.0, "> 0"),
+        ("P", -1000.0, "> 0"),
+        ("P", math.nan, "finite"),
+    ],
+)
+def test_bad_input_is_discarded_named_and_recoverable(name, value, requirement):
+    b = loaded_body()
+    assert b.step()
+    good = b.get(name)
+    before = b.outputs()
+    b.set(name, value)
+    assert b.step() is False  # fmi2Discard
+    assert b.outputs() == before  # state and outputs untouched, all finite
+    assert all(math.isfinite(v) for v in before.values())
+    expected = f"{name} = {value!r} is invalid: must be {requirement}"
+    assert any(expected in m for m in b.messages), b.messages
+    assert any("discarded" in m and expected in m for m in b.messages)
+    b.set(name, good)
+    assert b.step()
+    fresh = loaded_body()
+    assert fresh.step() and fresh.step()
+    assert b.outputs() == fresh.outputs()  # the rejected step left no trace
+
+
+@pytest.mark.parametrize("h", [0.0, -1e-3, math.nan, math.inf])
+def test_non_positive_or_non_finite_step_is_discarded(h):
+    b = loaded_body()
+    assert b.s.do_step(0.0, h) is False
+    assert f"communicationStepSize = {h!r} is invalid" in b.messages[-1]
+    assert b.step()  # usable afterwards
+
+
+def test_step_not_starting_at_the_fmu_time_is_discarded():
+    b = loaded_body()
+    assert b.step()
+    assert b.s.do_step(10 * H, H) is False
+    assert "currentCommunicationPoint" in b.messages[-1] and repr(10 * H) in b.messages[-1]
+    assert b.step()
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "good", "fragment"),
+    [
+        ("mu", 0.0, ex.mu, "mu = 0.0 is invalid: must be > 0"),
+        ("mu", -0.3, ex.mu, "mu = -0.3 is invalid: must be > 0"),
+        ("Rx", math.nan, ex.Rx, "Rx = nan is invalid: must be finite"),
+        ("h_max", 0.0, H / 4, "h_max = 0.0 is invalid: must be > 0"),
+        ("M", math.inf, ex.M, "M = inf is invalid: must be finite"),
+    ],
+)
+def test_bad_parameter_blocks_stepping_until_corrected(name, value, good, fragment):
+    b = loaded_body(**{name: value})
+    assert any(fragment in m for m in b.messages), b.messages
+    assert b.step() is False
+    assert any(fragment in m for m in b.messages[-2:])
+    assert all(math.isfinite(v) for v in b.outputs().values())
+    b.set(name, good)  # the model is not set up: the parameter may still change
+    assert b.step()
+    fresh = loaded_body()
+    assert fresh.step() and b.outputs() == fresh.outputs()
+
+
+def test_parameter_combination_refused_by_the_model_is_named():
+    """k1 = k2 = 0 passes each range but leaves no normal compliance (Eq. 32)."""
+    b = loaded_body(k1=0.0, k2=0.0)
+    assert any("k1 + k2 = 0.0 is invalid" in m for m in b.messages), b.messages
+    assert b.step() is False
+    b.set("k1", ex.k1)
+    b.set("k2", ex.k2)
+    assert b.step()
+
+
+def test_fixed_parameter_change_after_initialisation_is_ignored_and_logged():
+    b = loaded_body()
+    assert b.step()
+    b.set("mu", 0.5)
+    assert b.get("mu") == ex.mu
+    assert "mu is a fixed parameter" in b.messages[-1]
+    assert b.step()
+
+
+def test_setting_an_output_is_ignored_and_logged():
+    b = loaded_body()
+    b.set("Tx", 1.0)
+    assert "Tx is an output" in b.messages[-1]
+    assert b.step()
+
+
+def test_stage_failure_is_discarded_with_the_state_unchanged():
+    """eta = inf (Iy = 0) admits no gross sliding: loads beyond mu P have no solution."""
+    b = Slave(BODY, Iy=0.0)
+    b.set("Fx_ex", F)
+    assert b.step()
+    before = b.outputs()
+    b.set("My_ex", -2.0 * ex.mu * ex.P * ex.Rx)  # |A1 My/Rx| = 2 mu P
+    assert b.step() is False
+    assert "no gross sliding" in b.messages[-1] and "discarded" in b.messages[-1]
+    assert b.outputs() == before
+    b.set("My_ex", 0.0)
+    assert b.step()
+
+
+def test_contact_outputs_follow_the_inputs_before_any_step():
+    """A force element has direct feedthrough: getReal after setReal sees the new force."""
+    c = Slave(CONTACT)
+    law = ex.contact()
+    for ratio in (1.0, 0.999, 1.003):
+        Vx, Omega_y = ex.speed_unit(), ex.speed_unit() / ex.Rx * ratio
+        c.set("Omega_y", Omega_y)
+        vx, vy = rigid_slip(Vx, Omega_y, 0.0, ex.Rx)
+        assert c.get("Tx") == float(law.forces(vx, vy, 0.0, Vx)[0])
+        assert c.get("vx") == vx
+
+
+def test_contact_bad_input_keeps_the_last_outputs():
+    c = Slave(CONTACT)
+    c.set("Omega_y", ex.speed_unit() / ex.Rx * 0.999)
+    before = c.outputs()
+    c.set("Vx", math.nan)
+    assert c.outputs() == before
+    assert c.step() is False
+    c.set("Vx", ex.speed_unit())
+    assert c.step() and c.outputs() == before
+
+
+def test_rigid_body_integrates_eqs_8_and_9_exactly_for_held_force():
+    r = Slave(RIGID, Iy=1e-3)
+    r.set("Tx", 30.0)
+    r.set("Fx_ex", 50.0)
+    r.set("My_ex", -1.0)
+    assert r.step(0.01)
+    assert r.get("Vx") == pytest.approx(ex.speed_unit() + 0.01 * (50.0 - 30.0) / 1.0, rel=1e-15)
+    dOmega = 0.01 * (-1.0 + ex.Rx * 30.0) / 1e-3  # Eq. (9) with +Rx Tx
+    assert r.get("Omega_y") == pytest.approx(ex.speed_unit() / ex.Rx + dOmega, rel=1e-15)
+
+
+def test_substeps_split_a_communication_step_by_h_max():
+    assert substeps(1e-6, 1e-4) == 1
+    assert substeps(1e-4, 1e-4) == 1
+    assert substeps(3e-4, 1e-4) == 3  # 3e-4/1e-4 = 2.9999999999999996 in floating point
+    assert substeps(3.0001e-4, 1e-4) == 4
+    assert substeps(1.0, 1e-9) == MAX_SUBSTEPS
