@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -129,3 +130,9 @@ def test_config_round_trips_through_plain_data():
         experiment=(0.0, 1.0, 0.01),
     )
     assert ModelConfig.from_dict(cfg.to_dict()) == cfg
+
+
+def test_readme_lists_the_declared_variables():
+    """The README's variable table is generated from the declarations (kept in sync)."""
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    assert fv.markdown_table() in readme

@@ -308,14 +308,14 @@ VARIABLES: tuple[Var, ...] = (
     Var(
         "xi_x",
         "1",
-        "Longitudinal creepage vx/|Vx|",
+        "Longitudinal creepage vx / abs(Vx)",
         {"body": OUTPUT, "contact": OUTPUT},
         feedthrough=("Vx", "Omega_y"),
     ),
     Var(
         "xi_y",
         "1",
-        "Lateral creepage vy/|Vx|",
+        "Lateral creepage vy / abs(Vx)",
         {"body": OUTPUT, "contact": OUTPUT},
         needs="vy",
         feedthrough=("Vx", "Vy"),
@@ -323,7 +323,7 @@ VARIABLES: tuple[Var, ...] = (
     Var(
         "xi_sp",
         "1/m",
-        "Spin creepage Omega_z/|Vx|",
+        "Spin creepage Omega_z / abs(Vx)",
         {"body": OUTPUT, "contact": OUTPUT},
         needs="spin",
         feedthrough=("Vx", "Omega_z"),
@@ -397,3 +397,23 @@ def select(s: Structure, inputs: tuple[str, ...], outputs: tuple[str, ...]) -> l
         if c == PARAMETER or v.name in wanted:
             chosen.append(v)
     return chosen
+
+
+def markdown_table() -> str:
+    """Every variable as a Markdown table (README): causality per mode, unit, start."""
+    rows = [
+        "| name | body | contact | rigid_body | unit | start | description |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for v in VARIABLES:
+        modes = [v.causality.get(m, "") for m in MODES]
+        if v.needs:
+            modes[0] += f" ({v.needs})" if modes[0] else ""
+        start = "" if all(c == OUTPUT for c in v.causality.values()) else f"{v.start!r}"
+        unit = v.unit if v.unit is not None else ("" if v.type == "Real" else v.type)
+        rows.append(f"| {v.name} | {' | '.join(modes)} | {unit} | {start} | {v.description} |")
+    return "\n".join(rows)
+
+
+if __name__ == "__main__":
+    print(markdown_table())

@@ -1,0 +1,177 @@
+"""Step cost, size and variable count of each scene's FMU against the full FMU of its mode.
+
+    .venv/bin/python benchmarks/bench_fmu_step.py [--steps N] [--repeats R] [--write]
+
+For every scene (its first case) the scene's FMU and the full FMU of the same mode run
+the same inputs through fmpy's FMU2Slave, call by call as a master does (setReal of the
+inputs, doStep, getReal of the scene's outputs). Each of the N steps is timed in R fresh
+runs; the cost per communication step is the mean over the steps of each step's fastest
+run (the machine is shared: the minimum filters out the other processes). "model" is
+the same model object called directly in Python (no FMI), to separate the FMI/pythonfmu
+overhead from the numerics.
+``--write`` replaces the section "## FMU step cost" of docs/performance.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import platform
+import sys
+import time
+from pathlib import Path
+
+import fmpy
+import numpy as np
+
+import fmu_build
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.scenario import discover, load, runner
+from contact_fmu.scenario.instance import OK, Instance
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+DOC = ROOT / "docs" / "performance.md"
+SECTION = "## FMU step cost"
+
+
+def time_fmu(path: Path, scene, case, n: int, repeats: int) -> tuple[float, dict[str, float]]:
+    """Best mean seconds per step over fresh runs, and the outputs after n steps."""
+    table = runner.input_table(scene, case)
+    names = {v.name for v in fmpy.read_model_description(str(path)).modelVariables}
+    starts = {k: v for k, v in runner.start_values(scene, case).items() if k in names}
+    times, last = np.full((repeats, n), np.inf), {}
+    for r in range(repeats):
+        with Instance(path, f"bench{r}", starts) as inst:
+            refs = {k: inst.vars[k].valueReference for k in scene.inputs}
+            outs = [inst.vars[k].valueReference for k in scene.outputs if k != "regime"]
+            fmu = inst.fmu
+            for k in range(n):
+                t0 = time.perf_counter()
+                fmu.setReal(list(refs.values()), [float(table[i][k]) for i in refs])
+                if inst.step(scene.step) != OK:
+                    raise RuntimeError(f"{path.name}: {inst.messages[-1:]}")
+                fmu.getReal(outs)
+                times[r, k] = time.perf_counter() - t0
+            last = {k: inst.get(k) for k in scene.outputs}
+    return float(np.mean(np.min(times, axis=0))), last
+
+
+def time_model(scene, case, n: int, repeats: int) -> float:
+    """The scene's model object stepped directly (what the adapter calls per doStep)."""
+    import importlib
+
+    cfg = scene.config
+    module = importlib.import_module(f"contact_fmu.{cfg.model_module}")
+    table = runner.input_table(scene, case)
+    params = {v.name: cfg.start(v) for v in cfg.variables if v.causality[cfg.mode] == "parameter"}
+    params.update(runner.start_values(scene, case))
+    times = np.full((repeats, n), np.inf)
+    for r in range(repeats):
+        inputs = {k: float(table[k][0]) for k in scene.inputs}
+        model = module.build(cfg, params, inputs, 0.0)
+        for k in range(n):
+            t0 = time.perf_counter()
+            inputs = {i: float(table[i][k]) for i in scene.inputs}
+            model.step(scene.step, inputs)
+            model.outputs()
+            times[r, k] = time.perf_counter() - t0
+    return float(np.mean(np.min(times, axis=0)))
+
+
+def measure(steps: int, repeats: int) -> list[dict]:
+    rows = []
+    full = {m: fmu_build.build(ModelConfig.full(m), OUT) for m in ("body", "contact")}
+    for path in discover(ROOT / "scenarios"):
+        scene = load(path)
+        case = scene.cases[0]
+        n = min(steps, scene.n_steps)
+        own = fmu_build.build(scene.config, OUT)
+        big = full[scene.config.mode]
+        t_own, out_own = time_fmu(own.path, scene, case, n, repeats)
+        t_full, out_full = time_fmu(big.path, scene, case, n, max(2, repeats // 2))
+        rows.append(
+            {
+                "scene": scene.name,
+                "mode": scene.config.mode,
+                "vars": len(scene.config.variables),
+                "vars_full": len(ModelConfig.full(scene.config.mode).variables),
+                "size": own.path.stat().st_size,
+                "size_full": big.path.stat().st_size,
+                "files": len(own.modules),
+                "files_full": len(big.modules),
+                "step": t_own,
+                "step_full": t_full,
+                "model": time_model(scene, case, n, repeats),
+                "dTx": abs(out_own["Tx"] - out_full["Tx"]),
+                "n": n,
+                "lateral": scene.config.vy != "zero",
+            }
+        )
+        print(f"{scene.name}: {t_own * 1e6:.0f} us vs {t_full * 1e6:.0f} us", file=sys.stderr)
+    return rows
+
+
+def markdown(rows: list[dict], steps: int, repeats: int) -> str:
+    today = datetime.date.today().isoformat()
+    cpu = platform.processor() or platform.machine()
+    lines = [
+        SECTION,
+        "",
+        f"Measured by `benchmarks/bench_fmu_step.py` on {today} ({cpu}, "
+        f"Python {platform.python_version()}, {steps} steps; each step the fastest of "
+        f"{repeats} runs, full FMU {max(2, repeats // 2)}; shared 2-core machine). Per "
+        "communication step: setReal of the "
+        "inputs, doStep, getReal of the scene's outputs through fmpy's FMU2Slave. The full "
+        "FMU of a mode holds every variable and model part (Eqs. 10-11 integrated, both "
+        "steppers); it runs the scene's inputs with its extra inputs at 0. *model*: the "
+        "scene's model object stepped in Python without FMI.",
+        "",
+        "| scene | mode | variables (full) | FMU size KiB (full) | modules (full) "
+        "| step ms | full FMU step ms | model ms | abs(Tx - Tx_full) N |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        note = " (*)" if r["lateral"] else ""
+        lines.append(
+            f"| {r['scene']} | {r['mode']} | {r['vars']} ({r['vars_full']}) "
+            f"| {r['size'] / 1024:.0f} ({r['size_full'] / 1024:.0f}) "
+            f"| {r['files']} ({r['files_full']}) | {r['step'] * 1e3:.3f} "
+            f"| {r['step_full'] * 1e3:.3f} | {r['model'] * 1e3:.3f} | {r['dTx']:.1e}{note} |"
+        )
+    lines += [
+        "",
+        "(*) Fig. 12 holds vy/Vx = 0.002; the full FMU has no held ratio and integrates "
+        "Eq. (10) from Vy = 0 instead, so its Tx differs by the lateral creep.",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def write(section: str) -> None:
+    text = DOC.read_text() if DOC.exists() else "# Performance\n\n"
+    if SECTION in text:
+        head, rest = text.split(SECTION, 1)
+        nxt = rest.find("\n## ")
+        tail = rest[nxt + 1 :] if nxt >= 0 else ""
+        text = head + section + ("\n" + tail if tail else "")
+    else:
+        text = text.rstrip("\n") + "\n\n" + section
+    DOC.parent.mkdir(parents=True, exist_ok=True)
+    DOC.write_text(text)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--steps", type=int, default=40)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
+    args = ap.parse_args()
+    section = markdown(measure(args.steps, args.repeats), args.steps, args.repeats)
+    print(section)
+    if args.write:
+        write(section)
+
+
+if __name__ == "__main__":
+    main()
