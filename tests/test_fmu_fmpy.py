@@ -185,3 +185,33 @@ def test_two_scene_fmus_in_one_process_each_give_their_own_results(fmus, scenes)
     finally:
         for inst in insts:
             inst.close()
+
+
+def test_full_body_fmu_lateral_dynamics_and_method_parameter():
+    """The full FMU: Eqs. (10)-(11) and the string parameter choosing the stepper."""
+    from contact_fmu.fmu.config import ModelConfig
+
+    path = fmu_build.build(ModelConfig.full("body"), OUT).path
+    for method in ("full", "quasistationary"):
+        with Instance(path, method, {"method": method, "h_max": 1e-4}) as b:
+            assert b.get("method") == method
+            b.set("Fx_ex", 0.2 * MU_P)
+            b.set("Fy_ex", 0.2 * MU_P)
+            for _ in range(3):
+                assert b.step(1e-4) == OK, b.messages[-1:]
+            out = b.outputs()
+            assert out["Vy"] > 0.0 and out["Ty"] > 0.0  # the lateral force drives Vy
+            assert math.hypot(out["Tx"], out["Ty"]) <= MU_P * (1 + 1e-12)
+            if method == "full":
+                # the lateral traction's moment spins the body: Iz dOmega_z/dt = -Mz (Eq. 11)
+                assert out["Mz"] != 0.0 and np.sign(out["Omega_z"]) == -np.sign(out["Mz"])
+            else:  # Eqs. (26), (29), (30): the fast variables balance the loads exactly
+                A2 = 0.25  # default Iy: eta = 3
+                assert out["Tx"] == pytest.approx(A2 * 0.2 * MU_P, rel=1e-12)
+                assert out["Ty"] == pytest.approx(0.2 * MU_P, rel=1e-12)
+                assert out["Mz"] == pytest.approx(0.0, abs=1e-9)
+    with Instance(path, "bad", {"method": "euler"}) as b:
+        assert any("method = 'euler' is invalid" in m for _, m in b.messages), b.messages
+        assert b.step(1e-4) == DISCARD
+        b.set("method", "full")  # not initialised: a parameter may still be corrected
+        assert b.step(1e-4) == OK

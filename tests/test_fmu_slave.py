@@ -278,3 +278,19 @@ def test_substeps_split_a_communication_step_by_h_max():
     assert substeps(3e-4, 1e-4) == 3  # 3e-4/1e-4 = 2.9999999999999996 in floating point
     assert substeps(3.0001e-4, 1e-4) == 4
     assert substeps(1.0, 1e-9) == MAX_SUBSTEPS
+
+
+def test_normal_load_input_moves_the_contact_ellipse_and_is_part_of_the_state():
+    """P is an input in body mode: the ellipse follows Eq. (34) from the next step on."""
+    cfg = ModelConfig(name="bodyP", mode="body", inputs=("P", "Fx_ex"),
+                      outputs=("Tx", "a1", "a2", "p0"), starts={"h_max": H / 4})  # fmt: skip
+    b = Slave(cfg)
+    b.set("Fx_ex", F)
+    assert b.step()
+    state = b.s._get_fmu_state()
+    b.set("P", 2.0 * ex.P)
+    assert b.step()
+    doubled = ex.contact().with_load(2.0 * ex.P)
+    assert (b.get("a1"), b.get("a2"), b.get("p0")) == (doubled.a1, doubled.a2, doubled.p0)
+    b.s._set_fmu_state(state)
+    assert b.get("P") == ex.P and b.get("a1") == ex.contact().a1
