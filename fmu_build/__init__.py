@@ -67,7 +67,7 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
     h.update(FORMAT.encode())
     h.update(metadata.version("pythonfmu").encode())
     h.update(json.dumps(cfg.to_dict(), sort_keys=True).encode())
-    for rel, src in sources.files(modules):
+    for rel, src in sources.files(modules) + sources.data(cfg.data_files):
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
     for own in sorted(p for p in HERE.glob("*.py") if p.name != "__main__.py"):
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
@@ -97,7 +97,7 @@ def build(cfg: ModelConfig, out_dir: str | Path = DEFAULT_OUT, force: bool = Fal
     work = Path(tempfile.mkdtemp(prefix=f".build-{cfg.name}-", dir=out_dir))
     try:
         stage = work / "stage"
-        sources.vendor(modules, stage / package)
+        sources.vendor(modules, stage / package, cfg.data_files)
         script_file = stage / f"{module}.py"
         script_file.write_text(script.render(cfg, package, class_name))
         cmd = [

@@ -104,11 +104,22 @@ def files(modules: list[str]) -> list[tuple[str, Path]]:
 PACKAGE_INIT = '"""Parts of contact_fmu vendored into this FMU by fmu_build (do not edit)."""\n'
 
 
-def vendor(modules: list[str], dest: Path) -> None:
-    """Copy the modules into the package folder ``dest`` (its own __init__.py)."""
+def data(paths: tuple[str, ...]) -> list[tuple[str, Path]]:
+    """(path inside the vendored package, source file) for package-relative data files."""
+    out = []
+    for rel in paths:
+        src = PACKAGE_DIR / rel
+        if not src.is_file():
+            raise SourceError(f"data file {PACKAGE}/{rel} does not exist")
+        out.append((Path(rel).as_posix(), src))
+    return out
+
+
+def vendor(modules: list[str], dest: Path, data_files: tuple[str, ...] = ()) -> None:
+    """Copy the modules (and data files) into the package folder ``dest``."""
     dest.mkdir(parents=True)
     (dest / "__init__.py").write_text(PACKAGE_INIT)
-    for rel, src in files(modules):
+    for rel, src in files(modules) + data(data_files):
         if rel == "__init__.py":
             continue
         target = dest / rel

@@ -153,3 +153,15 @@ def test_build_command_line(built, tmp_path):
         capture_output=True, text=True, cwd=ROOT,
     )  # fmt: skip
     assert bad.returncode == 2 and "missing.toml" in bad.stderr
+
+
+def test_law_data_files_travel_in_the_fmu_and_in_its_key(tmp_path, monkeypatch):
+    """The hook for table-based laws (issue 4): a law's data files are vendored."""
+    from contact_fmu.fmu import config
+
+    cfg = CONFIGS["sweep"]
+    plain = fmu_build.identity(cfg)[0]
+    monkeypatch.setitem(config.LAW_DATA, "layer", ("figures/__init__.py",))
+    built = fmu_build.build(cfg, tmp_path)
+    assert built.key != plain
+    assert "figures/__init__.py" in _vendored(built)

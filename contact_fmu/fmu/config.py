@@ -21,6 +21,9 @@ MODEL_MODULES = {
     "rigid_body": "fmu.rigid_body",
 }
 LAW_MODULES = {"layer": "layer"}
+# Data files a law reads at run time (paths relative to the package, e.g. a table .npz):
+# the build copies them next to the law's module in the FMU's resources.
+LAW_DATA: dict[str, tuple[str, ...]] = {"layer": ()}
 PHASES = ("steady",)
 METHODS = ("full", "quasistationary")
 # Recognised scene values that later issues implement.
@@ -126,6 +129,11 @@ class ModelConfig:
     @property
     def law_module(self) -> str | None:
         return LAW_MODULES[self.contact_law] if self.mode != "rigid_body" else None
+
+    @property
+    def data_files(self) -> tuple[str, ...]:
+        """Package-relative data files the FMU must carry (the law's tables)."""
+        return LAW_DATA.get(self.contact_law, ()) if self.mode != "rigid_body" else ()
 
     # ---- plain data --------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
