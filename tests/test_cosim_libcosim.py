@@ -22,6 +22,7 @@ from pathlib import Path
 import fmpy
 import numpy as np
 import pytest
+from fmpy.validation import validate_fmu
 from libcosimpy.CosimEnums import CosimVariableType
 from libcosimpy.CosimExecution import CosimExecution
 from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -134,6 +135,7 @@ def body_mode() -> np.ndarray:
         outputs=("Tx", "Vx", "Omega_y"), starts={"Iy": IY, "h_max": 2.5e-7},
     )  # fmt: skip
     fmu = fmu_build.build(cfg, OUT).path
+    assert validate_fmu(str(fmu)) == []  # every FMU the project builds validates
     loads = np.array(
         [(0.0, ex.P, F, MY)],
         dtype=[("time", float), ("P", float), ("Fx_ex", float), ("My_ex", float)],
