@@ -1,0 +1,597 @@
+"""Steady rolling with the exact half-space theory (Kalker) plus the local layer terms.
+
+Model (Spector & Batra 1995, Eqs. 2-7 and the Appendix; quasistationary phase, Eq. 15
+without the time derivative). With u = u^s - u^b the slip is s = v + Vx du/dx and
+
+    u = A tau + (kb + ks) tau + C p,
+
+A the Cerruti operator of both half-spaces (influence.cerruti_kernels), C the pressure
+coupling (zero for quasi-identical bodies). The solver works in the frame rolling in
++x (Vx > 0; contact.py mirrors Vx < 0): material enters at the leading edge x = +l(y).
+
+Discretisation (Kalker 1990, Ch. 5; Vollebregt's CONTACT). Rectangular elements with
+piecewise-constant traction; the derivative along the rolling direction is the upwind
+difference over one element, so the slip per element, scaled by dx/Vx, is
+
+    S_I = W_I - (U_I - U_I+),    W_I = w(x_I + dx/2, y_I) dx,    w = v/Vx,
+
+I+ the element ahead of I. On a Toeplitz grid (U_I - U_I+) = (A dtau)_I exactly, with
+the traction differences dtau_I = tau_I - tau_I+ (supported on the contact and on the
+element behind each trailing edge): the steady-rolling operator is the symmetric
+influence operator acting on differences, K tau = (A + k) D tau. One application costs
+two FFTs per component (O(N log N)).
+
+Leading edge. The element I0 of a row whose centre is the last inside the contact has
+its forward neighbour outside, where the layer term vanishes but the half-space
+displacement continues smoothly. With the edge at x_I0 + theta dx (0 < theta <= 1),
+integrating the adhesion condition from the edge to x_I0 and interpolating A tau
+linearly over the element gives (A dtau)_I0 + (k/theta) tau_I0 = w dx: the layer term
+of that element is k/theta. This is exact for the thin layer (it reproduces the nodal
+values of LayerContact.traction) and leaves Kalker's half-space scheme unchanged.
+
+Coulomb conditions (4)-(5), with g = mu p, in the equivalent fixed-point form
+
+    F(tau) = tau - Proj_{|.| <= g}(tau + r S(tau)) = 0,
+
+(adhesion: S = 0, |tau| <= g; slip: |tau| = g, tau parallel to S with the same sense).
+F is solved by a semismooth Newton method (Alart & Curnier 1991; Hintermueller, Ito &
+Kunisch 2002): in adhesion elements the Newton rows are K dtau = S; in slip elements
+the component along tau is local and the tangential one is (|z|/g - 1)/r dtau_t +
+(K dtau)_t = -(|z|/g) tau_t/r, z = tau + r S. Each Newton system is solved by GMRES
+(scipy) with a preconditioner that inverts the adhesion block: an FFT deconvolution
+of (A + k) for the traction differences, an exact closure that makes them sum to zero
+over each adhesion interval (a small dense system, one unknown per interval and
+component), and the march from the leading edge that turns differences into
+tractions. For the thin layer this preconditioner is the exact inverse (the march of
+LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
+|F| globalises the iteration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.typing import NDArray
+from scipy.sparse.linalg import LinearOperator, gmres
+
+from .._validate import InputError, finite, nonnegative, positive
+from .influence import BlockConvolution, Grid, coupling_displacement, tangential_operator
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+# Newton convergence: max |F| <= NEWTON_TOL * max g. F is a traction (Pa); 1e-7 of the
+# traction bound is far below the discretisation error (1e-3 and above).
+NEWTON_TOL = 1e-7
+# Newton iteration cap; observed counts are 2-12 (docs/halfspace.md).
+NEWTON_MAXIT = 60
+# Inexact Newton: the GMRES relative tolerance is min(GMRES_RTOL_MAX, ratio of the last two
+# |F|) and at least GMRES_RTOL_MIN (Eisenstat & Walker 1996, choice 1 simplified).
+GMRES_RTOL_MAX = 1e-2
+GMRES_RTOL_MIN = 1e-12
+# GMRES restart length and cap on the total number of inner iterations per Newton step.
+GMRES_RESTART = 60
+GMRES_MAXIT = 600
+# Backtracking: sufficient decrease factor on |F|_2 and the smallest step fraction.
+ARMIJO = 1e-4
+MIN_STEP = 1.0 / 64.0
+
+
+@dataclass(frozen=True)
+class RollingSolution:
+    """Steady-rolling traction on the grid (frame rolling in +x).
+
+    tau (2, ny, nx) (Pa): traction the body exerts on the substrate; slip S (2, ny, nx)
+    (m, the slip times dx/Vx); ``adhesion`` and ``slip`` masks (ny, nx); ``contact``
+    mask; forces Tx, Ty (N) and the spin moment Mz = sum (x tau_y - y tau_x) dA (N m);
+    Newton and total GMRES iteration counts.
+    """
+
+    grid: Grid
+    tau: FloatArray
+    S: FloatArray
+    contact: BoolArray
+    adhesion: BoolArray
+    slip: BoolArray
+    Tx: float
+    Ty: float
+    Mz: float
+    newton_iterations: int
+    gmres_iterations: int
+
+    @property
+    def adhesion_fraction(self) -> float:
+        """Adhesion area over contact area (-)."""
+        n = int(self.contact.sum())
+        return float(self.adhesion.sum()) / n if n else 0.0
+
+
+@dataclass
+class RollingPatch:
+    """The discretised steady-rolling problem on one grid and pressure.
+
+    grid: the potential contact area (it must leave at least one element outside the
+    contact behind every trailing edge); p (ny, nx): normal pressure (Pa), the contact
+    is p > 0; mu: friction coefficient (-); G, nu: Kalker's combined shear modulus (Pa)
+    and Poisson's ratio (-); k: layer compliance kb + ks (m/Pa, Eqs. 6-7); theta (ny,
+    nx): fraction of an element between its centre and the leading edge (1 inside,
+    (0, 1] in the leading elements; None: 1); kappa: Kalker's difference parameter
+    (pressure coupling, 0: quasi-identical bodies); backend "fft" or "dense" (the same
+    solver with an explicit influence matrix, for benchmarks).
+    """
+
+    grid: Grid
+    p: FloatArray
+    mu: float
+    G: float
+    nu: float
+    k: float = 0.0
+    theta: FloatArray | None = None
+    kappa: float = 0.0
+    backend: str = "fft"
+    use_closure: bool = True
+    operator: BlockConvolution | None = None
+
+    def __post_init__(self) -> None:
+        self.p = np.asarray(self.p, float)
+        if self.p.shape != self.grid.shape:
+            raise InputError("p.shape", self.p.shape, f"the grid shape {self.grid.shape}")
+        if np.any(self.p < 0.0) or not np.all(np.isfinite(self.p)):
+            raise InputError("p", "negative or non-finite values", "finite and >= 0")
+        positive("mu", self.mu)
+        positive("G", self.G)
+        finite("nu", self.nu)
+        nonnegative("k", self.k)
+        finite("kappa", self.kappa)
+        if self.backend not in ("fft", "dense"):
+            raise InputError("backend", self.backend, '"fft" or "dense"')
+        if np.any(self.contact[:, 0]):
+            raise InputError(
+                "grid", "contact in the first column", "one element behind each trailing edge"
+            )
+        th = np.ones(self.grid.shape) if self.theta is None else np.asarray(self.theta, float)
+        if th.shape != self.grid.shape or np.any(th <= 0.0) or np.any(th > 1.0):
+            raise InputError("theta", "shape or range", f"shape {self.grid.shape}, in (0, 1]")
+        self.theta = np.where(self.leading, th, 1.0)
+
+    # ---- geometry ------------------------------------------------------------------
+    @cached_property
+    def contact(self) -> BoolArray:
+        return self.p > 0.0
+
+    @cached_property
+    def leading(self) -> BoolArray:
+        """Leading elements: in contact, forward neighbour (+x) outside."""
+        C = self.contact
+        ahead = np.zeros_like(C)
+        ahead[:, :-1] = C[:, 1:]
+        return C & ~ahead
+
+    @cached_property
+    def g(self) -> FloatArray:
+        """Traction bound mu p (Pa)."""
+        return self.mu * self.p
+
+    @cached_property
+    def op(self) -> BlockConvolution:
+        """The operator A + k: supplied (e.g. plane strain) or the Cerruti block."""
+        if self.operator is not None:
+            return self.operator
+        return tangential_operator(self.grid, self.G, self.nu, self.k)
+
+    @cached_property
+    def k_extra(self) -> FloatArray:
+        """Extra layer coefficient k/theta - k of the leading elements (m/Pa)."""
+        return self.k * (1.0 / self.theta - 1.0)
+
+    @cached_property
+    def r(self) -> float:
+        """Scaling r of the fixed-point form: the inverse diagonal of K (Pa/m)."""
+        d = self.op.self_coefficient
+        return 1.0 / float(d[0, 0] - d[0, 1])
+
+    @cached_property
+    def diag(self) -> FloatArray:
+        """Diagonal of K per component (2, ny, nx) (m/Pa)."""
+        d = self.op.self_coefficient
+        out = np.empty((2, *self.grid.shape))
+        for a in range(2):
+            out[a] = d[a, 0] - d[a, 1]
+            out[a, :, 0] = d[a, 0]  # no element behind the first column
+        return out + self.k_extra
+
+    @cached_property
+    def pressure_slip(self) -> FloatArray:
+        """-(U_p,I - U_p,I+): the slip (m) from the pressure coupling C p, (2, ny, nx)."""
+        if self.kappa == 0.0:
+            return np.zeros((2, *self.grid.shape))
+        u = coupling_displacement(self.grid, self.p, self.G, self.kappa)
+        du = u.copy()
+        du[:, :, :-1] -= u[:, :, 1:]
+        return -du
+
+    @cached_property
+    def _dense(self) -> tuple[FloatArray, BoolArray]:
+        """Dense (A + k) restricted to rows C and columns C + trailing neighbours."""
+        C = self.contact
+        behind = np.zeros_like(C)
+        behind[:, :-1] = C[:, 1:]
+        cols = C | behind
+        jj, ii = np.nonzero(cols)
+        rows_in = C[jj, ii]
+        full = self.op.dense(cols)
+        keep = np.concatenate([rows_in, rows_in])
+        return full[keep], cols
+
+    # ---- operators ---------------------------------------------------------------------
+    @staticmethod
+    def difference(tau: FloatArray) -> FloatArray:
+        """D tau: tau_I - tau_I+ along x (the forward neighbour of the last column is 0)."""
+        d = tau.copy()
+        d[..., :-1] -= tau[..., 1:]
+        return d
+
+    def apply_K(self, tau: FloatArray) -> FloatArray:
+        """K tau = (A + k) D tau + (k/theta - k) D tau at the leading elements (m)."""
+        dq = self.difference(tau)
+        if self.backend == "fft":
+            u = self.op.apply(dq)
+        else:
+            M, cols = self._dense
+            v = np.concatenate([dq[0][cols], dq[1][cols]])
+            w = M @ v
+            m = int(self.contact.sum())
+            u = np.zeros_like(dq)
+            u[0][self.contact] = w[:m]
+            u[1][self.contact] = w[m:]
+        return u + self.k_extra * dq
+
+    def rhs(self, xi: float, eta: float, phi: float) -> FloatArray:
+        """W (2, ny, nx) (m): the creepage w = (xi - phi y, eta + phi x) at the element
+        centre times dx (Kalker's collocation; it converges faster for spin than the
+        midpoint of the travel, docs/halfspace.md), plus the pressure slip."""
+        X, Y = self.grid.mesh()
+        dx = self.grid.dx
+        W = np.stack([(xi - phi * Y) * dx, (eta + phi * X) * dx])
+        W = W + self.pressure_slip
+        return np.where(self.contact, W, 0.0)
+
+    # ---- preconditioner pieces ------------------------------------------------------------
+    def _intervals(
+        self, H: BoolArray
+    ) -> tuple[NDArray[np.int_], NDArray[np.int_], NDArray[np.int_]]:
+        """Maximal runs of H along x: (row, first column, last column); the closure element
+        is first - 1."""
+        Hp = np.zeros((H.shape[0], H.shape[1] + 2), bool)
+        Hp[:, 1:-1] = H
+        d = np.diff(Hp.astype(np.int8), axis=1)
+        rs, cs = np.nonzero(d == 1)
+        re, ce = np.nonzero(d == -1)
+        # np.nonzero scans row-major, so starts and ends pair up in order
+        return rs, cs, ce - 1
+
+    def _closure(self, H: BoolArray):
+        """Dense closure system for the adhesion intervals of H (factorised)."""
+        rows, c0, c1 = self._intervals(H)
+        n = len(rows)
+        if n == 0 or not self.use_closure:
+            return None
+        ny, nx = self.grid.shape
+        Kinv = self.op.inverse_offsets  # (2, 2, 2 ny - 1, 2 nx - 1)
+        pref = np.concatenate([np.zeros((2, 2, 2 * ny - 1, 1)), np.cumsum(Kinv, axis=-1)], axis=-1)
+        t = c0 - 1  # closure elements
+        dyo = rows[:, None] - rows[None, :] + ny - 1
+        hi = c1[:, None] - t[None, :] + nx - 1 + 1
+        lo = t[:, None] - t[None, :] + nx - 1
+        S = np.empty((2 * n, 2 * n))
+        dth = self._theta_scale
+        for a in range(2):
+            for b in range(2):
+                blk = pref[a, b][dyo, hi] - pref[a, b][dyo, lo]
+                # leading-element scaling of the preconditioner (see _theta_scale)
+                f = dth[rows, c1] - 1.0
+                blk = blk + f[:, None] * Kinv[a, b][dyo, c1[:, None] - t[None, :] + nx - 1]
+                S[a * n : (a + 1) * n, b * n : (b + 1) * n] = blk
+        return sla.lu_factor(S), rows, t, c1
+
+    @cached_property
+    def _theta_scale(self) -> FloatArray:
+        """Per-element factor on the deconvolution: (a0 + k)/(a0 + k/theta) (1 off the edge)."""
+        a0 = float(self.op.self_coefficient[0, 0])
+        return a0 / (a0 + self.k_extra)
+
+    def _precondition_adhesion(self, res: FloatArray, H: BoolArray, clo) -> FloatArray:
+        """Approximate K_HH^{-1} res (res (2, ny, nx) on H) -> dtau on H."""
+        r0 = np.where(H, res, 0.0)
+        q = self.op.solve_periodic(r0) * self._theta_scale
+        if clo is not None:
+            lu, rows, t, c1 = clo
+            n = len(rows)
+            # sums of q over interval + closure element per component
+            cs = np.cumsum(q, axis=-1)
+            tot = cs[:, rows, c1] - np.where(t > 0, cs[:, rows, np.maximum(t - 1, 0)], 0.0)
+            mult = sla.lu_solve(lu, -np.concatenate([tot[0], tot[1]]))
+            r1 = r0.copy()
+            r1[0, rows, t] += mult[:n]
+            r1[1, rows, t] += mult[n:]
+            q = self.op.solve_periodic(r1) * self._theta_scale
+        return march(q, H)
+
+    # ---- linear theory and the initial guess -----------------------------------------
+    def solve_adhesion(self, W: FloatArray, rtol: float = 1e-10) -> tuple[FloatArray, int]:
+        """Full adhesion (mu -> inf, Kalker's linear theory): K tau = W on the contact.
+
+        Returns tau (2, ny, nx) (Pa) and the GMRES iteration count."""
+        C = self.contact
+        m = int(C.sum())
+        clo = self._closure(C)
+
+        def matvec(x):
+            t = np.zeros((2, *self.grid.shape))
+            t[0][C], t[1][C] = x[:m], x[m:]
+            Kt = self.apply_K(t)
+            return np.concatenate([Kt[0][C], Kt[1][C]])
+
+        def psolve(v):
+            res = np.zeros((2, *self.grid.shape))
+            res[0][C], res[1][C] = v[:m], v[m:]
+            d = self._precondition_adhesion(res, C, clo)
+            return np.concatenate([d[0][C], d[1][C]])
+
+        b = np.concatenate([W[0][C], W[1][C]])
+        count = [0]
+        x, _ = gmres(
+            LinearOperator((2 * m, 2 * m), matvec=matvec, dtype=float),
+            b,
+            M=LinearOperator((2 * m, 2 * m), matvec=psolve, dtype=float),
+            rtol=rtol,
+            atol=0.0,
+            restart=GMRES_RESTART,
+            maxiter=GMRES_MAXIT // GMRES_RESTART,
+            callback=lambda _: count.__setitem__(0, count[0] + 1),
+            callback_type="pr_norm",
+        )
+        tau = np.zeros((2, *self.grid.shape))
+        tau[0][C], tau[1][C] = x[:m], x[m:]
+        return tau, count[0]
+
+    @cached_property
+    def flexibilities(self) -> tuple[float, float, float]:
+        """FASTSIM flexibilities (L_x, L_y, L_phi) (m/Pa) that reproduce this patch's linear
+        theory: the march tau_I = tau_I+ + W_I/L has the same force per unit creepage as the
+        full-adhesion solution (three linear solves, cached)."""
+        C = self.contact
+        ones = np.where(C, self.grid.dx, 0.0)
+        X, _ = self.grid.mesh()
+        out = []
+        for a, W1 in ((0, ones), (1, ones), (1, np.where(C, X * self.grid.dx, 0.0))):
+            W = np.zeros((2, *self.grid.shape))
+            W[a] = W1
+            exact, _ = self.solve_adhesion(W, rtol=1e-6)
+            fs = march(W[a], C)
+            out.append(float(fs.sum()) / float(exact[a].sum()))
+        return out[0], out[1], out[2]
+
+    def fastsim_guess(self, xi: float, eta: float, phi: float) -> FloatArray:
+        """Kalker's simplified theory on this grid with ``flexibilities``: the march from the
+        leading edge projected on |tau| <= g (the initial guess of solve_rolling)."""
+        Lx, Ly, Lp = self.flexibilities
+        X, Y = self.grid.mesh()
+        dx = self.grid.dx
+        Wx = (xi / Lx - phi * Y / Lp) * dx + self.pressure_slip[0] / Lx
+        Wy = (eta / Ly + phi * X / Lp) * dx + self.pressure_slip[1] / Ly
+        C, g = self.contact, self.g
+        tau = np.zeros((2, *self.grid.shape))
+        tx = np.zeros(self.grid.ny)
+        ty = np.zeros(self.grid.ny)
+        for i in range(self.grid.nx - 1, -1, -1):
+            ins = C[:, i]
+            tx = np.where(ins, tx + Wx[:, i], 0.0)
+            ty = np.where(ins, ty + Wy[:, i], 0.0)
+            mag = np.hypot(tx, ty)
+            f = np.where(mag > g[:, i], g[:, i] / np.where(mag > 0, mag, 1.0), 1.0)
+            tx, ty = tx * f, ty * f
+            tau[0, :, i], tau[1, :, i] = tx, ty
+        return tau
+
+
+def march(q: FloatArray, H: BoolArray) -> FloatArray:
+    """Tractions from differences within each run of H: tau_I = q_I + tau_I+ (I+ in H),
+    summed from the leading (+x) end of the run. q: (..., ny, nx)."""
+    qH = np.where(H, q, 0.0)
+    rev = qH[..., ::-1]
+    cs = np.cumsum(rev, axis=-1)
+    # value of the cumulative sum at the last element outside H (ahead of each run)
+    outside = ~H[:, ::-1]
+    idx = np.where(outside, np.arange(H.shape[1]), -1)
+    last = np.maximum.accumulate(idx, axis=-1)
+    base = np.where(
+        last >= 0, np.take_along_axis(cs, np.broadcast_to(np.maximum(last, 0), cs.shape), -1), 0.0
+    )
+    return np.where(H, (cs - base)[..., ::-1], 0.0)
+
+
+def solve_rolling(
+    patch: RollingPatch,
+    xi: float,
+    eta: float = 0.0,
+    phi: float = 0.0,
+    tau0: FloatArray | None = None,
+    tol: float = NEWTON_TOL,
+    maxit: int = NEWTON_MAXIT,
+) -> RollingSolution:
+    """Steady rolling for the creepages xi = vx/Vx, eta = vy/Vx (-) and spin phi =
+    Omega_z/Vx (1/m), rolling in +x. tau0: initial traction (2, ny, nx) (warm start)."""
+    for name, val in (("xi", xi), ("eta", eta), ("phi", phi)):
+        finite(name, val)
+    C, g, r = patch.contact, patch.g, patch.r
+    W = patch.rhs(xi, eta, phi)
+    if tau0 is None:
+        tau = patch.fastsim_guess(xi, eta, phi)
+    else:
+        tau = np.where(C, tau0, 0.0)
+    gmax = float(g.max())
+
+    def residual(t: FloatArray):
+        S = np.where(C, W - patch.apply_K(t), 0.0)
+        z = t + r * S
+        nz = np.hypot(z[0], z[1])
+        slip = C & (nz > g)
+        scale = np.where(slip, g / np.where(slip, nz, 1.0), 1.0)
+        F = np.where(C, t - z * scale, 0.0)
+        return F, S, z, nz, slip
+
+    F, S, z, nz, slip = residual(tau)
+    fnorm = float(np.sqrt(np.sum(F * F)))
+    newton = 0
+    inner = 0
+    prev_ratio = GMRES_RTOL_MAX
+    while float(np.abs(F).max()) > tol * gmax:
+        if newton >= maxit:
+            raise RuntimeError(
+                f"steady rolling: no convergence in {maxit} Newton steps "
+                f"(max |F| / max g = {float(np.abs(F).max()) / gmax:.3g})"
+            )
+        newton += 1
+        rtol = min(GMRES_RTOL_MAX, max(prev_ratio, GMRES_RTOL_MIN))
+        dtau, its = _newton_direction(patch, tau, F, S, z, nz, slip, rtol)
+        inner += its
+        step = 1.0
+        while True:
+            trial = tau + step * dtau
+            F_t, S_t, z_t, nz_t, slip_t = residual(trial)
+            fn_t = float(np.sqrt(np.sum(F_t * F_t)))
+            if fn_t <= (1.0 - ARMIJO * step) * fnorm or step <= MIN_STEP:
+                break
+            step *= 0.5
+        prev_ratio = fn_t / fnorm if fnorm > 0 else GMRES_RTOL_MIN
+        tau, F, S, z, nz, slip = trial, F_t, S_t, z_t, nz_t, slip_t
+        fnorm = fn_t
+    tau = np.where(C, tau, 0.0)
+    X, Y = patch.grid.mesh()
+    dA = patch.grid.area
+    Tx = float(tau[0].sum() * dA)
+    Ty = float(tau[1].sum() * dA)
+    Mz = float(np.sum(X * tau[1] - Y * tau[0]) * dA)
+    adhesion = C & ~slip
+    return RollingSolution(patch.grid, tau, S, C, adhesion, slip, Tx, Ty, Mz, newton, inner)
+
+
+def _newton_direction(
+    patch: RollingPatch,
+    tau: FloatArray,
+    F: FloatArray,
+    S: FloatArray,
+    z: FloatArray,
+    nz: FloatArray,
+    slip: BoolArray,
+    rtol: float,
+) -> tuple[FloatArray, int]:
+    """The semismooth Newton step dtau for F(tau) = 0 (module docstring) by GMRES with
+    the block preconditioner; returns dtau (2, ny, nx) and the GMRES iteration count."""
+    C, g, r = patch.contact, patch.g, patch.r
+    H = C & ~slip
+    Sl = slip
+    zhat = np.where(Sl, z / np.where(Sl, nz, 1.0), 0.0)
+    that = np.stack([-zhat[1], zhat[0]])
+    ratio = np.where(Sl, nz / np.where(C, g, 1.0), 1.0)
+    cS = (ratio - 1.0) / r
+    # slip elements: the component along z is local, dtau_n = -F_n
+    dn = np.where(Sl, -(F[0] * zhat[0] + F[1] * zhat[1]), 0.0)
+    tau_t = tau[0] * that[0] + tau[1] * that[1]
+    nH, nS = int(H.sum()), int(Sl.sum())
+    Kn = patch.apply_K(dn * zhat)
+    bH = (S - Kn)[:, H]
+    bS = (-(ratio * tau_t) / r - (that[0] * Kn[0] + that[1] * Kn[1]))[Sl]
+    b = np.concatenate([bH[0], bH[1], bS])
+    shape = (2, *patch.grid.shape)
+
+    def to_field(x: FloatArray) -> FloatArray:
+        d = np.zeros(shape)
+        d[0][H] = x[:nH]
+        d[1][H] = x[nH : 2 * nH]
+        d[:, Sl] += x[2 * nH :] * that[:, Sl]
+        return d
+
+    def matvec(x: FloatArray) -> FloatArray:
+        Kd = patch.apply_K(to_field(x))
+        out_S = cS[Sl] * x[2 * nH :] + (that[0] * Kd[0] + that[1] * Kd[1])[Sl]
+        return np.concatenate([Kd[0][H], Kd[1][H], out_S])
+
+    clo = patch._closure(H)
+    dS = (cS + that[0] ** 2 * patch.diag[0] + that[1] ** 2 * patch.diag[1])[Sl]
+
+    def psolve(v: FloatArray) -> FloatArray:
+        # block preconditioner: the adhesion block inverted approximately (FFT
+        # deconvolution, closure, march), the slip rows by their diagonal
+        res = np.zeros(shape)
+        res[0][H] = v[:nH]
+        res[1][H] = v[nH : 2 * nH]
+        dH = patch._precondition_adhesion(res, H, clo)
+        return np.concatenate([dH[0][H], dH[1][H], v[2 * nH :] / dS])
+
+    N = 2 * nH + nS
+    count = [0]
+
+    def cb(_):
+        count[0] += 1
+
+    x, _info = gmres(
+        LinearOperator((N, N), matvec=matvec, dtype=float),
+        b,
+        M=LinearOperator((N, N), matvec=psolve, dtype=float),
+        rtol=rtol,
+        atol=0.0,
+        restart=GMRES_RESTART,
+        maxiter=GMRES_MAXIT // GMRES_RESTART,
+        callback=cb,
+        callback_type="pr_norm",
+    )
+    return to_field(x) + dn * zhat, count[0]
+
+
+def ellipse_patch(
+    a1: float,
+    a2: float,
+    n: int,
+    pressure,
+    mu: float,
+    G: float,
+    nu: float,
+    k: float = 0.0,
+    kappa: float = 0.0,
+    ny: int | None = None,
+    backend: str = "fft",
+) -> RollingPatch:
+    """Patch on an ellipse x^2/a1^2 + y^2/a2^2 < 1 with n x ny elements (ny = n default).
+
+    The potential contact area is the bounding box with one element to spare in x on each
+    side: dx = 2 a1/(n - 2), dy = 2 a2/ny. pressure(X, Y) gives p (Pa) at the centres;
+    theta follows from the exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
+    """
+    if n < 4:
+        raise InputError("n", n, ">= 4")
+    ny = n if ny is None else int(ny)
+    dx = 2.0 * a1 / (n - 2)
+    dy = 2.0 * a2 / ny
+    grid = Grid(n, ny, dx, dy, -a1 - dx, -a2)
+    X, Y = grid.mesh()
+    inside = (X / a1) ** 2 + (Y / a2) ** 2 < 1.0
+    p = np.where(inside, pressure(X, Y), 0.0)
+    p = np.where(p > 0.0, p, 0.0)
+    ell = a1 * np.sqrt(np.maximum(1.0 - (Y / a2) ** 2, 0.0))
+    theta = np.clip((ell - X) / dx, np.finfo(float).tiny, 1.0)
+    theta = np.where(inside, theta, 1.0)
+    return RollingPatch(grid, p, mu, G, nu, k, theta, kappa, backend)
+
+
+def normalise_load(p: FloatArray, grid: Grid, P: float) -> FloatArray:
+    """Scale a sampled pressure so that sum p dA = P exactly (the load invariant)."""
+    tot = float(p.sum()) * grid.area
+    if tot <= 0.0 or not math.isfinite(tot):
+        raise InputError("p", "sum <= 0", "a positive pressure on the grid")
+    return p * (P / tot)
