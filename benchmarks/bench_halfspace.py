@@ -1,0 +1,175 @@
+"""Benchmark of the steady-rolling half-space solver: FFT against a dense influence matrix.
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace.py [--grids 16 32 64 128]
+        [--repeat 3] [--dense-limit-mb 1500] [--json out.json]
+
+Steady rolling of the railway wheel on rail (contact_fmu.halfspace.railway, Hertz,
+steel, nu = 0.28) on n x n elements, two cases: longitudinal creepage in partial slip
+(xi = 0.3 mu P/(G c^2), about 90 % of mu P) and combined creepage with spin
+(xi = eta = 0.2, phi = 0.3 in the same units). The same solver (semismooth Newton,
+GMRES with the FFT preconditioner) runs with the influence sums as FFT convolutions
+and as products with an explicit dense influence matrix, in the same process, so the
+ratio is a fair measure on a noisy machine. Dense is skipped where its matrix would
+exceed --dense-limit-mb. Times are the median of --repeat cold solves (no warm
+start; the patch, i.e. kernels, symbols and the FASTSIM calibration of the initial
+guess, is built once per grid and timed separately as "setup").
+
+Threaded BLAS is switched off (the environment variables below are set before numpy
+is imported): on the shared 2-core machine OpenBLAS threads contend with the other
+process and slow GMRES's vector operations down by an order of magnitude.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+from dataclasses import replace  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
+from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
+
+CASES = {"longitudinal": (0.3, 0.0, 0.0), "combined+spin": (0.2, 0.2, 0.3)}
+# CONTACT's published steady-rolling timings, Hertzian cases (references.md; 2016
+# hardware, one thread): elements per side -> seconds
+CONTACT_PUBLISHED = {11: 1.9e-3, 19: 9.7e-3, 35: 0.134}
+
+
+def _time(fn, repeat: int) -> tuple[float, object]:
+    times, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
+    results = {"grids": grids, "cases": {}, "setup": {}, "machine": platform.platform()}
+    for n in grids:
+        contact = wheel_on_rail(n=n)
+        xref = contact.mu * contact.P / (contact.elastic.G * contact.c**2)
+        t0 = time.perf_counter()
+        patch = contact.patch
+        _ = patch.op.symbols, patch.op.inverse_symbols, patch.op.inverse_offsets
+        _ = patch.flexibilities
+        setup = time.perf_counter() - t0
+        m = int(patch.contact.sum())
+        dense_mb = 8.0 * (2 * m) * (2 * (m + patch.grid.ny)) / 1e6
+        dense_patch = None
+        dense_setup = math.nan
+        if dense_mb <= dense_limit_mb:
+            dense_patch = replace(patch, backend="dense")
+            dense_patch.__dict__["flexibilities"] = patch.flexibilities  # same initial guess
+            t0 = time.perf_counter()
+            _ = dense_patch._dense
+            dense_setup = time.perf_counter() - t0
+        results["setup"][n] = {
+            "elements_in_contact": m,
+            "fft_setup_s": setup,
+            "dense_matrix_MB": dense_mb,
+            "dense_setup_s": dense_setup,
+        }
+        for name, w in CASES.items():
+            args = (w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
+            t_fft, sol = _time(lambda a=args, p=patch: solve_rolling(p, *a), repeat)
+            entry = {
+                "fft_s": t_fft,
+                "newton": sol.newton_iterations,
+                "gmres": sol.gmres_iterations,
+                "Tx/muP": sol.Tx / (contact.mu * contact.P),
+                "Ty/muP": sol.Ty / (contact.mu * contact.P),
+                "adhesion": sol.adhesion_fraction,
+            }
+            if dense_patch is not None:
+                t_dense, sd = _time(lambda a=args, p=dense_patch: solve_rolling(p, *a), repeat)
+                entry["dense_s"] = t_dense
+                entry["dense_over_fft"] = t_dense / t_fft
+                entry["max_dtau_over_g"] = float(np.abs(sd.tau - sol.tau).max() / patch.g.max())
+            else:
+                entry["dense_s"] = None
+            results["cases"].setdefault(name, {})[n] = entry
+            print(
+                f"n={n:4d} {name:14s} fft {t_fft:8.4f} s  dense "
+                f"{entry['dense_s'] if entry['dense_s'] is not None else float('nan'):8.4f} s  "
+                f"Newton {sol.newton_iterations:2d}  GMRES {sol.gmres_iterations:4d}",
+                flush=True,
+            )
+    return results
+
+
+def exponents(res: dict, key: str, case: str) -> list[tuple[int, int, float]]:
+    """Observed exponent p of time ~ N^p between successive grids (N = n^2)."""
+    out = []
+    ns = [n for n in res["grids"] if res["cases"][case][n].get(key)]
+    for a, b in zip(ns[:-1], ns[1:], strict=True):
+        ta, tb = res["cases"][case][a][key], res["cases"][case][b][key]
+        out.append((a, b, math.log(tb / ta) / math.log((b * b) / (a * a))))
+    return out
+
+
+def markdown(res: dict) -> str:
+    lines = []
+    for case in CASES:
+        lines.append(
+            f"\n**{case}** (railway wheel on rail, {CASES[case]} in units of mu P/(G c^2))\n"
+        )
+        lines.append(
+            "| grid | elements in contact | FFT (s) | dense (s) | dense/FFT | Newton | GMRES "
+            "| GMRES/Newton |"
+        )
+        lines.append("|---|---|---|---|---|---|---|---|")
+        for n in res["grids"]:
+            e = res["cases"][case][n]
+            s = res["setup"][n]
+            d = e.get("dense_s")
+            lines.append(
+                f"| {n}x{n} | {s['elements_in_contact']} | {e['fft_s']:.4f} | "
+                + (f"{d:.4f} | {e['dense_over_fft']:.1f}" if d else "skipped (memory) | -")
+                + f" | {e['newton']} | {e['gmres']} | {e['gmres'] / max(e['newton'], 1):.1f} |"
+            )
+        fx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "fft_s", case))
+        dx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "dense_s", case))
+        lines.append(
+            f"\nScaling exponent p of time ~ N^p (N = n^2 elements): FFT {fx}; dense {dx}."
+        )
+    lines.append("\n| grid | FFT setup (s) | dense matrix (MB) | dense setup (s) |")
+    lines.append("|---|---|---|---|")
+    for n in res["grids"]:
+        s = res["setup"][n]
+        lines.append(
+            f"| {n}x{n} | {s['fft_setup_s']:.3f} | {s['dense_matrix_MB']:.0f} "
+            f"| {s['dense_setup_s']:.3f} |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument("--grids", type=int, nargs="+", default=[16, 32, 64, 128])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--dense-limit-mb", type=float, default=1500.0)
+    ap.add_argument("--json", type=str, default=None)
+    args = ap.parse_args(argv)
+    res = run(args.grids, args.repeat, args.dense_limit_mb)
+    print(markdown(res))
+    print("\nCONTACT (published, 2016 hardware, one thread):", CONTACT_PUBLISHED)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=1, default=str)
+
+
+if __name__ == "__main__":
+    main()
