@@ -48,7 +48,7 @@ from numpy.typing import NDArray
 from ._validate import InputError, finite, positive
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .kinematics import contact_quantities, is_full_slip
-from .solvers import StageSolveError, increasing_root, newton
+from .solvers import FD_STEP, StageSolveError, newton, newton_increasing
 
 FloatArray = NDArray[np.float64]
 
@@ -153,6 +153,7 @@ class RollingBody:
         self._act = [0] + [i for i, d in ((1, lateral.dynamic_vy), (2, lateral.dynamic_spin)) if d]
         self._idx = [i + 1 for i in self._act]
         self.sliding = False
+        self._dv = 0.0  # last step's dvx/dt (m/s^2): the predictor of the stage solves
         T = self._forces(self.y[None, :])[0]
         self.out = ContactOutputs(*map(float, T), _saturated(law, self.y))
 
@@ -200,10 +201,10 @@ class RollingBody:
 
     def snapshot(self) -> tuple:
         """The whole internal state, for FMU get/set state: restore(snapshot()) is exact."""
-        return (self.y.copy(), self.t, self.sliding, self.out, self.law.P)
+        return (self.y.copy(), self.t, self.sliding, self.out, self.law.P, self._dv)
 
     def restore(self, snap: tuple) -> None:
-        y, t, sliding, out, P = snap
+        y, t, sliding, out, P, self._dv = snap
         self.y, self.t, self.sliding, self.out = np.array(y, float), float(t), bool(sliding), out
         self.law = self.law.with_load(P)
 
@@ -222,14 +223,14 @@ class RollingBody:
         if substeps < 1:
             raise InputError("substeps", substeps, ">= 1")
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
-        saved = (self.y.copy(), self.t, self.sliding, self.out)
+        saved = (self.y.copy(), self.t, self.sliding, self.out, self._dv)
         try:
             dt = h / substeps
             for k in range(substeps):
                 self._step(saved[1] + k * dt, dt, load_at)
             self.t = saved[1] + h
         except Exception:
-            self.y, self.t, self.sliding, self.out = saved
+            self.y, self.t, self.sliding, self.out, self._dv = saved
             raise
 
     # ---- one step ------------------------------------------------------------------
@@ -251,7 +252,9 @@ class RollingBody:
             step = self._lobatto_scalar if one else self._lobatto_vector
         else:
             step = self._sdirk_scalar if one else self._sdirk_vector
+        vn = self.y[1]
         self.y, T = step(h, L1, L2, algebraic)
+        self._dv = (self.y[1] - vn) / h
         cap = self.law.mu * self.law.P
         if math.hypot(T[0], T[1]) > cap:  # rounding of an implied force at mu P
             T[:2] *= cap / math.hypot(T[0], T[1])
@@ -304,6 +307,21 @@ class RollingBody:
         V = Vx if abs(Vx) >= V_STANDSTILL else math.copysign(V_STANDSTILL, Vx)
         return self.law.forces(vx, self.lateral.vy_ratio * Vx, self.lateral.spin_ratio * Vx, V)
 
+    def _law_x(self, vx: float, Vx: float, k: float, scale: float) -> tuple[float, float]:
+        """Tx and dTx/dvx along a stage path on which Vx moves by k per unit of vx
+        (held ratios). The law's analytic slope (``tx_slope``) where it has one, else a
+        forward difference."""
+        ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
+        slope = getattr(self.law, "tx_slope", None)
+        if slope is not None and rz == 0.0:
+            floored = abs(Vx) < V_STANDSTILL
+            V = math.copysign(V_STANDSTILL, Vx) if floored else Vx
+            T, d_vx, d_vy, d_V = slope(vx, ry * Vx, V)
+            return T, d_vx + k * ry * d_vy + (0.0 if floored else k * d_V)
+        T = self._law(vx, Vx)[0]
+        dv = FD_STEP * (abs(vx) + scale)
+        return T, (self._law(vx + dv, Vx + k * dv)[0] - T) / dv
+
     def _forces(self, Y: FloatArray) -> FloatArray:
         """(Tx, Ty, Mz) at states Y (k, 4), shape (k, 3): one vectorised law call."""
         Vx = Y[:, 0]
@@ -333,22 +351,21 @@ class RollingBody:
         m = 0.0 if algebraic else b.m_slip
         slope = self.law.mu * self.law.P / scale  # dT/dv at the saturation scale
         if m == 0.0 or h * slope / m > Z_ALGEBRAIC:
-            m = 0.0
-            v2 = increasing_root(lambda v: self._law(v, V2b)[0] - Fe2, vn, scale)
+            v2 = newton_increasing(
+                lambda v: _shift(self._law_x(v, V2b, 0.0, scale), Fe2), vn + self._dv * h, scale
+            )
             T = self._law(v2, V2b)
             return self._state(V2b, v2), np.array([Fe2, float(T[1]), float(T[2])])
         k = m / b.M
 
-        def v1_of(v2: float) -> float:
-            return v2 - h * (Fe2 - self._law(v2, V2b + k * (v2 - vn))[0]) / m
+        def g(v2: float) -> tuple[float, float]:
+            T2, d2 = self._law_x(v2, V2b + k * (v2 - vn), k, scale)
+            v1 = v2 - h * (Fe2 - T2) / m
+            dv1 = 1.0 + h * d2 / m  # v1 increases with v2
+            T1, d1 = self._law_x(v1, V1b + k * (v1 - vn), k, scale)
+            return T1 - Fe1 + m * (v1 + v2 - 2 * vn) / h, d1 * dv1 + m * (dv1 + 1.0) / h
 
-        def g(v2: float) -> float:
-            v1 = v1_of(v2)
-            return self._law(v1, V1b + k * (v1 - vn))[0] - Fe1 + m * (v1 + v2 - 2 * vn) / h
-
-        # |T| <= mu P bounds both stage slips: |v - vn| <= h (|Fe1| + |Fe2| + 2 mu P)/m
-        bound = h * (abs(Fe1) + abs(Fe2) + 2 * self.law.mu * self.law.P) / m
-        v2 = increasing_root(g, vn, scale, max_step=bound)
+        v2 = newton_increasing(g, vn + self._dv * h, scale)
         V2 = V2b + k * (v2 - vn)
         return self._state(V2, v2), np.array([float(t) for t in self._law(v2, V2)])
 
@@ -400,18 +417,18 @@ class RollingBody:
         G1, G2 = self._drive(L1), self._drive(L2)
         m = 0.0 if algebraic else b.m_slip
         k = m / b.M
-        cap = self.law.mu * self.law.P
         v_hat, V_hat = vn, Vn
         for i, (L, G) in enumerate(((L1, G1), (L2, G2))):
             Fe = float(self._targets(L)[0])
             Vb = V_hat + hg * G / b.M
 
-            def r(v: float, Vb=Vb, Fe=Fe, v_hat=v_hat) -> float:
-                return m * (v - v_hat) / hg + self._law(v, Vb + k * (v - v_hat))[0] - Fe
-
             scale = float(self._scale(Vb)[0])
-            bound = hg * (cap + abs(Fe)) / m if m > 0 else np.inf
-            v = increasing_root(r, v_hat, scale, max_step=bound * (1 + 1e-12))
+
+            def r(v: float, Vb=Vb, Fe=Fe, v_hat=v_hat, scale=scale) -> tuple[float, float]:
+                T, dT = self._law_x(v, Vb + k * (v - v_hat), k, scale)
+                return m * (v - v_hat) / hg + T - Fe, m / hg + dT
+
+            v = newton_increasing(r, v_hat + self._dv * hg, scale)
             V = Vb + k * (v - v_hat)
             if i == 0:  # the explicit part of stage 2 from stage 1's slope
                 V_hat = Vn + (1 - GAMMA) / GAMMA * (V - Vn)
@@ -452,6 +469,11 @@ class RollingBody:
     def _state(self, Vx: float, vx: float) -> FloatArray:
         y = np.array([Vx, vx, 0.0, 0.0])
         return self._apply_ratios(y)
+
+
+def _shift(f_df: tuple[float, float], target: float) -> tuple[float, float]:
+    """(f - target, f') for the root finder."""
+    return f_df[0] - target, f_df[1]
 
 
 def _checked(L: Loads) -> Loads:

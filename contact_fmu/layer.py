@@ -72,6 +72,17 @@ def _force_fraction_scalar(beta: float) -> float:
     return min((2.0 / math.pi) * _H(beta, math.sqrt, math.asin), 1.0)
 
 
+def _force_fraction_slope(beta: float) -> float:
+    """dh/dbeta for one float: (2/pi) (m (8 + beta^2)/3 - 2 beta asin m), 0 beyond full slip.
+
+    From differentiating H of ``force_fraction``; 16/(3 pi) at beta = 0, 0 at beta = 2.
+    """
+    if beta >= BETA_FULL_SLIP:
+        return 0.0
+    m = math.sqrt(1.0 - 0.25 * beta * beta)
+    return max((2.0 / math.pi) * (m * (8.0 + beta * beta) / 3.0 - 2.0 * beta * math.asin(m)), 0.0)
+
+
 def moment_fraction(beta: ArrayLike) -> FloatArray:
     """int x |tau| dA / (mu P a1) for rolling in +x (derived in docs/model.md).
 
@@ -266,6 +277,28 @@ class LayerContact:
         Mz = math.copysign(1.0, Vx) * muP * self.a1 * g * vy / speed if Vx != 0.0 else 0.0
         return muP * h * vx / speed, muP * h * vy / speed, Mz
 
+    def tx_slope(self, vx: float, vy: float, Vx: float) -> tuple[float, float, float, float]:
+        """Tx and its partial derivatives (dTx/dvx, dTx/dvy, dTx/dVx) for floats, no spin.
+
+        With s = |v|, beta = c s/|Vx| (c = a1/(mu p0 k)) and Tx = mu P h(beta) vx/s:
+        dTx/dvx = mu P (h' c vx^2/(|Vx| s^2) + h vy^2/s^3),
+        dTx/dvy = mu P vx vy (h' c/(|Vx| s^2) - h/s^3), dTx/dVx = -mu P h' beta vx/(s Vx).
+        For the integrator's Newton iterations; Vx != 0.
+        """
+        muP, c = self.mu * self.P, self._beta_per_creep
+        aV = abs(Vx)
+        s = math.hypot(vx, vy)
+        if s == 0.0:  # h ~ h'(0) beta: Tx ~ mu P h'(0) c vx/|Vx|
+            return 0.0, muP * _force_fraction_slope(0.0) * c / aV, 0.0, 0.0
+        beta = s * c / aV
+        h, dh = _force_fraction_scalar(beta), _force_fraction_slope(beta)
+        s2 = s * s
+        Tx = muP * h * vx / s
+        d_vx = muP * (dh * c * vx * vx / (aV * s2) + h * vy * vy / (s2 * s))
+        d_vy = muP * vx * vy * (dh * c / (aV * s2) - h / (s2 * s))
+        d_V = -muP * dh * beta * vx / (s * Vx)
+        return Tx, d_vx, d_vy, d_V
+
     @cached_property
     def _beta_per_creep(self) -> float:
         """beta per unit creepage |v|/|Vx|: a1 / (mu p0 (kb + ks))."""
@@ -296,6 +329,15 @@ class LayerContact:
 
     def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
         """Adhesion area over contact area (-), without spin."""
+        if isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float):
+            s = math.hypot(vx, vy)  # float path: (2 asin m - beta m)/pi in math
+            if s == 0.0:
+                return 1.0
+            if Vx == 0.0 or s * self._beta_per_creep >= BETA_FULL_SLIP * abs(Vx):
+                return 0.0
+            b = s * self._beta_per_creep / abs(Vx)
+            m = math.sqrt(1.0 - 0.25 * b * b)
+            return (2.0 * math.asin(m) - b * m) / math.pi
         return adhesion_fraction(self.beta(vx, vy, Vx))
 
     def traction(

@@ -51,6 +51,44 @@ def increasing_root(
     return float(brentq(r, lo, hi, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
 
 
+# Safeguarded Newton: at most this many iterations before the bracketing fallback.
+MAX_NEWTON = 30
+
+
+def newton_increasing(
+    fdf: Callable[[float], tuple[float, float]], u0: float, scale: float
+) -> float:
+    """Root of an increasing function f from the guess u0, given f and f' (fdf(u)).
+
+    Newton steps, kept inside the bracket [lo, hi] that the iterates establish (f < 0
+    at lo, > 0 at hi); a step that leaves it, or a vanishing f', bisects (or, before a
+    bracket exists, moves by a growing multiple of ``scale``). Converged when the step
+    is below SOLVE_RTOL (scale + |u|); falls back to ``increasing_root`` otherwise.
+    """
+    lo, hi = -np.inf, np.inf
+    u = u0
+    jump = scale
+    for _ in range(MAX_NEWTON):
+        f, df = fdf(u)
+        if f == 0.0:
+            return u
+        if f > 0.0:
+            hi = u
+        else:
+            lo = u
+        new = u - f / df if df > 0.0 else np.nan
+        if not lo < new < hi:  # outside the bracket (or no slope): bisect or search
+            if np.isfinite(lo) and np.isfinite(hi):
+                new = 0.5 * (lo + hi)
+            else:
+                new = u + (jump if f < 0.0 else -jump)
+                jump *= EXPAND
+        if abs(new - u) <= SOLVE_RTOL * (scale + abs(u)):
+            return new
+        u = new
+    return increasing_root(lambda v: fdf(v)[0], u0, scale)
+
+
 def newton(
     residuals: Callable[[FloatArray], FloatArray], u0: FloatArray, scale: FloatArray
 ) -> FloatArray:

@@ -203,6 +203,26 @@ def test_friction_power_is_never_negative():
     assert np.all(np.hypot(Tx, Ty) <= MU_P * (1 + 4 * np.finfo(float).eps))
 
 
+def test_analytic_slope_matches_the_force_law():
+    # tx_slope (the integrator's Newton derivative) against central differences of
+    # force(); the difference error is ~1e-8 of the slope scale mu P/(creep_full Vx)
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        vx, vy = rng.normal(size=2) * 10.0 ** rng.uniform(-5, -1)
+        Vx = float(rng.choice([-1, 1]) * 10.0 ** rng.uniform(-1, 1.3))
+        T, d_vx, d_vy, d_V = C.tx_slope(float(vx), float(vy), Vx)
+        assert T == pytest.approx(float(C.force(vx, vy, Vx)[0]), rel=1e-13, abs=1e-13 * MU_P)
+        scale = MU_P / (C.creep_full_slip * abs(Vx))
+        for i, d in enumerate((d_vx, d_vy, d_V)):
+            args = np.array([vx, vy, Vx])
+            e = 1e-6 * max(abs(args[i]), 1e-3 * C.creep_full_slip * abs(Vx))
+            up, down = args.copy(), args.copy()
+            up[i] += e
+            down[i] -= e
+            fd = (float(C.force(*up)[0]) - float(C.force(*down)[0])) / (2 * e)
+            assert d == pytest.approx(fd, abs=1e-5 * scale)
+
+
 def test_scalar_and_vector_paths_agree():
     # the integrator's float path and the numpy path implement the same formulas
     rng = np.random.default_rng(4)
@@ -213,6 +233,8 @@ def test_scalar_and_vector_paths_agree():
         vector = C.forces(np.array([vx]), np.array([vy]), 0.0, np.array([Vx]))
         for s, v in zip(scalar, vector, strict=True):
             assert s == pytest.approx(float(v[0]), rel=1e-13, abs=1e-13 * MU_P)
+        af = C.adhesion_fraction(float(vx), float(vy), Vx)
+        assert af == pytest.approx(float(C.adhesion_fraction(vx, vy, np.array(Vx))), abs=1e-14)
 
 
 @pytest.mark.parametrize("creep", [1e-3, 4e-3, 0.0099])
