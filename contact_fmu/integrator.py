@@ -273,15 +273,19 @@ class RollingBody:
 
     def _admissible(self, L: Loads) -> bool:
         """Eq. (27): the demanded force (Tx[, Ty]) is inside the capacity mu P."""
-        b = self.body
-        Tx = b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx
         Ty = L.Fy_ex if self.lateral.dynamic_vy else 0.0
-        return math.hypot(Tx, Ty) < self.law.mu * self.law.P * (1.0 - CAPACITY_MARGIN)
+        cap = self.law.mu * self.law.P * (1.0 - CAPACITY_MARGIN)
+        return math.hypot(self._target_x(L), Ty) < cap
 
     def _targets(self, L: Loads) -> FloatArray:
         """Forces the stages balance: Eqs. (26), (29), (30) in the QS limit."""
         b = self.body
         return np.array([b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx, L.Fy_ex, L.Mz_ex])[self._act]
+
+    def _target_x(self, L: Loads) -> float:
+        """Eq. (26)'s demand A2 Fx_ex - A1 My_ex/Rx (N), the first of ``_targets``."""
+        b = self.body
+        return b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx
 
     def _drive(self, L: Loads) -> float:
         """A1 (Fx_ex + My_ex/Rx): the force that accelerates Vx once T is eliminated."""
@@ -344,7 +348,7 @@ class RollingBody:
         b = self.body
         Vn, vn = float(self.y[0]), float(self.y[1])
         G1, G2 = self._drive(L1), self._drive(L2)
-        Fe1, Fe2 = float(self._targets(L1)[0]), float(self._targets(L2)[0])
+        Fe1, Fe2 = self._target_x(L1), self._target_x(L2)
         V1b = Vn + 0.5 * h * (G1 - G2) / b.M
         V2b = Vn + 0.5 * h * (G1 + G2) / b.M
         scale = float(self._scale(V2b)[0])
@@ -419,7 +423,7 @@ class RollingBody:
         k = m / b.M
         v_hat, V_hat = vn, Vn
         for i, (L, G) in enumerate(((L1, G1), (L2, G2))):
-            Fe = float(self._targets(L)[0])
+            Fe = self._target_x(L)
             Vb = V_hat + hg * G / b.M
 
             scale = float(self._scale(Vb)[0])
