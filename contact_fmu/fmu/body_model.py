@@ -52,6 +52,7 @@ def make_stepper(cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float) ->
         Vy0=p.get("Vy0", 0.0),
         Omega_z0=p.get("Omega_z0", 0.0),
         t0=t0,
+        scheme=p.get("scheme", cfg.schemes[0]),
     )
 
 

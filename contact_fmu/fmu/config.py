@@ -26,6 +26,9 @@ LAW_MODULES = {"layer": "layer"}
 LAW_DATA: dict[str, tuple[str, ...]] = {"layer": ()}
 PHASES = ("steady",)
 METHODS = ("full", "quasistationary")
+# Time-stepping schemes of the body-mode stepper (``integrator.SCHEMES``; a test keeps the
+# two equal: importing the integrator here would put it into every FMU, contact mode too).
+SCHEMES = ("lobatto3c", "sdirk2")
 # Recognised scene values that later issues implement.
 PLANNED = {"contact_law": ("halfspace",), "phase": ("transient",)}
 
@@ -47,7 +50,9 @@ class ModelConfig:
     """The structure of one FMU.
 
     ``methods``: the steppers the FMU offers (body mode); with more than one, the
-    string parameter ``method`` chooses. ``vy``/``spin``: how Vy and Omega_z follow
+    string parameter ``method`` chooses. ``schemes``: the integrator schemes it offers
+    (body mode); with more than one, the string parameter ``scheme`` chooses (the first
+    is the default). ``vy``/``spin``: how Vy and Omega_z follow
     (body mode): "zero" (held at 0, no lateral variables), "ratio" (held ratio to Vx,
     parameters vy_ratio/spin_ratio) or Eqs. (10)/(11). ``starts``: start values that
     replace the declared defaults. ``experiment``: (start, stop, step) in s, or None.
@@ -60,6 +65,7 @@ class ModelConfig:
     contact_law: str = "layer"
     phase: str = "steady"
     methods: tuple[str, ...] = ("full",)
+    schemes: tuple[str, ...] = ("lobatto3c",)
     vy: str = "zero"
     spin: str = "zero"
     starts: dict[str, Any] = field(default_factory=dict)
@@ -76,14 +82,19 @@ class ModelConfig:
             raise InputError("method", self.methods, f"at least one of {METHODS}")
         for m in self.methods:
             _choice("method", m, METHODS)
+        if not self.schemes:
+            raise InputError("scheme", self.schemes, f"at least one of {SCHEMES}")
+        for m in self.schemes:
+            _choice("scheme", m, SCHEMES)
         _choice("vy", self.vy, VY_MODES)
         _choice("spin", self.spin, SPIN_MODES)
-        if self.mode != "body" and (self.vy, self.spin, self.methods) != (
+        if self.mode != "body" and (self.vy, self.spin, self.methods, self.schemes) != (
             "zero",
             "zero",
             ("full",),
+            SCHEMES[:1],
         ):
-            raise InputError("mode", self.mode, 'body for lateral parts and "method"')
+            raise InputError("mode", self.mode, 'body for lateral parts, "method" and "scheme"')
         self._check_names("input", self.inputs, fv.INPUT)
         self._check_names("output", self.outputs, fv.OUTPUT)
         required = {"body": ("P",), "contact": ("P", "Vx", "Omega_y"), "rigid_body": ("Tx",)}
@@ -101,6 +112,8 @@ class ModelConfig:
                 raise InputError(name, value, problem)
         if "method" in self.starts and self.starts["method"] not in self.methods:
             raise InputError("method", self.starts["method"], f"one of {self.methods}")
+        if "scheme" in self.starts and self.starts["scheme"] not in self.schemes:
+            raise InputError("scheme", self.starts["scheme"], f"one of {self.schemes}")
 
     def _check_names(self, what: str, names: tuple[str, ...], causality: str) -> None:
         allowed = fv.available(self, causality)
@@ -120,6 +133,8 @@ class ModelConfig:
         """Start value of ``var``: the configured one, else the declared default."""
         if var.name == "method":
             return self.starts.get("method", self.methods[0])
+        if var.name == "scheme":
+            return self.starts.get("scheme", self.schemes[0])
         return self.starts.get(var.name, var.start)
 
     @property
@@ -138,7 +153,7 @@ class ModelConfig:
     # ---- plain data --------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
-        for k in ("inputs", "outputs", "methods"):
+        for k in ("inputs", "outputs", "methods", "schemes"):
             d[k] = list(d[k])
         d["experiment"] = list(self.experiment) if self.experiment else None
         return d
@@ -146,7 +161,7 @@ class ModelConfig:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> ModelConfig:
         d = dict(d)
-        for k in ("inputs", "outputs", "methods"):
+        for k in ("inputs", "outputs", "methods", "schemes"):
             d[k] = tuple(d[k])
         if d.get("experiment") is not None:
             d["experiment"] = tuple(float(x) for x in d["experiment"])
@@ -154,7 +169,7 @@ class ModelConfig:
 
     @classmethod
     def full(cls, mode: str) -> ModelConfig:
-        """The full FMU of a mode: every variable, Eqs. (10)-(11), both steppers."""
+        """The full FMU of a mode: every variable, Eqs. (10)-(11), both steppers and schemes."""
         body = mode == "body"
         skeleton = cls(
             name=f"full_{mode}",
@@ -162,6 +177,7 @@ class ModelConfig:
             inputs={"body": ("P",), "contact": ("P", "Vx", "Omega_y"), "rigid_body": ("Tx",)}[mode],
             outputs=(),
             methods=METHODS if body else ("full",),
+            schemes=SCHEMES if body else SCHEMES[:1],
             vy="eq10" if body else "zero",
             spin="eq11" if body else "zero",
         )
@@ -171,6 +187,7 @@ class ModelConfig:
             inputs=tuple(fv.available(skeleton, fv.INPUT)),
             outputs=tuple(fv.available(skeleton, fv.OUTPUT)),
             methods=skeleton.methods,
+            schemes=skeleton.schemes,
             vy=skeleton.vy,
             spin=skeleton.spin,
             description=f"Full {mode}-mode FMU: every variable and model part",

@@ -48,6 +48,7 @@ class Structure(Protocol):
     vy: str  # "zero" | "ratio" | "eq10"
     spin: str  # "zero" | "ratio" | "eq11"
     methods: tuple[str, ...]
+    schemes: tuple[str, ...]
 
 
 # Conditions on the structure, by name (only the body mode has optional parts).
@@ -60,6 +61,7 @@ CONDITIONS = {
     "spin_ratio": lambda s: s.spin == "ratio",
     "lateral": lambda s: s.vy != "zero" or s.spin != "zero",
     "methods": lambda s: len(s.methods) > 1,
+    "schemes": lambda s: len(s.schemes) > 1,
 }
 
 
@@ -199,6 +201,16 @@ VARIABLES: tuple[Var, ...] = (
         "full",
         type="String",
         needs="methods",
+    ),
+    Var(
+        "scheme",
+        None,
+        'Integrator: "lobatto3c" (Lobatto IIIC, no overshoot after load steps) or "sdirk2" '
+        "(SDIRK2, smaller error constant, rings after steps of a few relaxation times)",
+        {"body": PARAMETER},
+        "lobatto3c",
+        type="String",
+        needs="schemes",
     ),
     # ---- inputs ----------------------------------------------------------------------
     Var(

@@ -104,6 +104,7 @@ def by_simulation(
     rb = RollingBody(
         _law(p, float(P[0])), _body(p), lateral, case.method, Vx0=p["Vx0"],
         Omega_y0=p["Omega_y0"], Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0),
+        scheme=case.scheme,
     )  # fmt: skip
     loads = np.array([case.inputs[n](t) if n in case.inputs else np.zeros(t.size)
                       for n in Loads._fields])  # fmt: skip

@@ -61,10 +61,12 @@ def input_table(scene: Scene, case: Case) -> np.ndarray:
 
 
 def start_values(scene: Scene, case: Case) -> dict[str, Any]:
-    """Every parameter of the case (and the stepper, when the FMU offers several)."""
+    """Every parameter of the case (and the stepper and scheme, when the FMU offers several)."""
     values = dict(case.parameters)
     if len(scene.config.methods) > 1:
         values["method"] = case.method
+    if len(scene.config.schemes) > 1:
+        values["scheme"] = case.scheme
     return values
 
 

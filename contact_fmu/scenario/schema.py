@@ -10,6 +10,7 @@ grid, the outputs to record, reference results with tolerances and a plot layout
     contact_law = "layer"               # layer   ("halfspace": issue 4)
     phase = "steady"                    # steady  ("transient": issue 5)
     method = "full"                     # full | quasistationary (a case may override)
+    scheme = "lobatto3c"                # lobatto3c | sdirk2 (a case may override)
     vy = 0.0                            # Vy/Vx held at this value, or "eq10"
     spin = 0.0                          # Omega_z/Vx held (1/m), or "eq11"
     [run]
@@ -18,7 +19,8 @@ grid, the outputs to record, reference results with tolerances and a plot layout
     outputs = ["Tx", "vx"]
     [parameters]                        # FMU parameters, SI (see contact_fmu.fmu.variables)
     [inputs]                            # FMU inputs as signals (see signals.py)
-    [[cases]]                           # name, and overrides: parameters, inputs, method
+    [[cases]]                           # name, and overrides: parameters, inputs, method,
+                                        # scheme
     [[reference]]                       # file (CSV next to the scene), source, tolerance,
                                         # cases, and options of the producing path
     [plot]                              # x, panels, scale
@@ -55,9 +57,9 @@ TOP_KEYS = {
     "reference",
     "plot",
 }
-MODEL_KEYS = {"mode", "contact_law", "phase", "method", "vy", "spin"}
+MODEL_KEYS = {"mode", "contact_law", "phase", "method", "scheme", "vy", "spin"}
 RUN_KEYS = {"stop_time", "step", "outputs"}
-CASE_KEYS = {"name", "parameters", "inputs", "method"}
+CASE_KEYS = {"name", "parameters", "inputs", "method", "scheme"}
 REFERENCE_KEYS = {"file", "source", "note", "tolerance", "cases", "options"}
 PLOT_KEYS = {"x", "panels", "scale"}
 # The grid must hold a whole number of steps to this relative precision.
@@ -70,12 +72,13 @@ class ScenarioError(ValueError):
 
 @dataclass(frozen=True)
 class Case:
-    """One run of a scene: its full parameter set, input signals and stepper."""
+    """One run of a scene: its full parameter set, input signals, stepper and scheme."""
 
     name: str
     parameters: dict[str, Any]
     inputs: dict[str, Signal]
     method: str
+    scheme: str = "lobatto3c"
 
 
 @dataclass(frozen=True)
@@ -203,6 +206,7 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
     inputs_raw = _table(path, "inputs", raw.get("inputs", {}), set(fv.BY_NAME))
     base_inputs = {k: parse(k, v) for k, v in inputs_raw.items()}
     default_method = model.get("method", "full")
+    default_scheme = model.get("scheme", "lobatto3c")
 
     cases_raw = raw.get("cases", [{"name": "default"}])
     if not isinstance(cases_raw, list) or not cases_raw:
@@ -218,11 +222,13 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
         signals = dict(base_inputs)
         signals.update({k: parse(k, v) for k, v in ci.items()})
         method = c.get("method", default_method)
-        cases.append(Case(cname, {**params, **cp}, signals, method))
+        scheme = c.get("scheme", default_scheme)
+        cases.append(Case(cname, {**params, **cp}, signals, method, scheme))
     if len({c.name for c in cases}) != len(cases):
         raise _err(path, "cases", "case names must be unique")
 
     methods = tuple(dict.fromkeys(c.method for c in cases))
+    schemes = tuple(dict.fromkeys(c.scheme for c in cases))
     input_names = tuple(v.name for v in fv.VARIABLES if any(v.name in c.inputs for c in cases))
     for c in cases:
         missing = set(input_names) - set(c.inputs)
@@ -232,6 +238,8 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
     starts.update({k: float(s(np.zeros(1))[0]) for k, s in base_inputs.items()})
     if len(methods) > 1:
         starts["method"] = methods[0]
+    if len(schemes) > 1:
+        starts["scheme"] = schemes[0]
     config = ModelConfig(
         name=name,
         mode=model.get("mode", "body"),
@@ -240,6 +248,7 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
         contact_law=model.get("contact_law", "layer"),
         phase=model.get("phase", "steady"),
         methods=methods,
+        schemes=schemes,
         vy=vy,
         spin=spin,
         starts=starts,
