@@ -154,6 +154,54 @@ def markdown(res: dict) -> str:
     return "\n".join(lines)
 
 
+def table_report(n: int, nodes: tuple[int, int, int], points: int, seed: int = 1) -> dict:
+    """Build the railway creep-force table on an n x n solver grid and measure its
+    interpolation error against direct solves at random points of the table box."""
+    from contact_fmu.halfspace.table import build_table
+
+    contact = wheel_on_rail(n=n)
+    t0 = time.perf_counter()
+    table = build_table(contact, nodes=nodes)
+    build_s = time.perf_counter() - t0
+    rng = np.random.default_rng(seed)
+    X = table.data.extent
+    muP = contact.mu * contact.P
+    err = []
+    for x in rng.uniform(-0.98, 0.98, (points, 3)) * X:
+        a = (x[0] * table.xi_ref, x[1] * table.xi_ref, x[2] * table.phi_ref)
+        s = contact.solve(*a)
+        T = table.forces(*a, 1.0)
+        err.append(
+            [abs(T[0] - s.Tx) / muP, abs(T[1] - s.Ty) / muP, abs(T[2] - s.Mz) / (muP * contact.c)]
+        )
+    err = np.array(err)
+    from contact_fmu.layer import LayerContact
+
+    lc = LayerContact(1e5, 0.46, 0.3, 5e-13, 5e-13, 3.2e-13, 3.2e-13, 0.3)
+    calls = {}
+    for label, v in (("no_spin", (1e-3, 5e-4, 0.0, 20.0)), ("spin", (1e-3, 5e-4, 0.1, 20.0))):
+        for name, law in (("table", table), ("layer", lc)):
+            reps = 2000 if name == "table" or label == "no_spin" else 50
+            t0 = time.perf_counter()
+            for _ in range(reps):
+                law.forces(*v)
+            calls[f"{name}_{label}_us"] = (time.perf_counter() - t0) / reps * 1e6
+    vec = np.linspace(-0.01, 0.01, 10000)
+    t0 = time.perf_counter()
+    table.forces(vec, 0.0, 0.0, 20.0)
+    vec_us = (time.perf_counter() - t0) / len(vec) * 1e6
+    return {
+        "n": n,
+        "nodes": nodes,
+        "solves": json.loads(table.data.meta)["solves"],
+        "build_s": build_s,
+        "max_err": err.max(axis=0).tolist(),
+        "rms_err": np.sqrt((err**2).mean(axis=0)).tolist(),
+        "scalar_calls": calls,
+        "vector_us_per_point": vec_us,
+    }
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -162,7 +210,24 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dense-limit-mb", type=float, default=1500.0)
     ap.add_argument("--json", type=str, default=None)
+    ap.add_argument(
+        "--table",
+        type=int,
+        nargs=4,
+        metavar=("N", "N1", "N2", "N3"),
+        default=None,
+        help="instead: build the railway table on an N x N grid with N1 x N2 x N3 nodes "
+        "and report its cost and interpolation error",
+    )
+    ap.add_argument("--points", type=int, default=60, help="random points for --table")
     args = ap.parse_args(argv)
+    if args.table:
+        rep = table_report(args.table[0], tuple(args.table[1:]), args.points)
+        print(json.dumps(rep, indent=1))
+        if args.json:
+            with open(args.json, "w") as f:
+                json.dump(rep, f, indent=1)
+        return
     res = run(args.grids, args.repeat, args.dense_limit_mb)
     print(markdown(res))
     print("\nCONTACT (published, 2016 hardware, one thread):", CONTACT_PUBLISHED)

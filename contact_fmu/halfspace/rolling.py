@@ -71,7 +71,7 @@ NEWTON_TOL = 1e-7
 NEWTON_MAXIT = 60
 # Inexact Newton: the GMRES relative tolerance is min(GMRES_RTOL_MAX, ratio of the last two
 # |F|) and at least GMRES_RTOL_MIN (Eisenstat & Walker 1996, choice 1 simplified).
-GMRES_RTOL_MAX = 1e-2
+GMRES_RTOL_MAX = 0.1
 GMRES_RTOL_MIN = 1e-12
 # GMRES restart length and cap on the total number of inner iterations per Newton step.
 GMRES_RESTART = 60
@@ -133,7 +133,7 @@ class RollingPatch:
     theta: FloatArray | None = None
     kappa: float = 0.0
     backend: str = "fft"
-    use_closure: bool = True
+    use_closure: bool = False
     operator: BlockConvolution | None = None
 
     def __post_init__(self) -> None:

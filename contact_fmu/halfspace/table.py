@@ -35,7 +35,7 @@ Invariants enforced by construction:
   creepage vector x is scaled by lambda = min(1, min_i X_i/|x_i|) onto the box
   |x_i| <= X_i, which keeps its direction; beyond full slip the force depends on the
   direction of the creepage only (up to the elastic part of the slip, which falls off
-  like 1/|x|). Vx = 0 (pure sliding) is the limit |x| -> inf of this rule.
+  like 1/|x|^2). Vx = 0 (pure sliding) is the limit |x| -> inf of this rule.
 """
 
 from __future__ import annotations
