@@ -141,6 +141,33 @@ def test_table_is_C1_across_cells_and_symmetry_planes(table):
     assert ref > 0.0
 
 
+def test_tx_slope_matches_difference_quotients(table):
+    """The analytic slope offered to the integrator (tx_slope) agrees with central
+    differences of forces: inside the table, in the saturation band, outside the box
+    (clamped) and rolling backwards (cubic patches: the difference error is O(h^2),
+    1e-6 of the slope's scale with h = 1e-6 of the creepage scale)."""
+    xr = table.xi_ref
+    V = 7.0
+    for vx, vy, Vx in (
+        (0.1 * xr * V, 0.05 * xr * V, V),
+        (0.35 * xr * V, -0.2 * xr * V, V),
+        (-0.3 * xr * V, 0.4 * xr * V, -V),
+        (3.0 * xr * V, 1.0 * xr * V, V),
+        (0.02 * xr * V, 2.5 * xr * V, -V),
+    ):
+        T, dvx, dvy, dV = table.tx_slope(vx, vy, Vx)
+        assert T == pytest.approx(table.forces(vx, vy, 0.0, Vx)[0], rel=1e-13, abs=1e-9)
+        h = 1e-6 * xr * V
+        fd = [
+            (table.forces(vx + h, vy, 0.0, Vx)[0] - table.forces(vx - h, vy, 0.0, Vx)[0]) / (2 * h),
+            (table.forces(vx, vy + h, 0.0, Vx)[0] - table.forces(vx, vy - h, 0.0, Vx)[0]) / (2 * h),
+            (table.forces(vx, vy, 0.0, Vx + h)[0] - table.forces(vx, vy, 0.0, Vx - h)[0]) / (2 * h),
+        ]
+        scale = table.mu * table.P / (xr * V)
+        for a, b in zip((dvx, dvy, dV), fd, strict=True):
+            assert abs(a - b) < 1e-6 * scale
+
+
 def test_saturation_outside_the_table_keeps_the_direction(table):
     """Beyond the box the normalised creepage is scaled back onto it along its own
     direction: twice and ten times the largest creepage give the same force, and Vx = 0
@@ -193,9 +220,17 @@ def test_table_drives_the_integrator_to_eqs_26_and_29(table):
     body = Body(M=1000.0, Rx=0.46, Iy=1000.0 * 0.46**2 / 2.0)
     muP = table.mu * table.P
     loads = Loads(Fx_ex=0.4 * muP, Fy_ex=0.25 * muP)
-    lat = Lateral(vy_ratio=None, spin_ratio=0.1)  # a held spin creepage of 0.1 1/m
+    # held spin creepage 0.1 1/m, or none; Vy from Eq. (10)
+    for spin in (0.1, 0.0):
+        lat = Lateral(vy_ratio=None, spin_ratio=spin)
+        tr = simulate(
+            table, body, loads, 0.5, 0.05, method="quasistationary", lateral=lat, Vx0=20.0
+        )
+        assert tr.Tx[-1] == pytest.approx(body.A2 * 0.4 * muP, rel=1e-9)
+        assert tr.Ty[-1] == pytest.approx(0.25 * muP, rel=1e-9)
+        assert not tr.sliding[-1]
+        assert math.isfinite(tr.vx[-1]) and math.isfinite(tr.Vy[-1])
+    # held lateral creepage, no spin: the scalar stage solve uses the table's tx_slope
+    lat = Lateral(vy_ratio=0.001, spin_ratio=0.0)
     tr = simulate(table, body, loads, 0.5, 0.05, method="quasistationary", lateral=lat, Vx0=20.0)
     assert tr.Tx[-1] == pytest.approx(body.A2 * 0.4 * muP, rel=1e-9)
-    assert tr.Ty[-1] == pytest.approx(0.25 * muP, rel=1e-9)
-    assert not tr.sliding[-1]
-    assert math.isfinite(tr.vx[-1]) and math.isfinite(tr.Vy[-1])

@@ -31,7 +31,6 @@ from .rolling import (
     RollingPatch,
     RollingSolution,
     ellipse_patch,
-    normalise_load,
     solve_rolling,
 )
 
@@ -40,8 +39,8 @@ FloatArray = NDArray[np.float64]
 # Default elements of the potential contact area per direction (docs/halfspace.md:
 # about 1 % discretisation error of the creep forces on 32 x 32).
 DEFAULT_N = 32
-# Adhesion fraction below which a solution counts as full slip (one element of a 32 x 32
-# grid is about 1e-3 of the contact; the bisection for the onset resolves it).
+# Adhesion fraction at or below which a solution counts as full slip: none of the
+# elements adheres (the bisection for the onset resolves one element).
 FULL_SLIP_ADHESION = 0.0
 # Relative bracket tolerance of the bisection for the onset of full slip (-).
 ONSET_RTOL = 1e-4
@@ -130,8 +129,8 @@ class HalfSpaceContact:
             e.nu,
             k=self.k,
             kappa=e.kappa if self.coupling else 0.0,
+            P=self.P,
         )
-        patch.p = normalise_load(patch.p, patch.grid, self.P)
         return patch
 
     def with_load(self, P: float) -> HalfSpaceContact:

@@ -121,7 +121,8 @@ class RollingPatch:
     nx): fraction of an element between its centre and the leading edge (1 inside,
     (0, 1] in the leading elements; None: 1); kappa: Kalker's difference parameter
     (pressure coupling, 0: quasi-identical bodies); backend "fft" or "dense" (the same
-    solver with an explicit influence matrix, for benchmarks).
+    solver with an explicit influence matrix, for benchmarks). Derived quantities are
+    cached: treat a patch as immutable once built.
     """
 
     grid: Grid
@@ -566,12 +567,14 @@ def ellipse_patch(
     kappa: float = 0.0,
     ny: int | None = None,
     backend: str = "fft",
+    P: float | None = None,
 ) -> RollingPatch:
     """Patch on an ellipse x^2/a1^2 + y^2/a2^2 < 1 with n x ny elements (ny = n default).
 
     The potential contact area is the bounding box with one element to spare in x on each
-    side: dx = 2 a1/(n - 2), dy = 2 a2/ny. pressure(X, Y) gives p (Pa) at the centres;
-    theta follows from the exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
+    side: dx = 2 a1/(n - 2), dy = 2 a2/ny. pressure(X, Y) gives p (Pa) at the centres,
+    scaled so that sum p dA = P (N) when P is given (the load invariant); theta follows
+    from the exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
     """
     if n < 4:
         raise InputError("n", n, ">= 4")
@@ -583,6 +586,8 @@ def ellipse_patch(
     inside = (X / a1) ** 2 + (Y / a2) ** 2 < 1.0
     p = np.where(inside, pressure(X, Y), 0.0)
     p = np.where(p > 0.0, p, 0.0)
+    if P is not None:
+        p = normalise_load(p, grid, positive("P", P))
     ell = a1 * np.sqrt(np.maximum(1.0 - (Y / a2) ** 2, 0.0))
     theta = np.clip((ell - X) / dx, np.finfo(float).tiny, 1.0)
     theta = np.where(inside, theta, 1.0)

@@ -156,7 +156,7 @@ class TableData:
             )
 
 
-# ---- tricubic Hermite patches of the tensor spline ---------------------------------
+# ---- tricubic Hermite patches ---------------------------------------------------------
 # Power-basis coefficients of the cubic Hermite basis on [0, 1]: rows H00, H10, H01,
 # H11 (value at 0, slope at 0 times h, value at 1, slope at 1 times h), columns t^0..t^3.
 _HERMITE = np.array(
@@ -404,6 +404,73 @@ class CreepTable:
             fx, fy = fx * s / m, fy * s / m
         muP = self.mu * self.P
         return sV * muP * fx, muP * fy, sV * muP * self.c * mz, min(max(adh, 0.0), 1.0)
+
+    def tx_slope(self, vx: float, vy: float, Vx: float) -> tuple[float, float, float, float]:
+        """Tx (N) and its partial derivatives (dTx/dvx, dTx/dvy, dTx/dVx) for floats, no
+        spin: the optional slope the integrator's Newton iterations use (cf.
+        LayerContact.tx_slope). Exact derivatives of the Hermite patch, the radial
+        saturation and the clamp; on a cell face or the box face the one-sided value of
+        the cell the point falls in. Vx != 0."""
+        vx, vy, Vx = float(vx), float(vy), float(Vx)
+        if Vx == 0.0:
+            raise InputError("Vx", Vx, "!= 0 for the slope")
+        sV = -1.0 if Vx < 0.0 else 1.0
+        aV = abs(Vx)
+        xr = self.xi_ref
+        d = (sV * vx / xr, vy / xr)
+        ext = self._extent
+        lam, j = math.inf, -1
+        for i in (0, 1):
+            if d[i] != 0.0 and ext[i] / abs(d[i]) < lam:
+                lam, j = ext[i] / abs(d[i]), i
+        dd = (sV / xr, 1.0 / xr)  # d d_i / d(vx, vy)_i
+        if j < 0 or lam * aV >= 1.0:  # inside the box: x = d/|Vx|
+            x = (d[0] / aV, d[1] / aV)
+            J = ((dd[0] / aV, 0.0, -x[0] * sV / aV), (0.0, dd[1] / aV, -x[1] * sV / aV))
+        else:  # clamped onto the face of axis j: x = d X_j/|d_j|, independent of Vx
+            x = (d[0] * lam, d[1] * lam)
+            J = tuple(
+                tuple(lam * ((i == k) - (d[i] / d[j] if k == j else 0.0)) * dd[k] for k in (0, 1))
+                + (0.0,)
+                for i in (0, 1)
+            )
+        x1, x2 = x
+        sg = 1.0
+        if x1 < 0.0 or (x1 == 0.0 and x2 < 0.0):
+            sg, x1, x2 = -1.0, -x1, -x2
+        A1, A2, A3 = self._axes_lists
+        i1 = min(max(bisect_right(A1, x1) - 1, 0), len(A1) - 2)
+        i2 = min(max(bisect_right(A2, x2) - 1, 0), len(A2) - 2)
+        i3 = min(max(bisect_right(A3, 0.0) - 1, 0), len(A3) - 2)
+        h1, h2 = A1[i1 + 1] - A1[i1], A2[i2 + 1] - A2[i2]
+        t1, t2 = (x1 - A1[i1]) / h1, (x2 - A2[i2]) / h2
+        t3 = (0.0 - A3[i3]) / (A3[i3 + 1] - A3[i3])
+        T1, dT1 = (1.0, t1, t1 * t1, t1**3), (0.0, 1.0, 2.0 * t1, 3.0 * t1 * t1)
+        T2, dT2 = (1.0, t2, t2 * t2, t2**3), (0.0, 1.0, 2.0 * t2, 3.0 * t2 * t2)
+        T3 = (1.0, t3, t3 * t3, t3**3)
+        C = self._coef_flat[i1, i2, i3][:, :2]  # (64, 2): fx, fy
+        f = np.multiply.outer(np.multiply.outer(T1, T2), T3).ravel() @ C
+        g1 = np.multiply.outer(np.multiply.outer(dT1, T2), T3).ravel() @ C / h1
+        g2 = np.multiply.outer(np.multiply.outer(T1, dT2), T3).ravel() @ C / h2
+        # f(x) = sg F(sg x): the value changes sign, the gradient does not
+        fx, fy = sg * float(f[0]), sg * float(f[1])
+        dfx = (float(g1[0]), float(g2[0]))
+        dfy = (float(g1[1]), float(g2[1]))
+        m = math.hypot(fx, fy)
+        w = SATURATION_WIDTH
+        if m > 1.0 - w:
+            tt = min((m - (1.0 - w)) / w, 1.0)
+            s = 1.0 - w + w * (tt + tt * tt - tt**3) if m < 1.0 else 1.0
+            ds = 1.0 + 2.0 * tt - 3.0 * tt * tt if m < 1.0 else 0.0
+            S, dS = s / m, (ds * m - s) / (m * m)
+            dox = (S + fx * dS * fx / m, fx * dS * fy / m)  # d out_x/d(fx, fy)
+            out = fx * S
+        else:
+            dox, out = (1.0, 0.0), fx
+        dx_out = [dox[0] * dfx[a] + dox[1] * dfy[a] for a in (0, 1)]  # d out_x/d x_a
+        muP = self.mu * self.P
+        grad = [sV * muP * (dx_out[0] * J[0][k] + dx_out[1] * J[1][k]) for k in range(3)]
+        return sV * muP * out, grad[0], grad[1], grad[2]
 
     @cached_property
     def _extent(self) -> tuple[float, float, float]:
