@@ -762,6 +762,19 @@ class TransientRollingBody:
         self.field.set_shift(delta_x, delta_y)
         self.out = self._outputs_now()
 
+    def start_steady(self) -> None:
+        """Replace the field by the steady field of the present rigid slip (Eqs. 36-38):
+        the field after rolling one contact length (plus two cells) at constant
+        kinematics, exact on the grid (see ``LayerField.roll``). With vx on the steady
+        law for the loads, the body starts on the quasistationary state (Eq. 26)."""
+        if self.Vx == 0.0:
+            raise InputError("Vx", self.Vx, "!= 0 (no steady rolling field at standstill)")
+        f = self.field
+        h = f.dx / abs(self.Vx)
+        for _ in range(f.nx + 2):
+            f.roll(h, self.vx, self.vy, self.Vx, self.Omega_z)
+        self.out = self._outputs_now()
+
     def outputs(self) -> dict[str, float]:
         """The keys of RollingBody.outputs() (from the field where they describe it:
         forces, adhesion, regime) and summary quantities of the field: slip-area

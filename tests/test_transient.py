@@ -325,6 +325,27 @@ def test_cattaneo_start_then_rolling_reaches_the_steady_creepage():
     assert o["xi_x"] == pytest.approx(steady_creepage(C, target, 0.0), rel=2e-3)
 
 
+def test_steady_start_stays_steady():
+    """start_steady: the steady field of the present slip (Eqs. 36-38) with vx on the
+    steady law for the loads (Eq. 26, here Tx = Fx at constant Vx) is an equilibrium
+    of the transient model: over 3 contact lengths Tx stays at Fx. The only excitation
+    is the steady quadrature error (< 2e-5, test_steady_force_is_the_closed_form), so
+    1e-4 is allowed."""
+    body = ex.body(10.9)
+    Fx = 0.5 * F
+    xi = steady_creepage(C, Fx, 0.002)
+    tb = TransientRollingBody(
+        C, body, Lateral(0.002, 0.0), Vx0=V, Omega_y0=V * (1 - xi) / body.Rx, nx=32, ny=16
+    )
+    tb.start_steady()
+    loads = Loads(Fx_ex=Fx, My_ex=-body.Rx * Fx)
+    dev = [abs(tb.out.Tx / Fx - 1.0)]
+    for _ in range(3 * 32):
+        tb.advance(TRANSIT / 32, loads)
+        dev.append(abs(tb.out.Tx / Fx - 1.0))
+    assert max(dev) < 1e-4
+
+
 def test_long_steps_are_stable_and_give_the_quasistationary_state():
     """Any step is stable: steps of 5 contact lengths (the fast oscillation, period
     0.3 contact lengths, is far under-resolved) damp it (L-stability) and give the
@@ -466,6 +487,7 @@ def test_failed_step_leaves_the_state_unchanged():
         (lambda: TransientRollingBody(C, ex.body(2.0)).advance(1e-5, Loads(), 0), "substeps"),
         (lambda: TransientRollingBody(C, ex.body(2.0)).advance(1e-5, Loads(math.nan)), "Fx_ex"),
         (lambda: TransientRollingBody(C, ex.body(2.0)).substeps_for(1e-3, 0.0), "cells"),
+        (lambda: TransientRollingBody(C, ex.body(2.0)).start_steady(), "Vx"),
     ],
 )
 def test_bad_input_names_the_variable(call, name):
