@@ -23,11 +23,12 @@ step "set by the grid" (Vx h = dx) is the special case where theta returns to th
 value every step; it is not required.
 
 Along each material path the load rate v/k and the cap are integrated with the same
-two-stage SDIRK method as the body (Alexander's, L-stable, stiffly accurate; see
-``integrator``), the cap being imposed at each stage by the radial return (closest
-point projection onto the disc, the backward-Euler treatment of the slip rule).
-Material that entered the contact during the step carries the displacement
-v t_in/k of the time t_in since it crossed the leading edge.
+two-stage SDIRK method as the body (Alexander's: L-stable, stiffly accurate, order 2),
+the cap being imposed at each stage by the radial return (closest point projection
+onto the disc, the backward-Euler treatment of the slip rule). Material that entered
+the contact during the step carries the displacement v t_in/k of the time t_in since
+it crossed the leading edge. The resultant uses a slip-aware quadrature (see
+``LayerField._weights``), exact along the strips for the steady and Cattaneo fields.
 
 Coupling. The field and the body (Eqs. 8-11) are advanced together and implicitly:
 each stage solves the body's stage equation for the slip velocity with the force
@@ -69,8 +70,9 @@ A21 = 1.0 - GAMMA
 STAGE_C = (GAMMA, 1.0)
 
 # Default grid: cells along the contact length 2 a1 and strips across 2 a2. The
-# steady force error of this grid against Eqs. (40)-(42) is below 0.1 % (measured,
-# docs/transient.md, "Grid convergence").
+# steady force error of such grids against Eqs. (40)-(42) is a few 1e-6 (measured,
+# docs/transient.md, section 3); the transient needs the cells to resolve the fast
+# oscillation (about 0.3 contact lengths per period in the example).
 DEFAULT_NX = 64
 DEFAULT_NY = 32
 # Layouts of the strips across the contact (LayerField).
@@ -256,7 +258,7 @@ class LayerField:
         c0 = law.mu * law.p0 / law.a1**2
         l2 = (self.ell**2)[:, None]
         m = np.hypot(tau_x, tau_y)
-        sl = slip & inside
+        sl = (np.zeros_like(inside) if slip is None else slip) & inside
         with np.errstate(divide="ignore", invalid="ignore"):
             inv_m = np.where(m > 0.0, 1.0 / m, 0.0)
         s0, s1 = sl[:, :-1], sl[:, 1:]
