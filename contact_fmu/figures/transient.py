@@ -268,6 +268,57 @@ def fig_snapshots(
     return _save(fig, outdir, f"transient_fig{number:02d}_tau{name}_vy{vy_ratio:g}")
 
 
+def fig_cattaneo(outdir: Path) -> Path:
+    """Cattaneo start: a tangential shift at rest carrying A2 Fx_ex, then rolling from
+    pure rolling under the constant Fx_ex (eta = 10.9, vy = 0, one force unit)."""
+    c = ex.contact()
+    eta = 10.9
+    b = ex.body(eta)
+    Fx = ex.force_unit(c)
+    target = b.A2 * Fx
+    tb = _body_at_rest_field(eta, 0.0)
+
+    def excess(delta: float) -> float:
+        tb.set_shift(delta)
+        return tb.out.Tx - target
+
+    brentq(excess, 0.0, c.k * c.mu * c.p0, xtol=1e-22)  # the shift carrying A2 Fx
+    start = tb.traction_field()
+    run = _run(tb, Loads(Fx_ex=Fx), 10.0, (0.25, 0.5, 1.0, 2.0))
+    xi = steady_creepage(c, target, 0.0)
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 3.8))
+    ax1.plot(run.s, run.vx / run.Vx / xi, label="$v_x/V_x$ / steady creepage")
+    ax1.plot(run.s, run.Tx / target, label="$T_x / (A_2 F_x^{ex})$")
+    ax1.axhspan(1 - SETTLE_TOL, 1 + SETTLE_TOL, color="0.85")
+    ax1.set(xlabel="rolled distance / $2a_1$", ylim=(-0.5, 2.5))
+    ax1.legend(fontsize=8)
+    cmap = plt.get_cmap("viridis")
+    fields = [(0.0, start), *sorted(run.snaps.items()), (run.s[-1], run.final)]
+    for i, (s_, tf) in enumerate(fields):
+        j = int(np.argmin(np.abs(tf.y)))
+        ins = tf.inside[j]
+        ax2.plot(
+            tf.x[ins] / c.a1,
+            tf.tau_x[j][ins] / (c.mu * c.p0),
+            color=cmap(i / len(fields)),
+            label=f"{s_:.2g} $\\cdot 2a_1$",
+        )
+    x = np.linspace(-1, 1, 201)
+    ax2.plot(x, 1 - x**2, color="0.6", lw=0.6)
+    ax2.set(
+        xlabel="$x/a_1$ (rolling towards +x)",
+        ylabel="$\\tau_x/(\\mu p_0)$ on y = 0",
+        ylim=(0, 0.35),
+    )
+    ax2.legend(fontsize=7, title="rolled", title_fontsize=7)
+    fig.suptitle(
+        "Cattaneo start: shift at rest carrying $A_2 F_x^{ex}$, then rolling under "
+        "$F_x^{ex}$ = $\\mu p_0 a_1 a_2$, $\\eta$ = 10.9, $v_y$ = 0",
+        fontsize=10,
+    )
+    return _save(fig, outdir, "transient_cattaneo_start")
+
+
 # ---- durations ------------------------------------------------------------------------
 @dataclass
 class Duration:
@@ -444,6 +495,7 @@ def make_figures(outdir: Path, durations_only: bool = False) -> list[Path]:
         paths.append(fig_snapshots(outdir, runs, vy_ratio, 1, first + 1))
         if vy_ratio == 0.002:
             paths.append(fig12(outdir, runs))
+    paths.append(fig_cattaneo(outdir))
     rows = durations()
     paths.append(fig_durations(outdir, rows))
     paths.append(write_durations(outdir, rows))
