@@ -177,7 +177,9 @@ def test_two_scene_fmus_in_one_process_each_give_their_own_results(fmus, scenes)
             for inst, (_, scene, _, _), table in zip(insts, jobs, tables, strict=True):
                 for name in scene.inputs:
                     inst.set(name, float(table[name][k]))
-                assert inst.step(scene.step) == OK
+                # the step fmpy's simulate_fmu passes: a difference of grid points, which
+                # differs from scene.step in the last bits (bit-identity needs the same h)
+                assert inst.step((k + 1) * scene.step - k * scene.step) == OK
         for inst, (key, scene, case, _) in zip(insts, jobs, strict=True):
             own = alone[key][[c.name for c in scene.cases].index(case.name)]
             for name in scene.outputs:
