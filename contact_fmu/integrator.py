@@ -40,14 +40,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ._validate import InputError, finite, positive
+from .body_state import BodyState
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .kinematics import contact_quantities, is_full_slip
+from .law import ContactLaw
 from .solvers import FD_STEP, StageSolveError, newton, newton_increasing
 
 FloatArray = NDArray[np.float64]
@@ -76,30 +77,6 @@ LoadInput = Loads | Callable[[float], Loads]
 __all__ = ["ContactLaw", "ContactOutputs", "LoadInput", "RollingBody", "StageSolveError"]
 
 
-class ContactLaw(Protocol):
-    """What the integrator needs of a contact law (LayerContact, the half-space table).
-
-    forces(vx, vy, phi, Vx) -> (Tx, Ty, Mz) in N and N m for rigid slip (vx, vy) at the
-    contact centre (m/s), spin phi = Omega_z (rad/s) and rolling speed Vx (m/s), in the
-    sign convention of Eq. (8): the body receives -T. Floats in, floats out must work
-    (the integrator's inner loop); arrays in, arrays out too. creep_full_slip is |v|/|Vx|
-    at the onset of full slip; a1, a2, p0 describe the contact ellipse.
-    """
-
-    P: float
-    mu: float
-    a1: float
-    a2: float
-    p0: float
-    creep_full_slip: float
-
-    def forces(self, vx, vy, phi, Vx) -> tuple: ...
-
-    def adhesion_fraction(self, vx, vy, Vx): ...
-
-    def with_load(self, P: float) -> ContactLaw: ...
-
-
 @dataclass
 class ContactOutputs:
     """Contact quantities at the end of a step (SI)."""
@@ -110,7 +87,7 @@ class ContactOutputs:
     sliding: bool = False
 
 
-class RollingBody:
+class RollingBody(BodyState):
     """The rolling body of Eqs. (8)-(11) on a contact law, advanced in time.
 
     ``method``: "full" (stiff slip equation, Eq. 20) or "quasistationary" (Eqs. 26,
@@ -137,65 +114,20 @@ class RollingBody:
             raise InputError("method", method, '"full" or "quasistationary"')
         if scheme not in SCHEMES:
             raise InputError("scheme", scheme, " or ".join(f'"{s}"' for s in SCHEMES))
-        if lateral.dynamic_spin and body.Iz is None:
-            raise InputError("Iz", None, "given when Omega_z follows Eq. (11)")
+        super().__init__(body, lateral, Vx0, Omega_y0, Vy0, Omega_z0, t0)
         self.law = law
-        self.body = body
-        self.lateral = lateral
         self.method = method
         self.scheme = scheme
-        self.t = finite("t0", t0)
-        Vx0 = finite("Vx0", Vx0)
-        vx0 = Vx0 - finite("Omega_y0", Omega_y0) * body.Rx
-        self.y = np.array([Vx0, vx0, finite("Vy0", Vy0), finite("Omega_z0", Omega_z0)])
-        self._apply_ratios(self.y)
-        # unknowns of the stage solve: indices into y, and into (Tx, Ty, Mz)
-        self._act = [0] + [i for i, d in ((1, lateral.dynamic_vy), (2, lateral.dynamic_spin)) if d]
-        self._idx = [i + 1 for i in self._act]
         self.sliding = False
         self._dv = 0.0  # last step's dvx/dt (m/s^2): the predictor of the stage solves
         T = self._forces(self.y[None, :])[0]
         self.out = ContactOutputs(*map(float, T), _saturated(law, self.y))
 
     # ---- public -----------------------------------------------------------------
-    @property
-    def Vx(self) -> float:
-        return float(self.y[0])
-
-    @property
-    def vx(self) -> float:
-        return float(self.y[1])
-
-    @property
-    def Vy(self) -> float:
-        return float(self.y[2])
-
-    @property
-    def Omega_z(self) -> float:
-        return float(self.y[3])
-
-    @property
-    def Omega_y(self) -> float:
-        return (self.Vx - self.vx) / self.body.Rx
-
-    @property
-    def vy(self) -> float:
-        """Lateral rigid slip at the contact centre, Eq. (3) at x = 0: Vy."""
-        return self.Vy
-
     def outputs(self) -> dict[str, float]:
         """Everything a host reads after a step (SI): velocities, forces, contact state."""
-        o = {
-            "Vx": self.Vx,
-            "Vy": self.Vy,
-            "Omega_y": self.Omega_y,
-            "Omega_z": self.Omega_z,
-            "vx": self.vx,
-            "vy": self.vy,
-            "Tx": self.out.Tx,
-            "Ty": self.out.Ty,
-            "Mz": self.out.Mz,
-        }
+        o = self.kinematics()
+        o.update(Tx=self.out.Tx, Ty=self.out.Ty, Mz=self.out.Mz)
         o.update(contact_quantities(self.law, self.Vx, self.vx, self.vy, self.Omega_z))
         return o
 
@@ -297,14 +229,6 @@ class RollingBody:
             return np.zeros(len(self._idx))
         b = self.body
         return np.array([b.m_slip, b.M, b.Iz if b.Iz is not None else 0.0])[self._act]
-
-    def _apply_ratios(self, y: FloatArray) -> FloatArray:
-        """Impose the held ratios on state(s) y, shape (4,) or (4, k); returns y."""
-        if self.lateral.vy_ratio is not None:
-            y[2] = self.lateral.vy_ratio * y[0]
-        if self.lateral.spin_ratio is not None:
-            y[3] = self.lateral.spin_ratio * y[0]
-        return y
 
     def _law(self, vx: float, Vx: float) -> tuple:
         """The law at slip vx and speed Vx with the held lateral ratios (floats)."""

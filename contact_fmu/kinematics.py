@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from typing import Protocol
+
+from .law import ContactLaw
 
 # |Vx| floor (m/s) of the reported creepages v/|Vx|: below it the body is at rest in
 # practice and the creepage would be meaningless; the contact law itself has no floor.
@@ -12,19 +13,6 @@ V_CREEP_FLOOR = 1e-6
 # Regime indicator values of the outputs.
 ROLLING = 0.0  # rolling with partial slip (an adhesion area exists)
 SLIDING = 1.0  # gross sliding (|T| = mu P, no adhesion)
-
-
-class Law(Protocol):
-    P: float
-    mu: float
-    a1: float
-    a2: float
-    p0: float
-    creep_full_slip: float
-
-    def forces(self, vx, vy, phi, Vx) -> tuple: ...
-
-    def adhesion_fraction(self, vx, vy, Vx): ...
 
 
 def rigid_slip(Vx: float, Omega_y: float, Vy: float, Rx: float) -> tuple[float, float]:
@@ -37,14 +25,14 @@ def creepage(v: float, Vx: float) -> float:
     return v / max(abs(Vx), V_CREEP_FLOOR)
 
 
-def is_full_slip(law: Law, vx: float, vy: float, Vx: float) -> bool:
+def is_full_slip(law: ContactLaw, vx: float, vy: float, Vx: float) -> bool:
     """Gross sliding: |v| at or beyond the onset of full slip, |v| >= creep_full_slip |Vx|."""
     speed = math.hypot(vx, vy)
     return speed > 0.0 and speed >= law.creep_full_slip * abs(Vx)
 
 
 def contact_quantities(
-    law: Law, Vx: float, vx: float, vy: float, Omega_z: float
+    law: ContactLaw, Vx: float, vx: float, vy: float, Omega_z: float
 ) -> dict[str, float]:
     """Creepages, contact ellipse, adhesion fraction and regime at the given slip (SI)."""
     return {
