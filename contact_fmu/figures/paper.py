@@ -15,16 +15,9 @@ import numpy as np
 from .. import examples as ex
 from ..dynamics import Lateral, load_utilisation
 from ..simulate import load_history, simulate
+from . import save
 
 ETA_STYLE = {10.9: "-", 2.92: "--", 1.7: ":", 1.5: ":", 3.0: "--", 10.0: "-"}
-
-
-def _save(fig, outdir: Path, name: str) -> Path:
-    path = outdir / f"{name}.png"
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
 
 
 def fig2(outdir: Path) -> Path:
@@ -38,7 +31,7 @@ def fig2(outdir: Path) -> Path:
     ax.set(xlabel="$\\eta = M R_x^2 / I_y$", ylabel="$A_1, A_2$", ylim=(0, 1))
     ax.set_title("Fig. 2: $A_1 \\to 1$, $A_2 \\to 0$ as $\\eta \\to \\infty$", fontsize=10)
     ax.legend()
-    return _save(fig, outdir, "fig02_A1_A2")
+    return save(fig, outdir, "fig02_A1_A2")
 
 
 def fig3(outdir: Path) -> Path:
@@ -55,7 +48,7 @@ def fig3(outdir: Path) -> Path:
     ax.set(xlabel="$F_x^{ex}/\\mu P$", ylabel="$M_y^{ex}/(\\mu P R_x)$")
     ax.set_title("Fig. 3: admissible loads lie between the lines", fontsize=10)
     ax.legend()
-    return _save(fig, outdir, "fig03_admissible_Fx_My")
+    return save(fig, outdir, "fig03_admissible_Fx_My")
 
 
 def fig4(outdir: Path) -> Path:
@@ -72,7 +65,7 @@ def fig4(outdir: Path) -> Path:
     ax.set(xlabel="$F_x^{ex}/\\mu P$", ylabel="$F_y^{ex}/\\mu P$")
     ax.set_title("Fig. 4: admissible loads lie inside", fontsize=10)
     ax.legend(loc="upper right")
-    return _save(fig, outdir, "fig04_admissible_Fx_Fy")
+    return save(fig, outdir, "fig04_admissible_Fx_Fy")
 
 
 def fig5(outdir: Path) -> Path:
@@ -90,7 +83,7 @@ def fig5(outdir: Path) -> Path:
     ax.set(xlabel="$(v_x^2 + v_y^2)^{1/2}/V_x$", ylabel="$T_x/(\\mu p_0 a_1 a_2)$")
     ax.set_title("Fig. 5: creep-force law, corrected Eq. (42)", fontsize=10)
     ax.legend()
-    return _save(fig, outdir, "fig05_creep_force")
+    return save(fig, outdir, "fig05_creep_force")
 
 
 def _quasistationary_slip(eta: float, xi_y: float) -> float:
@@ -119,7 +112,7 @@ def fig_adhesion(outdir: Path, xi_y: float, number: int) -> Path:
         f"Fig. {number}: adhesion areas (right of the curves), $v_y/V_x$ = {xi_y}", fontsize=9
     )
     ax.legend(fontsize=8, loc="lower left")
-    return _save(fig, outdir, f"fig{number:02d}_adhesion_vy{xi_y:g}")
+    return save(fig, outdir, f"fig{number:02d}_adhesion_vy{xi_y:g}")
 
 
 def fig_traction(outdir: Path, xi_y: float, component: int, number: int) -> Path:
@@ -134,7 +127,7 @@ def fig_traction(outdir: Path, xi_y: float, component: int, number: int) -> Path
     ax.set(xlabel="$x/a_1$ (y = 0)", ylabel=f"$\\tau_{name}/(\\mu p_0)$")
     ax.set_title(f"Fig. {number}: $\\tau_{name}$ along the x axis, $v_y/V_x$ = {xi_y}", fontsize=10)
     ax.legend(fontsize=8)
-    return _save(fig, outdir, f"fig{number:02d}_tau{name}_vy{xi_y:g}")
+    return save(fig, outdir, f"fig{number:02d}_tau{name}_vy{xi_y:g}")
 
 
 def fig12(outdir: Path) -> Path:
@@ -158,7 +151,7 @@ def fig12(outdir: Path) -> Path:
         "$\\mu p_0 a_1 a_2$, $v_y/V_x$ = 0.002",
         fontsize=10,
     )
-    return _save(fig, outdir, "fig12_slip_evolution")
+    return save(fig, outdir, "fig12_slip_evolution")
 
 
 def fig13(outdir: Path) -> Path:
@@ -178,7 +171,7 @@ def fig13(outdir: Path) -> Path:
     ax.set(xlabel="$t/T_c$", ylabel="$T_x/(\\mu p_0 a_1 a_2)$")
     ax.set_title("Fig. 13: full model (black) on Eq. (26) (grey)", fontsize=10)
     ax.legend(fontsize=8)
-    return _save(fig, outdir, "fig13_Tx_time_moment")
+    return save(fig, outdir, "fig13_Tx_time_moment")
 
 
 def make_figures(outdir: Path) -> list[Path]:

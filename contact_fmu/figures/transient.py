@@ -25,6 +25,7 @@ from ..dynamics import Lateral, Loads
 from ..integrator import RollingBody
 from ..layer import LayerContact, TractionField
 from ..transient import TransientRollingBody
+from . import save
 
 # Grid of the figures: 64 cells along 2 a1; an odd number of strips puts one on y = 0
 # (the x-axis of Figs. 7-8, 10-11).
@@ -154,14 +155,6 @@ def omega_transit(law: LayerContact, m: float, Vx: float) -> float:
 
 
 # ---- figures ------------------------------------------------------------------------------
-def _save(fig, outdir: Path, name: str) -> Path:
-    path = outdir / f"{name}.png"
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
-
-
 def fig12(outdir: Path, runs: dict[float, Run]) -> Path:
     """vx(t) from the start of the motion, vy/Vx = 0.002: transient model against the
     steady-creep-law slip equation (Eq. 20, RollingBody "full") and Eq. (28)."""
@@ -212,7 +205,7 @@ def fig12(outdir: Path, runs: dict[float, Run]) -> Path:
         "$\\mu p_0 a_1 a_2$ from $\\tau$ = 0, $v_y/V_x$ = 0.002 (band: $\\pm$1 %)",
         fontsize=10,
     )
-    return _save(fig, outdir, "transient_fig12_slip_evolution")
+    return save(fig, outdir, "transient_fig12_slip_evolution")
 
 
 def fig_snapshots(
@@ -265,7 +258,7 @@ def fig_snapshots(
         f"$v_y/V_x$ = {vy_ratio:g} (grey: $\\mu p$)",
         fontsize=10,
     )
-    return _save(fig, outdir, f"transient_fig{number:02d}_tau{name}_vy{vy_ratio:g}")
+    return save(fig, outdir, f"transient_fig{number:02d}_tau{name}_vy{vy_ratio:g}")
 
 
 def fig_cattaneo(outdir: Path) -> Path:
@@ -316,7 +309,7 @@ def fig_cattaneo(outdir: Path) -> Path:
         "$F_x^{ex}$ = $\\mu p_0 a_1 a_2$, $\\eta$ = 10.9, $v_y$ = 0",
         fontsize=10,
     )
-    return _save(fig, outdir, "transient_cattaneo_start")
+    return save(fig, outdir, "transient_cattaneo_start")
 
 
 # ---- durations ------------------------------------------------------------------------
@@ -424,7 +417,7 @@ def fig_durations(outdir: Path, rows: list[Duration]) -> Path:
         "$\\mu p_0 a_1 a_2$, $v_y/V_x$ = 0.002",
         fontsize=10,
     )
-    return _save(fig, outdir, "transient_durations")
+    return save(fig, outdir, "transient_durations")
 
 
 def write_durations(outdir: Path, rows: list[Duration]) -> Path:
