@@ -61,10 +61,16 @@ def _keys(where: str, d: Any, allowed: set[str]) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class Signal:
-    """A scene input as a function of time: value(t) for an array of times (s)."""
+    """A scene input as a function of time: value(t) for an array of times (s).
+
+    ``breakpoints``: the times (s, sorted) where a piece jumps or has a kink (step
+    times, ramp ends, sine starts, table points); between them the signal is smooth.
+    An integrator of the continuous signal restarts there.
+    """
 
     name: str
     pieces: tuple[Callable[[FloatArray], FloatArray], ...]
+    breakpoints: tuple[float, ...] = ()
 
     def __call__(self, t: ArrayLike) -> FloatArray:
         t = np.asarray(t, dtype=float)
@@ -74,12 +80,16 @@ class Signal:
         return out
 
 
-def _piece(where: str, spec: Any) -> Callable[[FloatArray], FloatArray]:
+Piece = tuple[Callable[[FloatArray], FloatArray], tuple[float, ...]]
+
+
+def _piece(where: str, spec: Any) -> Piece:
+    """A piece as (function of t, its breakpoints)."""
     if isinstance(spec, bool):
         raise SignalError(f"{where}: {spec!r} is not a number or a piece")
     if isinstance(spec, int | float):
         c = _number(where, {"constant": spec}, "constant")
-        return lambda t: np.full_like(t, c)
+        return (lambda t: np.full_like(t, c)), ()
     if not isinstance(spec, dict) or len(spec) != 1:
         raise SignalError(
             f"{where}: a piece is one of constant, step, ramp, sine, table; got {spec!r}"
@@ -88,26 +98,26 @@ def _piece(where: str, spec: Any) -> Callable[[FloatArray], FloatArray]:
     w = f"{where}.{kind}"
     if kind == "constant":
         c = _number(where, spec, "constant")
-        return lambda t: np.full_like(t, c)
+        return (lambda t: np.full_like(t, c)), ()
     if kind == "step":
         d = _keys(w, body, {"time", "height"})
         t0, height = _number(w, d, "time"), _number(w, d, "height")
-        return lambda t: np.where(t >= t0, height, 0.0)
+        return (lambda t: np.where(t >= t0, height, 0.0)), (t0,)
     if kind == "ramp":
         d = _keys(w, body, {"start", "duration", "height"})
         t0, dur, height = _number(w, d, "start"), _number(w, d, "duration"), _number(w, d, "height")
         if dur <= 0.0:
             raise SignalError(f"{w}: 'duration' = {dur!r} must be > 0")
-        return lambda t: height * np.clip((t - t0) / dur, 0.0, 1.0)
+        return (lambda t: height * np.clip((t - t0) / dur, 0.0, 1.0)), (t0, t0 + dur)
     if kind == "sine":
         d = _keys(w, body, {"amplitude", "period", "phase", "start"})
         amp, period = _number(w, d, "amplitude"), _number(w, d, "period")
         phase, t0 = _number(w, d, "phase", 0.0), _number(w, d, "start", 0.0)
         if period <= 0.0:
             raise SignalError(f"{w}: 'period' = {period!r} must be > 0")
-        return lambda t: np.where(
-            t >= t0, amp * np.sin(2.0 * np.pi * (t - t0) / period + phase), 0.0
-        )
+        return (
+            lambda t: np.where(t >= t0, amp * np.sin(2.0 * np.pi * (t - t0) / period + phase), 0.0)
+        ), (t0,)
     if kind == "table":
         d = _keys(w, body, {"time", "value", "hold"})
         try:
@@ -124,9 +134,12 @@ def _piece(where: str, spec: Any) -> Callable[[FloatArray], FloatArray]:
             raise SignalError(f"{w}: 'time' must increase strictly")
         if not isinstance(hold, bool):
             raise SignalError(f"{w}: 'hold' = {hold!r} must be true or false")
+        points = tuple(float(x) for x in tt)
         if hold:
-            return lambda t: vv[np.clip(np.searchsorted(tt, t, side="right") - 1, 0, None)]
-        return lambda t: np.interp(t, tt, vv)
+            return (
+                lambda t: vv[np.clip(np.searchsorted(tt, t, side="right") - 1, 0, None)]
+            ), points
+        return (lambda t: np.interp(t, tt, vv)), points
     raise SignalError(f"{where}: unknown piece '{kind}' (constant, step, ramp, sine, table)")
 
 
@@ -136,7 +149,9 @@ def parse(name: str, spec: Any) -> Signal:
     specs = spec if isinstance(spec, list) else [spec]
     if not specs:
         raise SignalError(f"{where}: an empty list is not a signal")
-    return Signal(name, tuple(_piece(f"{where}[{i}]", s) for i, s in enumerate(specs)))
+    pieces = [_piece(f"{where}[{i}]", s) for i, s in enumerate(specs)]
+    breaks = tuple(sorted({b for _, bs in pieces for b in bs}))
+    return Signal(name, tuple(f for f, _ in pieces), breaks)
 
 
 def held(values: FloatArray) -> FloatArray:
