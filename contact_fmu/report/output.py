@@ -1,0 +1,249 @@
+"""Report files: CSV and Markdown tables, work-precision plots, documentation sections."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .workprecision import Row, SceneReport
+
+# Errors below this are drawn at this value on the log-log plots (exact results, e.g.
+# the quasistationary stepper under constant loads, have zero error).
+PLOT_FLOOR = 1e-16
+COLUMNS = (
+    "scene",
+    "family",
+    "method",
+    "scheme",
+    "substeps",
+    "level",
+    "h",
+    "steps",
+    "wall",
+    "Tx_max",
+    "Tx_rms",
+    "vx_max",
+    "vx_rms",
+    "order_Tx",
+    "order_vx",
+    "Tx_max_held",
+    "vx_max_held",
+    "error",
+)
+
+
+def _fmt(x: object, spec: str = ".3g") -> str:
+    if isinstance(x, float):
+        return "-" if math.isnan(x) else format(x, spec)
+    return "-" if x is None else str(x)
+
+
+def write_csv(report: SceneReport, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(COLUMNS)
+        for r in report.rows:
+            s = r.settings
+            w.writerow(
+                [r.scene, r.family, s.get("method", ""), s.get("scheme", ""),
+                 s.get("substeps", ""), r.level, repr(r.h), r.steps]
+                + [repr(getattr(r, c)) for c in COLUMNS[8:17]]
+                + [r.error or ""]
+            )  # fmt: skip
+    return path
+
+
+ERROR_NOTE = (
+    "Errors at every communication point after t = 0: Tx relative to mu P, vx relative "
+    "to the slip scale v_s = (creepage at the onset of full slip) x max |Vx| of the run; "
+    "max over the cases and RMS over all their points. Reference: the same equations "
+    "outside the FMU under the continuous inputs (solve_ivp Radau, rtol 1e-11, on "
+    "Eqs. 8-11 for the full stepper; Eqs. 26, 28 in closed form for the quasistationary "
+    "one; nested quadrature of Eq. 36 in contact mode), so the zero-order hold of the "
+    "inputs over a communication step counts as error. Order: log(e(2h)/e(h))/log 2 of "
+    "the max error against the next coarser step; the family's order is the least-squares "
+    "slope. Wall time: fmpy.simulate_fmu (instantiate, all steps, terminate), fastest "
+    "of the repeats, summed over the cases."
+)
+HELD_NOTE = (
+    "*held*: max error against the reference with the inputs held over each step as "
+    "the FMU receives them (the FMU's own integration error)."
+)
+
+
+def scene_markdown(report: SceneReport) -> str:
+    orders = report.family_orders()
+    held = report.held
+    lines = [
+        f"## {report.scene}: {report.title}",
+        "",
+        f"Mode {report.mode}; cases: {', '.join(report.cases)}; FMU `{report.fmu}`.",
+        "",
+        ERROR_NOTE + (" " + HELD_NOTE if held else ""),
+        "",
+    ]
+    head = (
+        "| family | h (s) | steps | wall (s) | Tx max | Tx RMS | vx max | vx RMS "
+        "| order Tx | order vx |"
+    )
+    sep = "|---|---|---|---|---|---|---|---|---|---|"
+    if held:
+        head += " Tx max held | vx max held |"
+        sep += "---|---|"
+    lines += [head, sep]
+    for f in report.families():
+        for r in report.of(f):
+            cells = [
+                r.family, _fmt(r.h), str(r.steps), _fmt(r.wall), _fmt(r.Tx_max, ".2e"),
+                _fmt(r.Tx_rms, ".2e"), _fmt(r.vx_max, ".2e"), _fmt(r.vx_rms, ".2e"),
+                _fmt(r.order_Tx, ".2f"), _fmt(r.order_vx, ".2f"),
+            ]  # fmt: skip
+            if held:
+                cells += [_fmt(r.Tx_max_held, ".2e"), _fmt(r.vx_max_held, ".2e")]
+            if r.error:
+                cells[4] = f"failed: {r.error}"
+            lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "Observed order per family (least squares over the steps):", ""]
+    lines += ["| family | order Tx | order vx |", "|---|---|---|"]
+    for f, (pT, pv) in orders.items():
+        lines.append(f"| {f} | {_fmt(pT, '.2f')} | {_fmt(pv, '.2f')} |")
+    if report.notes:
+        lines += ["", "Notes:", ""] + [f"- {n}" for n in dict.fromkeys(report.notes)]
+    return "\n".join(lines) + "\n"
+
+
+def _style(row: Row, families: list[str]):
+    s = row.settings
+    key = (s.get("method", ""), s.get("scheme", ""))
+    colors = {
+        ("full", "lobatto3c"): "tab:blue",
+        ("full", "sdirk2"): "tab:orange",
+        ("quasistationary", "lobatto3c"): "tab:green",
+        ("quasistationary", "sdirk2"): "tab:red",
+    }
+    color = colors.get(key, f"C{families.index(row.family) % 10}")
+    markers = {1: "o", 4: "s", 16: "^"}
+    return color, markers.get(s.get("substeps"), "D"), "-" if s.get("substeps", 4) != 1 else "--"
+
+
+def plot(report: SceneReport, path: Path) -> Path:
+    """Max error of Tx and vx against wall time, log-log, one curve per family."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fams = report.families()
+    orders = report.family_orders()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
+    for ax, var, label in (
+        (axes[0], "Tx", "max |Tx - Tx_ref| / (mu P)"),
+        (axes[1], "vx", "max |vx - vx_ref| / v_s"),
+    ):
+        for f in fams:
+            rows = [r for r in report.of(f) if not r.error]
+            if not rows:
+                continue
+            t = np.array([r.wall for r in rows])
+            e = np.maximum([getattr(r, f"{var}_max") for r in rows], PLOT_FLOOR)
+            color, marker, ls = _style(rows[0], fams)
+            p = orders[f][0 if var == "Tx" else 1]
+            name = f"{f} (p = {p:.2f})" if math.isfinite(p) else f
+            ax.loglog(t, e, ls, color=color, marker=marker, label=name, ms=5, lw=1.2)
+            ax.annotate(
+                f"h={rows[0].h:.2g}", (t[0], e[0]), fontsize=6, color=color,
+                xytext=(3, 3), textcoords="offset points",
+            )  # fmt: skip
+        ax.set_xlabel("wall time of the fmpy run (s)")
+        ax.set_ylabel(label)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[1].legend(fontsize=7, loc="best")
+    fig.suptitle(
+        f"{report.scene}: error against run time (communication step h halves along a curve)"
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def summary_rows(reports: list[SceneReport]) -> list[list[str]]:
+    """Per scene and family: step range, error range, order, time range (for the docs)."""
+    rows = []
+    for rep in reports:
+        orders = rep.family_orders()
+        for f in rep.families():
+            rs = [r for r in rep.of(f) if not r.error]
+            if not rs:
+                continue
+            pT, pv = orders[f]
+            rows.append(
+                [
+                    rep.scene,
+                    f,
+                    f"{rs[0].h:.3g} .. {rs[-1].h:.3g}",
+                    f"{rs[0].Tx_max:.1e} .. {rs[-1].Tx_max:.1e}",
+                    f"{rs[0].vx_max:.1e} .. {rs[-1].vx_max:.1e}",
+                    _fmt(pT, ".2f"),
+                    _fmt(pv, ".2f"),
+                    f"{rs[0].wall:.3g} .. {rs[-1].wall:.3g}",
+                ]
+            )
+    return rows
+
+
+def summary_markdown(reports: list[SceneReport], only_substeps: int | None = None) -> str:
+    head = (
+        "| scene | family | h (s) | Tx max error / (mu P) | vx max error / v_s "
+        "| order Tx | order vx | wall (s) |\n|---|---|---|---|---|---|---|---|"
+    )
+    body = []
+    for row, rep_row in zip(summary_rows(reports), _families_of(reports), strict=True):
+        if only_substeps is not None and rep_row.get("substeps") not in (None, only_substeps):
+            continue
+        body.append("| " + " | ".join(row) + " |")
+    return head + "\n" + "\n".join(body) + "\n"
+
+
+def _families_of(reports: list[SceneReport]) -> list[dict]:
+    out = []
+    for rep in reports:
+        for f in rep.families():
+            rs = [r for r in rep.of(f) if not r.error]
+            if rs:
+                out.append(rs[0].settings)
+    return out
+
+
+def _heading_level(line: str) -> int:
+    """Markdown ATX heading level of a line (0 if it is not a heading)."""
+    stripped = line.lstrip("#")
+    n = len(line) - len(stripped)
+    return n if n and stripped.startswith(" ") else 0
+
+
+def replace_section(path: Path, heading: str, body: str) -> None:
+    """Replace the section that starts with the line ``heading`` (up to the next heading
+    of the same or a higher level, outside code fences) by ``heading`` + ``body``;
+    append it if absent."""
+    text = path.read_text() if path.exists() else ""
+    level = _heading_level(heading)
+    section = (heading + "\n\n" + body.strip("\n")).split("\n")
+    lines = text.split("\n")
+    if heading not in lines:
+        path.write_text(text.rstrip("\n") + "\n\n" + "\n".join(section) + "\n")
+        return
+    start = lines.index(heading)
+    end, fenced = len(lines), False
+    for i in range(start + 1, len(lines)):
+        if lines[i].startswith("```"):
+            fenced = not fenced
+        elif not fenced and 0 < _heading_level(lines[i]) <= level:
+            end = i
+            break
+    new = lines[:start] + section + [""] + lines[end:]
+    path.write_text("\n".join(new).rstrip("\n") + "\n")

@@ -1,0 +1,268 @@
+"""Work against precision: each scene's sweep run through its built FMU in fmpy, timed,
+and compared with references computed outside the FMU.
+
+Errors (per case, then over the cases: the largest max, the RMS of all points):
+
+- Tx relative to mu P (P the largest normal load of the run);
+- vx relative to the slip scale v_s = (creepage at the onset of full slip) x max |Vx|,
+  the slip at which the law saturates at the run's largest speed (``creep_full_slip``
+  of the contact law at the largest load).
+
+They are taken at every communication point after t = 0 of the point's grid, against
+the reference of the same equations under the *continuous* inputs (what co-simulation
+approximates: the zero-order hold of the inputs counts as error), and optionally
+(``held=True``) against the reference with the inputs held over each step as the FMU
+receives them (the FMU's own integration error). The wall time of a run is that of
+``fmpy.simulate_fmu`` on the extracted FMU (instantiation, every step, termination),
+the fastest of ``repeats`` runs, summed over the cases.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import fmpy
+import numpy as np
+from numpy.typing import NDArray
+
+import fmu_build
+
+from ..scenario import runner
+from ..scenario.schema import Case, Scene
+from . import reference as ref
+from .metrics import norms, observed_order, pairwise_orders
+from .sweep import Family, families, fine_grid, levels, point, step
+
+FloatArray = NDArray[np.float64]
+
+# Errors below this (relative) are rounding: not used for the observed order.
+ORDER_FLOOR = 1e-12
+
+
+def _body_reference(continuous, held):
+    return {"continuous": continuous, "held": held}
+
+
+# Reference sources by (mode, method); a new law or phase adds its own entry.
+REFERENCES: dict[tuple[str, str], dict[str, Callable]] = {
+    ("body", "full"): _body_reference(ref.full_continuous, ref.full_held),
+    ("body", "quasistationary"): _body_reference(
+        ref.quasistationary_continuous, ref.quasistationary_held
+    ),
+}
+
+
+@dataclass
+class Row:
+    """One point of one family: a communication step, its cost and its errors."""
+
+    scene: str
+    family: str
+    settings: dict[str, object]
+    level: int
+    h: float
+    steps: int
+    wall: float = math.nan
+    Tx_max: float = math.nan
+    Tx_rms: float = math.nan
+    vx_max: float = math.nan
+    vx_rms: float = math.nan
+    Tx_max_held: float = math.nan
+    vx_max_held: float = math.nan
+    order_Tx: float = math.nan
+    order_vx: float = math.nan
+    error: str | None = None
+
+
+@dataclass
+class SceneReport:
+    scene: str
+    title: str
+    mode: str
+    cases: list[str]
+    fmu: str
+    rows: list[Row] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    held: bool = False
+
+    def families(self) -> list[str]:
+        return list(dict.fromkeys(r.family for r in self.rows))
+
+    def of(self, family: str) -> list[Row]:
+        return sorted((r for r in self.rows if r.family == family), key=lambda r: -r.h)
+
+    def family_orders(self) -> dict[str, tuple[float, float]]:
+        """Least-squares observed order of the max errors of Tx and vx, per family."""
+        out = {}
+        for f in self.families():
+            rows = self.of(f)
+            h = [r.h for r in rows]
+            out[f] = (
+                observed_order(h, [r.Tx_max for r in rows], ORDER_FLOOR),
+                observed_order(h, [r.vx_max for r in rows], ORDER_FLOOR),
+            )
+        return out
+
+
+@dataclass
+class _CaseRef:
+    """A case's references per method at the finest grid's points ``index`` (every
+    point in body mode; samples in contact mode, on the coarsest grid)."""
+
+    case: Case
+    by_method: dict[str, ref.Solution]
+    index: NDArray[np.int_]
+    Tx_scale: float
+    v_scale: float
+
+
+def _scales(scene: Scene, case: Case, grid: FloatArray, Vx: FloatArray) -> tuple[float, float]:
+    """(mu P, v_s) of the case: the largest load, the slip scale at the largest speed."""
+    p = case.parameters
+    P = float(np.max(ref.signal_values(case, ("P",), grid)["P"]))
+    Vmax = float(np.nanmax(np.abs(Vx))) if np.any(np.isfinite(Vx)) else abs(p.get("Vx0", 1.0))
+    try:
+        creep = ref.scene_law(scene, p, P).creep_full_slip
+    except ref.NoReferenceError:
+        creep = math.nan  # no reference for this law: nothing is compared
+    return p["mu"] * P, creep * Vmax
+
+
+def _references(scene: Scene, case: Case, methods: list[str], lv: tuple[int, ...]):
+    grid = fine_grid(scene, lv)
+    sols: dict[str, ref.Solution] = {}
+    notes = []
+    if scene.config.mode == "contact":
+        coarse = int(round(2 ** (max(lv) - min(lv))))
+        index = ref.contact_samples(grid[::coarse]) * coarse
+        try:
+            sols["contact"] = ref.contact_continuous(scene, case, grid[index])
+            Vx = sols["contact"].Vx
+        except ref.NoReferenceError as e:
+            notes.append(str(e))
+            Vx = np.array([np.nan])
+    else:
+        index = np.arange(grid.size)
+        for m in methods:
+            try:
+                sols[m] = REFERENCES[(scene.config.mode, m)]["continuous"](scene, case, grid)
+            except ref.NoReferenceError as e:
+                notes.append(str(e))
+        Vx = next(iter(sols.values())).Vx if sols else np.array([np.nan])
+    Tx_scale, v_scale = _scales(scene, case, grid, Vx)
+    return _CaseRef(case, sols, index, Tx_scale, v_scale), notes
+
+
+def run_scene(
+    scene: Scene,
+    fmu_dir: Path,
+    quick: bool = False,
+    repeats: int = 2,
+    held: bool = False,
+    all_cases: bool = True,
+    log: Callable[[str], None] = print,
+) -> SceneReport:
+    """The scene's sweep through its FMU (built or cached under ``fmu_dir``)."""
+    fams, cfg = families(scene, quick)
+    built = fmu_build.build(cfg, fmu_dir)
+    lv = levels(quick)
+    cases = list(scene.cases if all_cases and not quick else scene.cases[:1])
+    report = SceneReport(
+        scene.name, scene.title, scene.config.mode, [c.name for c in cases], built.path.name
+    )
+    report.held = held
+    methods = sorted({f.value("method", "full") for f in fams})
+    refs = []
+    for c in cases:
+        r, notes = _references(scene, c, methods, lv)
+        refs.append(r)
+        report.notes += notes
+    tmp = Path(tempfile.mkdtemp(prefix=f"report-{scene.name}-"))
+    try:
+        fmpy.extract(str(built.path), str(tmp))
+        for fam in fams:
+            for level in lv:
+                report.rows.append(_point(scene, cfg, fam, level, lv, refs, tmp, repeats, held))
+                r = report.rows[-1]
+                log(
+                    f"  {scene.name:8s} {fam.label:28s} h = {r.h:9.3g} s  {r.wall:7.3f} s  "
+                    f"Tx {r.Tx_max:9.2e}  vx {r.vx_max:9.2e}" + (f"  {r.error}" if r.error else "")
+                )
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    _orders(report)
+    return report
+
+
+def _point(scene, cfg, fam: Family, level, lv, refs: list[_CaseRef], fmu_dir, repeats, held):
+    h = step(scene, level)
+    n = int(round(scene.stop_time / h))
+    row = Row(scene.name, fam.label, dict(fam.settings), level, h, n)
+    method = fam.value("method", "full")
+    stride = int(round(2 ** (level - min(lv))))
+    errs: dict[str, list[FloatArray]] = {"Tx": [], "vx": [], "Tx_held": [], "vx_held": []}
+    wall = 0.0
+    for cr in refs:
+        sc, case = point(scene, cr.case, cfg, fam, h)
+        key = "contact" if scene.config.mode == "contact" else method
+        if key not in cr.by_method:
+            row.error = f"no reference for {method}"
+            return row
+        best, result = math.inf, None
+        for _ in range(max(1, repeats)):
+            t0 = time.perf_counter()
+            result = runner.simulate_case(fmu_dir, sc, case)
+            best = min(best, time.perf_counter() - t0)
+        wall += best
+        if result is None or result.error:
+            row.error = result.error if result is not None else "not run"
+            return row
+        sol = cr.by_method[key]
+        on = (cr.index % stride == 0) & (cr.index > 0)  # this level's points after t = 0
+        idx = cr.index[on] // stride
+        for var, scale in (("Tx", cr.Tx_scale), ("vx", cr.v_scale)):
+            errs[var].append((result.columns[var][idx] - getattr(sol, var)[on]) / scale)
+        if held:
+            for var, e in _held_errors(scene, sc, case, result, key, idx, cr).items():
+                errs[f"{var}_held"].append(e)
+    row.wall = wall
+    for var in ("Tx", "vx"):
+        e = np.concatenate(errs[var])
+        mx, rms = norms(e, 1.0)
+        setattr(row, f"{var}_max", mx)
+        setattr(row, f"{var}_rms", rms)
+        if held:
+            setattr(row, f"{var}_max_held", norms(np.concatenate(errs[f"{var}_held"]), 1.0)[0])
+    return row
+
+
+def _held_errors(scene, sc, case, result, key, idx, cr: _CaseRef) -> dict[str, FloatArray]:
+    """Errors against the reference with the inputs held as the FMU receives them."""
+    grid = sc.grid
+    if key == "contact":
+        sol = ref.contact_held(sc, case, grid, idx)
+        want = {"Tx": sol.Tx, "vx": sol.vx}
+    else:
+        sol = REFERENCES[(scene.config.mode, key)]["held"](sc, case, grid)
+        want = {"Tx": sol.Tx[idx], "vx": sol.vx[idx]}
+    scale = {"Tx": cr.Tx_scale, "vx": cr.v_scale}
+    return {v: (result.columns[v][idx] - want[v]) / scale[v] for v in ("Tx", "vx")}
+
+
+def _orders(report: SceneReport) -> None:
+    for f in report.families():
+        rows = report.of(f)
+        h = [r.h for r in rows]
+        for var in ("Tx", "vx"):
+            e = np.array([getattr(r, f"{var}_max") for r in rows])
+            p = pairwise_orders(h, e)
+            p[e <= ORDER_FLOOR] = np.nan  # at rounding level an order means nothing
+            p[1:][e[:-1] <= ORDER_FLOOR] = np.nan
+            for r, o in zip(rows, p, strict=True):
+                setattr(r, f"order_{var}", float(o))
