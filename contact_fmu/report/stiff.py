@@ -1,0 +1,361 @@
+"""Run the stiff and extreme cases through the body-mode FMU and check each one.
+
+Checks (each with its measured quantity; see the constants for the tolerances):
+
+- finite: every doStep answers fmi2OK and every output is finite;
+- bound: |Tx| <= mu P to rounding;
+- dissipation: the friction power Tx vx is never negative (to the stage-solve tolerance);
+- oscillation: no step-to-step zig-zag above the solution's own variation
+  (``metrics.oscillation``) in Tx or vx;
+- convergence: the run repeated at h/2 and h/4 (same internal steps per communication
+  step, inputs sampled on each grid): the differences d1 = |y(h) - y(h/2)| and
+  d2 = |y(h/2) - y(h/4)| at the communication points of h fall at the observed order
+  log2(d1/d2) >= P_MIN, or are at the rounding floor;
+- memory: the number of memory blocks the interpreter holds (``sys.getallocatedblocks``
+  after a garbage collection) grows by at most MEM_BLOCKS over the second half of the
+  longest run, and the resident set (``/proc/self/statm``) by at most MEM_RSS_BYTES.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import gc
+import math
+import os
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import fmpy
+import numpy as np
+from numpy.typing import NDArray
+
+import fmu_build
+
+from ..fmu.config import METHODS, SCHEMES, ModelConfig
+from ..layer import LayerContact
+from ..scenario.instance import OK, Instance
+from ..scenario.signals import parse
+from ..solvers import SOLVE_RTOL
+from .metrics import oscillation
+from .stiff_cases import StiffCase, cases
+
+FloatArray = NDArray[np.float64]
+
+INPUTS = ("P", "Fx_ex", "My_ex")
+OUTPUTS = ("Tx", "vx", "Vx", "regime")
+# |Tx| <= mu P to rounding: the stepper rescales an implied force beyond the capacity
+# onto it (a hypot, a quotient, a product: a few units in the last place); 16 of them.
+BOUND_RTOL = 16 * np.finfo(float).eps
+# The stage equations are solved to SOLVE_RTOL relative to the slip scale v_s (solvers):
+# Tx vx can be negative by at most mu P x SOLVE_RTOL v_s (the force is bounded by mu P);
+# the check allows 100 times that, in units of mu P v_s.
+DISSIPATION_TOL = 100 * SOLVE_RTOL
+# Noise of the outputs from the stage solves: vx to SOLVE_RTOL (v_s + |vx|), Tx to
+# dT/dv times that, <= (32/(3 pi)) 2 SOLVE_RTOL mu P = 7 SOLVE_RTOL mu P in adhesion
+# (h'(0) of Eq. 42; constant in full slip). Zig-zags below 100 SOLVE_RTOL of the scale
+# are noise, not oscillation.
+NOISE = 100 * SOLVE_RTOL
+# Convergence: the ZOH of the inputs is first order in h, the schemes second order
+# (Lobatto IIIC's stage order is 1: stiff order reduction towards 1, docs/model.md), so
+# halving h must at least halve the differences, up to pre-asymptotic effects; P_MIN
+# takes off a quarter of an order for them.
+P_MIN = 0.75
+# Differences below this (relative to mu P and v_s) are at the noise of the outputs
+# summed over the steps compared: nothing left to converge.
+CONV_FLOOR = 1e4 * SOLVE_RTOL
+# Memory: the interpreter's free lists (tuples, floats, dicts, frames) keep freed
+# objects allocated up to bounded sizes and fill slowly over a run: measured over the
+# second half of 800-step runs, the count moves by tens of blocks (<= 41 for the eta
+# cases). A leak of one object per step adds >= 256 blocks over the measured windows
+# (>= 256 steps). RSS: pymalloc arenas are 1 MiB; a leak of 8 bytes per internal step
+# over the long run's measured 5e5 internal steps reaches 4 MiB.
+MEM_BLOCKS = 128
+MEM_RSS_BYTES = 4 << 20
+PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
+
+
+def config() -> ModelConfig:
+    """The FMU of the suite: body mode, straight rolling, both steppers and schemes."""
+    return ModelConfig(
+        name="stiff",
+        mode="body",
+        inputs=INPUTS,
+        outputs=("Tx", "vx", "xi_x", "Vx", "Omega_y", "adhesion", "regime"),
+        methods=METHODS,
+        schemes=SCHEMES,
+        description="Stiff and extreme cases (issue 6)",
+    )
+
+
+@dataclass
+class Run:
+    """Outputs at the communication points t_1..t_n of one run (t_0 = 0 not included)."""
+
+    t: FloatArray
+    values: dict[str, FloatArray]
+    status: str | None = None  # the first non-OK doStep, if any
+    blocks: tuple[int, int] = (0, 0)  # allocated blocks at half-way and at the end
+    rss: tuple[int, int] = (0, 0)  # resident bytes at half-way and at the end
+    wall: float = 0.0
+
+
+def _rss() -> int:
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * PAGE
+    except OSError:  # pragma: no cover - not Linux
+        return 0
+
+
+def simulate(fmu_dir: Path, case: StiffCase, h: float, steps: int, memory: bool = False) -> Run:
+    """``steps`` communication steps of h through the FMU extracted at ``fmu_dir``."""
+    t = np.arange(steps + 1) * h
+    u = {n: parse(n, case.inputs[n])(t) for n in INPUTS}
+    vals = {n: np.full(steps, np.nan) for n in OUTPUTS}
+    run = Run(t[1:], vals)
+    t0 = time.perf_counter()
+    with Instance(fmu_dir, f"stiff-{case.name}", case.start_values(h), unzip_dir=fmu_dir) as inst:
+        vin = [inst.vars[n].valueReference for n in INPUTS]
+        vout = [inst.vars[n].valueReference for n in OUTPUTS if n != "regime"]
+        vreg = [inst.vars["regime"].valueReference]
+        fmu = inst.fmu
+        half = steps // 2
+        for k in range(steps):
+            if memory and k == half:
+                gc.collect()
+                b1, r1 = sys.getallocatedblocks(), _rss()
+            fmu.setReal(vin, [float(u[n][k]) for n in INPUTS])
+            status = inst.step(h)
+            if status != OK:
+                msg = inst.messages[-1][1] if inst.messages else ""
+                run.status = f"doStep {k + 1} at t = {t[k]:.6g} s: status {status} {msg}"
+                break
+            out = fmu.getReal(vout)
+            for i, n in enumerate(OUTPUTS[:-1]):
+                vals[n][k] = out[i]
+            vals["regime"][k] = fmu.getInteger(vreg)[0]
+        if memory and run.status is None:
+            gc.collect()
+            run.blocks = (b1, sys.getallocatedblocks())
+            run.rss = (r1, _rss())
+    run.wall = time.perf_counter() - t0
+    return run
+
+
+@dataclass
+class Check:
+    name: str
+    ok: bool
+    value: float
+    limit: float
+    note: str = ""
+
+
+@dataclass
+class Result:
+    case: StiffCase
+    checks: list[Check] = field(default_factory=list)
+    wall: float = 0.0
+    order_Tx: float = math.nan
+    order_vx: float = math.nan
+
+    @property
+    def ok(self) -> bool:
+        return all(c.ok for c in self.checks)
+
+    def check(self, name: str) -> Check:
+        return next(c for c in self.checks if c.name == name)
+
+
+def _slip_scale(case: StiffCase, Vx: FloatArray) -> FloatArray:
+    """v_s = (creepage at the onset of full slip) x max(|Vx|, 1e-9 m/s) at each point."""
+    p = case.params
+    law = LayerContact(
+        float(case.inputs["P"]), p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"], p["mu"]
+    )
+    return law.creep_full_slip * np.maximum(np.abs(Vx), 1e-9)
+
+
+def _order(d1: float, d2: float) -> float:
+    if d2 == 0.0:
+        return math.inf if d1 > 0.0 else math.nan
+    return math.log2(d1 / d2) if d1 > 0.0 else -math.inf
+
+
+def evaluate(case: StiffCase, runs: list[Run], memory_run: Run) -> Result:
+    """The checks of one case from its run at h (first), h/2 and h/4."""
+    res = Result(case)
+    main = runs[0]
+    failed = [r.status for r in runs if r.status]
+    finite = all(np.all(np.isfinite(v)) for r in runs for v in r.values.values())
+    res.checks.append(
+        Check("finite", not failed and finite, float(len(failed)), 0.0, failed[0] if failed else "")
+    )
+    if failed:
+        return res
+    muP = case.mu_P
+    Tx, vx, Vx = (main.values[n] for n in ("Tx", "vx", "Vx"))
+    vs = _slip_scale(case, Vx)
+    bound = float(np.max(np.abs(Tx))) / muP
+    res.checks.append(Check("bound", bound <= 1.0 + BOUND_RTOL, bound, 1.0 + BOUND_RTOL))
+    power = float(np.min(Tx * vx / (muP * vs)))
+    res.checks.append(Check("dissipation", power >= -DISSIPATION_TOL, power, -DISSIPATION_TOL))
+    vfloor = NOISE * float(np.max(vs + np.abs(vx)))
+    oT, kT = oscillation(Tx, NOISE * muP)
+    ov, kv = oscillation(vx, vfloor)
+    worst = max(oT / muP, ov / float(np.max(vs)))
+    where = f"Tx at step {kT}" if oT / muP >= ov / float(np.max(vs)) else f"vx at step {kv}"
+    res.checks.append(Check("oscillation", oT <= 0.0 and ov <= 0.0, worst, 0.0, where))
+    # convergence at the communication points of h (the first conv_steps of them)
+    m = case.conv_steps or case.steps
+    vsmax = float(np.max(vs[:m]))
+    orders, ok, note = {}, True, []
+    for var, scale in (("Tx", muP), ("vx", vsmax)):
+        y = [r.values[var][(2**i) - 1 :: 2**i][:m] for i, r in enumerate(runs)]
+        d1 = float(np.max(np.abs(y[0] - y[1]))) / scale
+        d2 = float(np.max(np.abs(y[1] - y[2]))) / scale
+        orders[var] = _order(d1, d2)
+        good = d2 <= CONV_FLOOR or orders[var] >= P_MIN
+        ok &= good
+        note.append(f"{var}: d1 {d1:.1e} d2 {d2:.1e}")
+    res.order_Tx, res.order_vx = orders["Tx"], orders["vx"]
+    low = min(o for o in orders.values() if not math.isnan(o)) if orders else math.nan
+    res.checks.append(Check("convergence", ok, low, P_MIN, "; ".join(note)))
+    b1, b2 = memory_run.blocks
+    r1, r2 = memory_run.rss
+    grow = b2 - b1
+    rss = r2 - r1
+    res.checks.append(
+        Check(
+            "memory",
+            grow <= MEM_BLOCKS and rss <= MEM_RSS_BYTES,
+            float(grow),
+            float(MEM_BLOCKS),
+            f"RSS {rss / 1024:+.0f} KiB over {len(memory_run.t) - len(memory_run.t) // 2} steps",
+        )
+    )
+    return res
+
+
+def run_case(case: StiffCase, fmu_dir: Path) -> Result:
+    """The case at h, h/2 and h/4; memory measured on the longest run."""
+    t0 = time.perf_counter()
+    m = case.conv_steps or case.steps
+    runs = []
+    for i in range(3):
+        h = case.h / 2**i
+        steps = case.steps * 2**i if m == case.steps else m * 2**i
+        memory = i == 2 and m == case.steps
+        runs.append(simulate(fmu_dir, case, h, steps, memory=memory))
+    memory_run = runs[2]
+    if m != case.steps:  # the long run: the full length at h, memory measured there
+        full = simulate(fmu_dir, case, case.h, case.steps, memory=True)
+        runs[0] = dataclasses.replace(full)
+        memory_run = full
+    res = evaluate(case, runs, memory_run)
+    res.wall = time.perf_counter() - t0
+    return res
+
+
+def prepare(out_dir: Path) -> Path:
+    """Build (or take from the cache) the suite's FMU and extract it; returns the folder."""
+    built = fmu_build.build(config(), out_dir)
+    tmp = Path(tempfile.mkdtemp(prefix="stiff-"))
+    fmpy.extract(str(built.path), str(tmp))
+    return tmp
+
+
+def run_all(
+    out_dir: Path,
+    selected: list[StiffCase] | None = None,
+    log: Callable[[str], None] = print,
+) -> list[Result]:
+    fmu_dir = prepare(out_dir)
+    results = []
+    try:
+        for case in selected or cases():
+            r = run_case(case, fmu_dir)
+            results.append(r)
+            log(row_text(r))
+    finally:
+        shutil.rmtree(fmu_dir, ignore_errors=True)
+    return results
+
+
+def row_text(r: Result) -> str:
+    flags = " ".join(f"{c.name}={'ok' if c.ok else 'FAIL'}" for c in r.checks)
+    return f"  {r.case.name:22s} {'PASS' if r.ok else 'FAIL'}  {r.wall:6.1f} s  {flags}"
+
+
+CHECK_NAMES = ("finite", "bound", "dissipation", "oscillation", "convergence", "memory")
+NOTE = (
+    "Each case runs the body-mode FMU through fmpy call by call at its communication "
+    "step h, and again at h/2 and h/4 (same internal steps per communication step). "
+    "Checks: every doStep fmi2OK and every output finite; max |Tx|/(mu P) <= 1 + 16 eps; "
+    "min Tx vx/(mu P v_s) >= -1e-11 (friction power never negative; v_s = creepage at "
+    "full slip x |Vx|); no step-to-step oscillation: a zig-zag (three successive "
+    "differences of alternating sign) must not exceed the solution's own change per step "
+    "over the four steps around it, where a step-to-step alternation cancels (excess <= 0; "
+    "noise floor 1e-11 of the scale); convergence: the differences between the runs at h, "
+    "h/2 and h/4 fall at an observed order >= 0.75 (first order expected: zero-order hold "
+    "of the inputs), or are below 1e-9 of the scale; memory: interpreter memory blocks "
+    "grow by <= 128 and the resident set by <= 4 MiB over the second half of the longest "
+    "run."
+)
+
+
+def short_markdown(results: list[Result]) -> str:
+    """A compact table (README): case, what, result, bound, order, wall time."""
+    rows = [
+        "| case | what | result | max abs(Tx)/(mu P) | order Tx, vx | wall (s) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        names = {k.name: k for k in r.checks}
+        failed = [k.name for k in r.checks if not k.ok]
+        result = "pass" if r.ok else "**FAIL** (" + ", ".join(failed) + ")"
+        bound = f"{names['bound'].value:.6f}" if "bound" in names else "-"
+        rows.append(
+            f"| {r.case.name} | {r.case.what} | {result} | {bound} "
+            f"| {_o(r.order_Tx)}, {_o(r.order_vx)} | {r.wall:.1f} |"
+        )
+    return "\n".join(rows) + "\n"
+
+
+def markdown(results: list[Result]) -> str:
+    """The table of the cases: pass/fail and the measured quantities."""
+    head = (
+        "| case | group | method, scheme | h (s) x steps (substeps) | result | max abs(Tx)/(mu P) "
+        "| min Tx vx/(mu P v_s) | oscillation excess | order Tx, vx | memory blocks, RSS "
+        "| wall (s) |\n|---|---|---|---|---|---|---|---|---|---|---|"
+    )
+    rows = [head]
+    for r in results:
+        c = r.case
+        names = {k.name: k for k in r.checks}
+        failed = [k.name for k in r.checks if not k.ok]
+        result = "pass" if r.ok else "FAIL: " + ", ".join(failed)
+        if "bound" not in names:
+            rows.append(
+                f"| {c.name} | {c.group} | {c.method}, {c.scheme} | {c.h:g} x {c.steps} "
+                f"({c.substeps}) | {result}: {names['finite'].note} | | | | | | {r.wall:.1f} |"
+            )
+            continue
+        mem = names["memory"]
+        rss = mem.note.split(" over")[0].removeprefix("RSS ")
+        rows.append(
+            f"| {c.name} | {c.group} | {c.method}, {c.scheme} | {c.h:g} x {c.steps} "
+            f"({c.substeps}) | {result} | {names['bound'].value:.15f} "
+            f"| {names['dissipation'].value:.1e} | {names['oscillation'].value:.1e} "
+            f"| {_o(r.order_Tx)}, {_o(r.order_vx)} | {mem.value:+.0f}, {rss} | {r.wall:.1f} |"
+        )
+    return "\n".join(rows) + "\n"
+
+
+def _o(x: float) -> str:
+    return "-" if math.isnan(x) else ("inf" if math.isinf(x) and x > 0 else f"{x:.2f}")
