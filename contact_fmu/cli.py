@@ -6,6 +6,10 @@ contact-fmu run scenarios/fig13.toml     build the scene's FMU (cached), simulat
 contact-fmu run --all                    every scene of scenarios/
 contact-fmu references scenarios/x.toml  rewrite a scene's stored references from
                                          their independent source (no FMU involved)
+contact-fmu report [--quick] [--stiff | --workprecision]
+                                         error against run time of every scene's FMU
+                                         (reports/workprecision/), and the stiff and
+                                         extreme cases with pass/fail (reports/stiff.md)
 """
 
 from __future__ import annotations
@@ -116,6 +120,32 @@ def _references(args: argparse.Namespace) -> int:
     return 0
 
 
+def _report(args: argparse.Namespace) -> int:
+    from .report import command
+
+    if args.write_docs and (args.quick or args.scenes or args.case):
+        raise SystemExit("--write-docs needs the full report (no --quick, scenes or --case)")
+    both = not (args.stiff or args.workprecision)
+    reports = results = None
+    fmu_dir = args.fmu_out
+    if args.workprecision or both:
+        paths = command.scene_paths(args.scenes, args.scenarios)
+        reports = command.workprecision(
+            paths, args.out, fmu_dir, args.quick, args.repeats, args.held
+        )
+    if args.stiff or both:
+        results = command.stiff_suite(args.out, fmu_dir, args.quick, args.case)
+    if args.write_docs:
+        cmd = "contact-fmu report" + (" --stiff" if args.stiff else "")
+        cmd += " --workprecision" if args.workprecision else ""
+        command.write_docs(reports, results, args.out, cmd + " --write-docs")
+    failed = [r.case.name for r in results or [] if not r.ok]
+    if failed:
+        print(f"stiff cases failed: {', '.join(failed)}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(
         prog="contact-fmu",
@@ -145,6 +175,26 @@ def parser() -> argparse.ArgumentParser:
         "tolerances ('simulate', 'traction') instead of writing",
     )
     refs.set_defaults(func=_references)
+
+    rep = sub.add_parser(
+        "report", help="error against run time per scene, and the stiff and extreme cases"
+    )
+    rep.add_argument("scenes", nargs="*", type=Path, help="scene files (default: all)")
+    rep.add_argument("--scenarios", type=Path, default=DEFAULT_SCENES)
+    rep.add_argument("--out", type=Path, default=Path("reports"), help="output folder (reports/)")
+    rep.add_argument("--fmu-out", type=Path, default=DEFAULT_OUT / "fmu", help="FMU cache")
+    rep.add_argument("--quick", action="store_true", help="two steps, one case, short sweep")
+    rep.add_argument("--stiff", action="store_true", help="only the stiff and extreme cases")
+    rep.add_argument("--workprecision", action="store_true", help="only the error/time sweep")
+    rep.add_argument("--case", action="append", default=[], help="stiff case or group (repeat)")
+    rep.add_argument("--repeats", type=int, default=2, help="timed runs per point (fastest)")
+    rep.add_argument(
+        "--held", action="store_true", help="also the error against held inputs (slower)"
+    )
+    rep.add_argument(
+        "--write-docs", action="store_true", help="update README.md, docs/performance.md"
+    )
+    rep.set_defaults(func=_report)
     return ap
 
 
