@@ -81,7 +81,7 @@ def scene_markdown(report: SceneReport) -> str:
     lines = [
         f"## {report.scene}: {report.title}",
         "",
-        f"Mode {report.mode}; cases: {', '.join(report.cases)}; FMU `{report.fmu}`.",
+        f"Mode {report.mode}; cases: {', '.join(report.cases)}; FMU `{report.fmu or '-'}`.",
         "",
         ERROR_NOTE + (" " + HELD_NOTE if held else ""),
         "",
@@ -206,7 +206,9 @@ def summary_markdown(reports: list[SceneReport], only_substeps: int | None = Non
         if only_substeps is not None and rep_row.get("substeps") not in (None, only_substeps):
             continue
         body.append("| " + " | ".join(row) + " |")
-    return head + "\n" + "\n".join(body) + "\n"
+    skipped = [f"{r.scene} ({'; '.join(dict.fromkeys(r.notes))})" for r in reports if not r.rows]
+    tail = "\nNot compared: " + ", ".join(skipped) + ".\n" if skipped else ""
+    return head + "\n" + "\n".join(body) + "\n" + tail
 
 
 def _families_of(reports: list[SceneReport]) -> list[dict]:

@@ -76,9 +76,25 @@ def law(p: dict, P: float) -> LayerContact:
     return LayerContact(P, p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"], p["mu"])
 
 
+def _halfspace_law(scene: Scene, p: dict, P: float) -> Any:
+    """The half-space law as its FMU evaluates it: the creep-force table the build
+    generates for the scene's [halfspace] declaration (fmu_build.tables, cached), so the
+    reference integrates the same equations (the table's own accuracy is issue 4's)."""
+    try:
+        from fmu_build import tables
+
+        path = tables.ensure(scene.config)
+        return scene.config.table_spec.load_law(path).with_load(P).with_mu(p["mu"])
+    except (ImportError, AttributeError) as e:  # the law's interface is not (yet) there
+        raise NoReferenceError(f"{scene.name}: no half-space table outside the FMU: {e}") from e
+
+
 # The contact law of a scene's ``contact_law`` from the case parameters and the load P:
 # the equations the references integrate. A law without an entry has no reference yet.
-LAWS: dict[str, Callable[[Scene, dict, float], Any]] = {"layer": lambda s, p, P: law(p, P)}
+LAWS: dict[str, Callable[[Scene, dict, float], Any]] = {
+    "layer": lambda s, p, P: law(p, P),
+    "halfspace": _halfspace_law,
+}
 
 
 def scene_law(scene: Scene, p: dict, P: float) -> Any:

@@ -63,11 +63,17 @@ def _methods(scene: Scene, quick: bool) -> tuple[str, ...]:
     return ("full", "quasistationary") if qs else ("full",)
 
 
-def _offer(field: str) -> Callable[[ModelConfig, tuple[Any, ...], Any], ModelConfig]:
-    """An FMU that offers every swept value of a string parameter (one FMU, fair timing)."""
+def _offer(
+    field: str, parameter: str
+) -> Callable[[ModelConfig, tuple[Any, ...], Any], ModelConfig]:
+    """An FMU that offers every swept value of a string parameter (one FMU, fair timing);
+    its start value is kept if offered (the parameter exists with two values or more)."""
 
     def configure(cfg: ModelConfig, values: tuple[Any, ...], _value: Any) -> ModelConfig:
-        return dataclasses.replace(cfg, **{field: tuple(values)})
+        starts = dict(cfg.starts)
+        if len(values) < 2 or starts.get(parameter) not in values:
+            starts.pop(parameter, None)
+        return dataclasses.replace(cfg, **{field: tuple(values)}, starts=starts)
 
     return configure
 
@@ -79,14 +85,14 @@ AXES: tuple[Axis, ...] = (
         "28-30), the latter where the loads stay admissible (Eq. 27) and no lateral "
         "dynamics enter",
         _methods,
-        _offer("methods"),
+        _offer("methods", "method"),
         lambda v, h: {"method": v},
     ),
     Axis(
         "scheme",
         "integrator scheme (Lobatto IIIC, SDIRK2)",
         lambda s, q: SCHEMES if s.config.mode == "body" else (),
-        _offer("schemes"),
+        _offer("schemes", "scheme"),
         lambda v, h: {"scheme": v},
     ),
     Axis(

@@ -170,12 +170,9 @@ def run_scene(
 ) -> SceneReport:
     """The scene's sweep through its FMU (built or cached under ``fmu_dir``)."""
     fams, cfg = families(scene, quick)
-    built = fmu_build.build(cfg, fmu_dir)
     lv = levels(quick)
     cases = list(scene.cases if all_cases and not quick else scene.cases[:1])
-    report = SceneReport(
-        scene.name, scene.title, scene.config.mode, [c.name for c in cases], built.path.name
-    )
+    report = SceneReport(scene.name, scene.title, scene.config.mode, [c.name for c in cases], "")
     report.held = held
     methods = sorted({f.value("method", "full") for f in fams})
     refs = []
@@ -183,6 +180,11 @@ def run_scene(
         r, notes = _references(scene, c, methods, lv)
         refs.append(r)
         report.notes += notes
+    if not any(r.by_method for r in refs):  # nothing to compare with: not run
+        log(f"  {scene.name}: skipped, " + "; ".join(dict.fromkeys(report.notes)))
+        return report
+    built = fmu_build.build(cfg, fmu_dir)
+    report.fmu = built.path.name
     tmp = Path(tempfile.mkdtemp(prefix=f"report-{scene.name}-"))
     try:
         fmpy.extract(str(built.path), str(tmp))
