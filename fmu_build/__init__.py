@@ -7,6 +7,10 @@ model description (units, ranges, ModelStructure). Builds are cached by content:
 configuration, every vendored source file, this package's own sources and the pythonfmu
 version make a SHA-256 key, and an FMU whose key exists is not built again.
 
+Data a law needs at run time and the build generates (the half-space law's creep-force
+table) is made by the numerics layer in a subprocess and cached by content of its own
+(``tables``); its key is part of the FMU's, and the file travels in the FMU's resources.
+
 This package only packages: it runs pythonfmu's command line in a subprocess and never
 imports pythonfmu itself.
 """
@@ -27,7 +31,7 @@ from pathlib import Path
 
 from contact_fmu.fmu.config import ModelConfig
 
-from . import model_description, script, sources
+from . import model_description, script, sources, tables
 
 DEFAULT_OUT = Path("out") / "fmu"
 # Bump when the layout of built FMUs changes without a change of the sources.
@@ -69,6 +73,8 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
     h.update(json.dumps(cfg.to_dict(), sort_keys=True).encode())
     for rel, src in sources.files(modules) + sources.data(cfg.data_files):
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
+    for rel in cfg.generated_files:  # the generated data's content key (no build needed)
+        h.update(rel.encode() + b"\0" + tables.key(cfg).encode() + b"\0")
     for own in sorted(p for p in HERE.glob("*.py") if p.name != "__main__.py"):
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
     return h.hexdigest(), modules
@@ -84,8 +90,14 @@ def names(cfg: ModelConfig, key: str) -> tuple[str, str, str]:
     )
 
 
-def build(cfg: ModelConfig, out_dir: str | Path = DEFAULT_OUT, force: bool = False) -> Built:
-    """The FMU for ``cfg`` under ``out_dir`` (built unless cached)."""
+def build(
+    cfg: ModelConfig,
+    out_dir: str | Path = DEFAULT_OUT,
+    force: bool = False,
+    table_cache: str | Path = tables.DEFAULT_CACHE,
+) -> Built:
+    """The FMU for ``cfg`` under ``out_dir`` (built unless cached); generated law data
+    (creep-force tables) is taken from, or built into, ``table_cache``."""
     out_dir = Path(out_dir).resolve()
     key, modules = identity(cfg)
     module, class_name, package = names(cfg, key)
@@ -98,6 +110,8 @@ def build(cfg: ModelConfig, out_dir: str | Path = DEFAULT_OUT, force: bool = Fal
     try:
         stage = work / "stage"
         sources.vendor(modules, stage / package, cfg.data_files)
+        for rel in cfg.generated_files:
+            shutil.copyfile(tables.ensure(cfg, table_cache), stage / package / rel)
         script_file = stage / f"{module}.py"
         script_file.write_text(script.render(cfg, package, class_name))
         cmd = [

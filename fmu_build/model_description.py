@@ -59,10 +59,11 @@ def patch(xml: bytes, cfg: ModelConfig) -> bytes:
         if var.type == "Real":
             typed.set("unit", var.unit)
             units.append(var.unit)
-            if var.min is not None:
-                typed.set("min", _num(var.min))
-            if var.max is not None:
-                typed.set("max", _num(var.max))
+            lo, hi = cfg.bounds(var)  # min = max for a value the build fixes
+            if lo is not None:
+                typed.set("min", _num(lo))
+            if hi is not None:
+                typed.set("max", _num(hi))
             if typed.get("start") is not None:
                 typed.set("start", _num(cfg.start(var)))
 

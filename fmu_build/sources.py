@@ -75,7 +75,10 @@ def _imports(dotted: str) -> set[str]:
 
 
 def closure(roots: list[str]) -> list[str]:
-    """Dotted names (relative to contact_fmu) of the roots and all they import."""
+    """Dotted names (relative to contact_fmu) of the roots and all they import.
+
+    Importing a module of a subpackage runs the subpackage's __init__ first, so its
+    __init__ and everything that imports are part of the closure too."""
     todo, seen = list(roots), set()
     while todo:
         m = todo.pop()
@@ -83,11 +86,8 @@ def closure(roots: list[str]) -> list[str]:
             continue
         seen.add(m)
         todo.extend(_imports(m))
-    # subpackages need their __init__
-    for m in list(seen):
         parts = m.split(".")[:-1]
-        for i in range(1, len(parts) + 1):
-            seen.add(".".join(parts[:i]))
+        todo.extend(".".join(parts[: i + 1]) for i in range(len(parts)))
     return sorted(seen)
 
 

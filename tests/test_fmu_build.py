@@ -29,7 +29,8 @@ def built() -> dict[str, fmu_build.Built]:
 
 
 def test_scene_set_is_the_one_the_issue_asks_for():
-    assert set(SCENES) == {"fig13", "fig12", "railway", "brake", "sweep"}
+    assert set(SCENES) == {"fig13", "fig12", "railway", "brake", "sweep", "rail_creep",
+                           "rail_traction"}  # fmt: skip
 
 
 def test_every_built_fmu_passes_fmpy_validate(built):
@@ -55,8 +56,11 @@ def test_model_description_has_units_ranges_and_complete_structure(built):
             assert v.description == decl.description
             if decl.type == "Real":
                 assert v.unit == decl.unit and v.unit in units, (name, v.name)
-            if decl.min is not None:
-                assert float(v.min) == decl.min
+            lo, hi = cfg.bounds(decl)  # the declared range, or min = max for a fixed value
+            if lo is not None:
+                assert float(v.min) == lo, (name, v.name)
+            if hi is not None:
+                assert float(v.max) == hi, (name, v.name)
         assert md.coSimulation.canGetAndSetFMUstate
         outputs = [v for v in md.modelVariables if v.causality == "output"]
         assert [u.variable for u in md.outputs] == outputs
@@ -94,9 +98,9 @@ def test_scene_fmu_holds_only_the_variables_it_uses(built):
     # fig12 holds vy/Vx: the ratio and the lateral force, but not Eq. (10)'s input
     fig12 = {v.name for v in CONFIGS["fig12"].variables}
     assert {"vy_ratio", "Ty", "vy"} <= fig12 and not fig12 & {"Fy_ex", "Vy0", "Iz"}
-    # only the railway scene switches steppers, so only it has the method parameter
+    # only the railway scenes switch steppers, so only they have the method parameter
     assert [n for n, c in CONFIGS.items() if any(v.name == "method" for v in c.variables)] == [
-        "railway", "full_body"
+        "rail_traction", "railway", "full_body"
     ]  # fmt: skip
 
 

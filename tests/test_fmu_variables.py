@@ -104,7 +104,8 @@ def test_contact_outputs_declare_their_direct_dependencies():
 @pytest.mark.parametrize(
     ("kw", "name", "fragment"),
     [
-        ({"contact_law": "halfspace"}, "contact_law", "not implemented yet"),
+        ({"contact_law": "halfspace"}, "halfspace", "required keys of the table"),
+        ({"law_spec": {"grid": 16}}, "halfspace", 'only with contact_law = "halfspace"'),
         ({"phase": "transient"}, "phase", "not implemented yet"),
         ({"contact_law": "hertz"}, "contact_law", "one of"),
         ({"methods": ("implicit",)}, "method", "one of"),

@@ -38,7 +38,7 @@ def make_stepper(cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float) ->
     """The stepper of the configured phase, law and method at the initial state."""
     if cfg.phase != "steady":  # ModelConfig admits only implemented phases
         raise InputError("phase", cfg.phase, '"steady"')
-    law = make_law(cfg.contact_law, p, P)
+    law = make_law(cfg, p, P)
     body = Body(M=p["M"], Rx=p["Rx"], Iy=p["Iy"], Iz=p.get("Iz"))
     vy_ratio = {"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy]
     spin_ratio = {"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin]

@@ -2,13 +2,22 @@
 
 A ``ModelConfig`` is plain data (JSON through ``to_dict``/``from_dict``): the build
 writes it into the generated FMU script, and the adapter reads it back. Values that
-later issues add to the scene schema (``contact_law = "halfspace"``, ``phase =
-"transient"``) are recognised and refused here with a clear error until implemented.
+later issues add to the scene schema (``phase = "transient"``) are recognised and
+refused here with a clear error until implemented.
+
+The half-space law (``contact_law = "halfspace"``) carries its declaration in
+``law_spec`` (``halfspace.spec.TableSpec`` as plain data: materials, radii, layers, the
+table's range and resolution). Its geometry and materials are structural: they are not
+FMU parameters (the layer law's Ry, k1, k2, kb, ks do not exist in such an FMU), the
+rolling radius Rx is a parameter fixed to the table's body radius (``fixed``: any other
+value is refused), and mu stays free (the normalised table does not depend on it).
 """
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 from typing import Any
 
 from .._validate import InputError
@@ -20,17 +29,20 @@ MODEL_MODULES = {
     "contact": "fmu.contact_model",
     "rigid_body": "fmu.rigid_body",
 }
-LAW_MODULES = {"layer": "layer"}
+LAW_MODULES = {"layer": "layer", "halfspace": "halfspace.spec"}
 # Data files a law reads at run time (paths relative to the package, e.g. a table .npz):
 # the build copies them next to the law's module in the FMU's resources.
-LAW_DATA: dict[str, tuple[str, ...]] = {"layer": ()}
+LAW_DATA: dict[str, tuple[str, ...]] = {"layer": (), "halfspace": ()}
+# Data files the build generates for a law from ``law_spec`` (path relative to the
+# package): the half-space law's creep-force table, built by the numerics layer.
+GENERATED_DATA: dict[str, str] = {"halfspace": "halfspace/creep_table.npz"}
 PHASES = ("steady",)
 METHODS = ("full", "quasistationary")
 # Time-stepping schemes of the body-mode stepper (``integrator.SCHEMES``; a test keeps the
 # two equal: importing the integrator here would put it into every FMU, contact mode too).
 SCHEMES = ("lobatto3c", "sdirk2")
 # Recognised scene values that later issues implement.
-PLANNED = {"contact_law": ("halfspace",), "phase": ("transient",)}
+PLANNED = {"phase": ("transient",)}
 
 VY_MODES = ("zero", "ratio", "eq10")
 SPIN_MODES = ("zero", "ratio", "eq11")
@@ -52,7 +64,9 @@ class ModelConfig:
     ``methods``: the steppers the FMU offers (body mode); with more than one, the
     string parameter ``method`` chooses. ``schemes``: the integrator schemes it offers
     (body mode); with more than one, the string parameter ``scheme`` chooses (the first
-    is the default). ``vy``/``spin``: how Vy and Omega_z follow
+    is the default). ``law_spec``: the contact law's structural data (the half-space
+    law's TableSpec as plain data; empty for the layer law). ``vy``/``spin``: how Vy and
+    Omega_z follow
     (body mode): "zero" (held at 0, no lateral variables), "ratio" (held ratio to Vx,
     parameters vy_ratio/spin_ratio) or Eqs. (10)/(11). ``starts``: start values that
     replace the declared defaults. ``experiment``: (start, stop, step) in s, or None.
@@ -71,12 +85,19 @@ class ModelConfig:
     starts: dict[str, Any] = field(default_factory=dict)
     experiment: tuple[float, float, float] | None = None
     description: str = ""
+    law_spec: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.name.isidentifier():
             raise InputError("name", self.name, "a Python identifier (letters, digits, _)")
         _choice("mode", self.mode, tuple(MODEL_MODULES))
         _choice("contact_law", self.contact_law, tuple(LAW_MODULES))
+        if self.has_table:  # checked and normalised (radii inf -> "inf", loads sorted)
+            object.__setattr__(self, "law_spec", self.table_spec.to_dict())
+        elif self.law_spec:
+            raise InputError(
+                "halfspace", self.law_spec, 'given only with contact_law = "halfspace"'
+            )
         _choice("phase", self.phase, PHASES)
         if not self.methods:
             raise InputError("method", self.methods, f"at least one of {METHODS}")
@@ -107,7 +128,7 @@ class ModelConfig:
             var = fv.BY_NAME.get(name)
             if var is None or not fv.applicable(var, self):
                 raise InputError(name, value, f"a variable of this {self.mode}-mode model")
-            problem = var.check(value)
+            problem = self.check(name, value)
             if problem is not None:
                 raise InputError(name, value, problem)
         if "method" in self.starts and self.starts["method"] not in self.methods:
@@ -130,12 +151,54 @@ class ModelConfig:
         return fv.select(self, self.inputs, self.outputs)
 
     def start(self, var: fv.Var) -> Any:
-        """Start value of ``var``: the configured one, else the declared default."""
+        """Start value of ``var``: the configured one, else the declared default (the
+        table's values for a half-space FMU's Rx and mu)."""
         if var.name == "method":
             return self.starts.get("method", self.methods[0])
         if var.name == "scheme":
             return self.starts.get("scheme", self.schemes[0])
+        if var.name in self.fixed:
+            return self.fixed[var.name]
+        if var.name == "mu" and self.has_table:
+            return self.starts.get("mu", self.table_spec.mu)
         return self.starts.get(var.name, var.start)
+
+    # ---- the half-space law's table --------------------------------------------------
+    @property
+    def has_table(self) -> bool:
+        """Whether the model's contact law is the tabulated half-space law."""
+        return self.contact_law == "halfspace" and self.mode != "rigid_body"
+
+    @cached_property
+    def table_spec(self) -> Any:
+        """``halfspace.spec.TableSpec`` of ``law_spec`` (imported lazily: only an FMU with
+        that law carries the module)."""
+        spec = importlib.import_module(f"..{LAW_MODULES['halfspace']}", __package__)
+        return spec.TableSpec.from_dict(self.law_spec)
+
+    @property
+    def fixed(self) -> dict[str, float]:
+        """Parameters whose value the build fixes: a half-space FMU's rolling radius Rx
+        is the body radius its table was built for."""
+        return {"Rx": self.table_spec.Rx} if self.has_table else {}
+
+    def check(self, name: str, value: object) -> str | None:
+        """None if ``value`` is admissible for the variable ``name`` of this model, else
+        the requirement it violates (the declared range, or the fixed value)."""
+        problem = fv.BY_NAME[name].check(value)
+        fixed = self.fixed.get(name)
+        if problem is None and fixed is not None and float(value) != fixed:  # type: ignore[arg-type]
+            return (
+                f"{fixed!r}, the value this FMU's creep-force table was built for (a "
+                "structural value: change the scene's [halfspace] table and rebuild)"
+            )
+        return problem
+
+    def bounds(self, var: fv.Var) -> tuple[float | None, float | None]:
+        """(min, max) of ``var`` in the model description: min = max for fixed values."""
+        if var.name in self.fixed:
+            return self.fixed[var.name], self.fixed[var.name]
+        return var.min, var.max
 
     @property
     def model_module(self) -> str:
@@ -149,6 +212,11 @@ class ModelConfig:
     def data_files(self) -> tuple[str, ...]:
         """Package-relative data files the FMU must carry (the law's tables)."""
         return LAW_DATA.get(self.contact_law, ()) if self.mode != "rigid_body" else ()
+
+    @property
+    def generated_files(self) -> tuple[str, ...]:
+        """Package-relative data files the build generates for the FMU (from law_spec)."""
+        return (GENERATED_DATA[self.contact_law],) if self.has_table else ()
 
     # ---- plain data --------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

@@ -56,4 +56,4 @@ class ContactElement:
 def build(
     cfg: ModelConfig, params: Mapping[str, Any], inputs: Mapping[str, float], t0: float
 ) -> ContactElement:
-    return ContactElement(make_law(cfg.contact_law, params, inputs["P"]), params["Rx"], inputs)
+    return ContactElement(make_law(cfg, params, inputs["P"]), params["Rx"], inputs)

@@ -8,7 +8,8 @@ Error handling. pythonfmu 0.7.0 answers fmi2Fatal for any Python exception and
 fmi2Discard only when ``do_step`` returns False; setReal cannot answer anything but
 fmi2OK or fmi2Fatal. So nothing here raises to pythonfmu:
 
-- an inadmissible value (NaN/inf input, P <= 0, a parameter out of its range) is
+- an inadmissible value (NaN/inf input, P <= 0, a parameter out of its range, a
+  value other than the fixed one of a half-space FMU's Rx) is
   accepted by setReal with a logged message naming the variable and the value; while
   it is held, every doStep answers fmi2Discard with the same message and leaves the
   state untouched; once the value is corrected the instance steps normally;
@@ -137,7 +138,7 @@ class ContactSlave(Fmi2Slave):
             )
             return
         var = self._vars[name]
-        problem = var.check(value)
+        problem = self.cfg.check(name, value)
         self._values[name] = (
             value if var.type == "String" or problem == "a number" else float(value)
         )

@@ -49,6 +49,7 @@ class Structure(Protocol):
     spin: str  # "zero" | "ratio" | "eq11"
     methods: tuple[str, ...]
     schemes: tuple[str, ...]
+    contact_law: str  # "layer" | "halfspace"
 
 
 # Conditions on the structure, by name (only the body mode has optional parts).
@@ -74,7 +75,10 @@ class Var:
     ``open_min`` excludes the lower bound itself (FMI has no exclusive bound, so the
     FMU checks it and the description says so). ``needs`` names a CONDITIONS entry
     that must hold in body mode. ``feedthrough``: the contact-mode inputs an output
-    depends on directly (ModelStructure/Outputs dependencies).
+    depends on directly (ModelStructure/Outputs dependencies). ``laws``: the contact
+    laws whose models have the variable (None: every law); the half-space law's
+    geometry and materials are structural, so the layer law's Ry, k1, k2, kb, ks are
+    parameters of the layer law only.
     """
 
     name: str
@@ -88,6 +92,7 @@ class Var:
     type: str = "Real"
     needs: str | None = None
     feedthrough: tuple[str, ...] = field(default=())
+    laws: tuple[str, ...] | None = None
 
     def check(self, value: object) -> str | None:
         """None if ``value`` is admissible, else the requirement it violates."""
@@ -111,6 +116,7 @@ def _p(name, unit, desc, start, modes=("body", "contact"), **kw) -> Var:
 
 
 _BODY = ("body",)
+_LAYER = ("layer",)
 _BODY_RB = ("body", "rigid_body")
 _ALL = ("body", "contact", "rigid_body")
 
@@ -126,11 +132,47 @@ VARIABLES: tuple[Var, ...] = (
         min=0.0,
         open_min=True,
     ),
-    _p("Ry", "m", "Lateral radius of curvature of the body (> 0)", 0.10, min=0.0, open_min=True),
-    _p("k1", "m/Pa", "Normal compliance of the body's layer, Eq. (32)", 5.0e-13, min=0.0),
-    _p("k2", "m/Pa", "Normal compliance of the substrate's layer, Eq. (32)", 5.0e-13, min=0.0),
-    _p("kb", "m/Pa", "Tangential compliance of the body's layer, Eq. (31)", 3.2e-13, min=0.0),
-    _p("ks", "m/Pa", "Tangential compliance of the substrate's layer, Eq. (31)", 3.2e-13, min=0.0),
+    _p(
+        "Ry",
+        "m",
+        "Lateral radius of curvature of the body (> 0)",
+        0.10,
+        min=0.0,
+        open_min=True,
+        laws=_LAYER,
+    ),
+    _p(
+        "k1",
+        "m/Pa",
+        "Normal compliance of the body's layer, Eq. (32)",
+        5.0e-13,
+        min=0.0,
+        laws=_LAYER,
+    ),
+    _p(
+        "k2",
+        "m/Pa",
+        "Normal compliance of the substrate's layer, Eq. (32)",
+        5.0e-13,
+        min=0.0,
+        laws=_LAYER,
+    ),
+    _p(
+        "kb",
+        "m/Pa",
+        "Tangential compliance of the body's layer, Eq. (31)",
+        3.2e-13,
+        min=0.0,
+        laws=_LAYER,
+    ),
+    _p(
+        "ks",
+        "m/Pa",
+        "Tangential compliance of the substrate's layer, Eq. (31)",
+        3.2e-13,
+        min=0.0,
+        laws=_LAYER,
+    ),
     _p("M", "kg", "Mass of the body (> 0)", 1.0, modes=_BODY_RB, min=0.0, open_min=True),
     _p(
         "Iy",
@@ -385,6 +427,8 @@ BY_NAME: dict[str, Var] = {v.name: v for v in VARIABLES}
 def applicable(var: Var, s: Structure) -> bool:
     """Whether the model ``s`` can have ``var`` at all."""
     if s.mode not in var.causality:
+        return False
+    if var.laws is not None and s.contact_law not in var.laws:
         return False
     return s.mode != "body" or var.needs is None or CONDITIONS[var.needs](s)
 

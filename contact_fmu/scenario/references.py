@@ -12,7 +12,17 @@ the scene's data on a path that does not go through the FMU, its adapter or fmpy
   ``refine`` times more internal steps than the FMU takes (h_max / refine);
 - ``traction``: contact mode; the resultant of the traction field marched strip by
   strip (``LayerContact.traction``) on an ``nx`` x ``ny`` grid, integrated numerically:
-  independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates.
+  independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates;
+- ``halfspace``: contact mode, half-space law; direct solves of the steady-rolling
+  problem (``HalfSpaceContact`` of the scene's [halfspace] declaration, on the solver
+  grid of the table) at the sampled points: independent of the creep-force table the
+  FMU interpolates;
+- ``halfspace_creepage``: body mode, half-space law; the quasistationary state of
+  Eq. (26): Tx = A2 Fx_ex - A1 My_ex/Rx, and the creepage xi_x and adhesion fraction at
+  which direct solves give that Tx (bracketed root finding on the solver, no table).
+
+Samples: every ``every``-th grid point within ``t_from`` <= t <= ``t_to``, or within
+each ``[from, to]`` of ``windows``, or the grid points nearest to the listed ``times``.
 
 All of them see the inputs as the FMU does: sampled on the communication grid and held
 over each step (``signals.held``), so that the value at t_k uses the inputs of the step
@@ -48,13 +58,22 @@ def _body(p: dict) -> Body:
 
 
 def _samples(scene: Scene, ref: Reference) -> NDArray[np.int_]:
-    """Grid indices of the reference points: t_from <= t <= t_to, every n-th."""
+    """Grid indices of the reference points: t_from <= t <= t_to (or each window of
+    ``windows``), every n-th; or the points nearest to ``times``."""
     o = ref.options
     t = scene.grid
-    t_from, t_to = float(o.get("t_from", 0.0)), float(o.get("t_to", scene.stop_time))
-    every = int(o.get("every", 1))
-    idx = np.flatnonzero((t >= t_from - 1e-12) & (t <= t_to + 1e-12))
-    return idx[:: max(every, 1)]
+    if "times" in o:
+        idx = np.rint(np.asarray(o["times"], float) / scene.step).astype(int)
+        if np.any(idx < 0) or np.any(idx >= t.size):
+            raise ValueError(f"{scene.path}: reference times {o['times']} outside the run")
+        return idx
+    every = max(int(o.get("every", 1)), 1)
+    windows = o.get("windows", [[o.get("t_from", 0.0), o.get("t_to", scene.stop_time)]])
+    parts = []
+    for t_from, t_to in windows:
+        idx = np.flatnonzero((t >= float(t_from) - 1e-12) & (t <= float(t_to) + 1e-12))
+        parts.append(idx[::every])
+    return np.concatenate(parts)
 
 
 def _held_inputs(scene: Scene, case: Case) -> dict[str, FloatArray]:
@@ -144,11 +163,89 @@ def by_traction(scene: Scene, ref: Reference, case: Case, refine: int = 1) -> di
     return out
 
 
+def _contacts(scene: Scene, case: Case):
+    """HalfSpaceContact of the scene's declaration at a load P (N) with the case's mu,
+    one per load (its patch and calibration are cached on it)."""
+    spec = scene.config.table_spec
+    mu = case.parameters.get("mu", spec.mu)
+    cache: dict[float, object] = {}
+
+    def at(P: float):
+        if P not in cache:
+            cache[P] = spec.contact(P=P, mu=mu)
+        return cache[P]
+
+    return at
+
+
+def by_halfspace(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
+    spec = scene.config.table_spec
+    Rx = case.parameters.get("Rx", spec.Rx)
+    u = _held_inputs(scene, case)
+    k = _samples(scene, ref)
+    contact = _contacts(scene, case)
+    rows: dict[str, list[float]] = {n: [] for n in ("Tx", "Ty", "Mz", "adhesion", "xi_x")}
+    for i in k:
+        vx, vy = rigid_slip(u["Vx"][i], u["Omega_y"][i], u["Vy"][i], Rx)
+        s = contact(float(u["P"][i])).traction(vx, vy, u["Omega_z"][i], u["Vx"][i])
+        for name, value in zip(rows, (s.Tx, s.Ty, s.Mz, s.adhesion_fraction), strict=False):
+            rows[name].append(value)
+        rows["xi_x"].append(vx / abs(u["Vx"][i]))  # for plots; not compared
+    out = {"time": scene.grid[k], "xi_x": np.asarray(rows["xi_x"])}
+    out.update({n: np.asarray(rows[n]) for n in ref.tolerance if n in rows})
+    return out
+
+
+# Bracket of the creepage root, in units of xi_ref = mu P/(G c^2): full slip sets in
+# near 0.5 for Hertzian contacts (docs/halfspace.md), so the force there is mu P up to
+# the elastic part of the slip (1e-4 of mu P and less).
+CREEPAGE_BRACKET = 3.0
+# Tolerance of that root in units of xi_ref: far below the table's interpolation error
+# it is compared with (1e-3 of xi_ref and more).
+CREEPAGE_XTOL = 1e-6
+
+
+def by_halfspace_creepage(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
+    k = _samples(scene, ref)
+    u = _held_inputs(scene, case)
+    if np.any(u["Fy_ex"] != 0.0) or np.any(u["Mz_ex"] != 0.0):
+        raise ValueError(f"{scene.name}: source 'halfspace_creepage' is longitudinal only")
+    Tx = _body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
+    contact = _contacts(scene, case)
+    solved: dict[tuple[float, float], tuple[float, float]] = {}
+    xi, adhesion = np.empty(k.size), np.empty(k.size)
+    for j, i in enumerate(k):
+        key = (float(u["P"][i]), float(Tx[j]))
+        if key not in solved:
+            solved[key] = _creepage(contact(key[0]), key[1])
+        xi[j], adhesion[j] = solved[key]
+    return {"time": scene.grid[k], "Tx": Tx, "xi_x": xi, "adhesion": adhesion,
+            "regime": np.zeros(k.size)}  # fmt: skip
+
+
+def _creepage(contact, Tx: float) -> tuple[float, float]:
+    """(xi, adhesion fraction) of the steady rolling state with longitudinal force Tx (N),
+    |Tx| < mu P: Tx is odd and increasing in xi = vx/|Vx| (for either sign of Vx: the
+    mirror of the contact), so the root lies in [0, CREEPAGE_BRACKET xi_ref]."""
+    from scipy.optimize import brentq
+
+    if Tx == 0.0:
+        return 0.0, contact.solve(0.0).adhesion_fraction
+    xi_ref = contact.mu * contact.P / (contact.elastic.G * contact.c**2)
+    hi = CREEPAGE_BRACKET * xi_ref
+    if contact.solve(hi).Tx <= abs(Tx):
+        raise ValueError(f"Tx = {Tx!r} N is not reached below full slip (mu P)")
+    xi = brentq(lambda x: contact.solve(x).Tx - abs(Tx), 0.0, hi, xtol=CREEPAGE_XTOL * xi_ref)
+    return math.copysign(xi, Tx), contact.solve(xi).adhesion_fraction
+
+
 SOURCES: dict[str, Callable[[Scene, Reference, Case], dict[str, FloatArray]]] = {
     "quasistationary": quasistationary,
     "full_slip": full_slip,
     "simulate": by_simulation,
     "traction": by_traction,
+    "halfspace": by_halfspace,
+    "halfspace_creepage": by_halfspace_creepage,
 }
 
 

@@ -7,7 +7,7 @@ grid, the outputs to record, reference results with tolerances and a plot layout
     title = "..."
     [model]
     mode = "body"                       # body | contact
-    contact_law = "layer"               # layer   ("halfspace": issue 4)
+    contact_law = "layer"               # layer | halfspace (needs [halfspace])
     phase = "steady"                    # steady  ("transient": issue 5)
     method = "full"                     # full | quasistationary (a case may override)
     scheme = "lobatto3c"                # lobatto3c | sdirk2 (a case may override)
@@ -17,6 +17,9 @@ grid, the outputs to record, reference results with tolerances and a plot layout
     stop_time = 0.056                   # s
     step = 1.75e-4                      # communication step (s)
     outputs = ["Tx", "vx"]
+    [halfspace]                         # contact_law = "halfspace": materials, radii,
+                                        # layers and the creep-force table's range and
+                                        # resolution (contact_fmu.halfspace.spec.TableSpec)
     [parameters]                        # FMU parameters, SI (see contact_fmu.fmu.variables)
     [inputs]                            # FMU inputs as signals (see signals.py)
     [[cases]]                           # name, and overrides: parameters, inputs, method,
@@ -56,6 +59,7 @@ TOP_KEYS = {
     "cases",
     "reference",
     "plot",
+    "halfspace",
 }
 MODEL_KEYS = {"mode", "contact_law", "phase", "method", "scheme", "vy", "spin"}
 RUN_KEYS = {"stop_time", "step", "outputs"}
@@ -164,6 +168,14 @@ def _lateral(path: Path, key: str, v: Any, eq: str) -> tuple[str, float | None]:
     return ("zero", None) if v == 0 else ("ratio", float(v))
 
 
+def _halfspace(path: Path, d: Any) -> dict[str, Any]:
+    """[halfspace] as plain data; its keys and values are checked by the model config
+    (contact_fmu.halfspace.spec.TableSpec), whose errors name them."""
+    if not isinstance(d, dict):
+        raise _err(path, "halfspace", f"expected a table, got {d!r}")
+    return dict(d)
+
+
 def load(path: str | Path) -> Scene:
     """Read and check a scene file."""
     path = Path(path)
@@ -254,6 +266,7 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
         starts=starts,
         experiment=(0.0, stop, step),
         description=str(raw.get("title", name)),
+        law_spec=_halfspace(path, raw.get("halfspace", {})),
     )
     fmu_params = {v.name for v in config.variables if v.causality[config.mode] == fv.PARAMETER}
     for c in cases:
