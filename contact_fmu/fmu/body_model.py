@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from .._validate import InputError
@@ -34,11 +35,14 @@ def substeps(h: float, h_max: float) -> int:
     return min(max(n, 1), MAX_SUBSTEPS)
 
 
-def make_stepper(cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float) -> Any:
-    """The stepper of the configured phase, law and method at the initial state."""
+def make_stepper(
+    cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float, data_dir: Path | None = None
+) -> Any:
+    """The stepper of the configured phase, law and method at the initial state; the
+    law's generated data (a creep-force table) is read under ``data_dir`` (laws.py)."""
     if cfg.phase != "steady":  # ModelConfig admits only implemented phases
         raise InputError("phase", cfg.phase, '"steady"')
-    law = make_law(cfg, p, P)
+    law = make_law(cfg, p, P, data_dir)
     body = Body(M=p["M"], Rx=p["Rx"], Iy=p["Iy"], Iz=p.get("Iz"))
     vy_ratio = {"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy]
     spin_ratio = {"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin]
@@ -96,8 +100,12 @@ class BodyModel:
 
 
 def build(
-    cfg: ModelConfig, params: Mapping[str, Any], inputs: Mapping[str, float], t0: float
+    cfg: ModelConfig,
+    params: Mapping[str, Any],
+    inputs: Mapping[str, float],
+    t0: float,
+    data_dir: Path | None = None,
 ) -> BodyModel:
     """The body model from the FMU's parameters and inputs at the start time t0 (s)."""
     P = inputs["P"]
-    return BodyModel(make_stepper(cfg, params, P, t0), params["h_max"], P)
+    return BodyModel(make_stepper(cfg, params, P, t0, data_dir), params["h_max"], P)

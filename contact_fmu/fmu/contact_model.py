@@ -9,6 +9,7 @@ a step only holds the inputs.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from ..kinematics import contact_quantities, rigid_slip
@@ -54,6 +55,11 @@ class ContactElement:
 
 
 def build(
-    cfg: ModelConfig, params: Mapping[str, Any], inputs: Mapping[str, float], t0: float
+    cfg: ModelConfig,
+    params: Mapping[str, Any],
+    inputs: Mapping[str, float],
+    t0: float,
+    data_dir: Path | None = None,
 ) -> ContactElement:
-    return ContactElement(make_law(cfg, params, inputs["P"]), params["Rx"], inputs)
+    law = make_law(cfg, params, inputs["P"], data_dir)
+    return ContactElement(law, params["Rx"], inputs)

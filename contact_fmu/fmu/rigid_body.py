@@ -48,7 +48,11 @@ class RigidBody:
 
 
 def build(
-    cfg: ModelConfig, params: Mapping[str, Any], inputs: Mapping[str, float], t0: float
+    cfg: ModelConfig,
+    params: Mapping[str, Any],
+    inputs: Mapping[str, float],
+    t0: float,
+    data_dir: Any = None,  # no contact law, no data
 ) -> RigidBody:
     p = params
     return RigidBody(p["M"], p["Rx"], p["Iy"], p["Vx0"], p["Omega_y0"])

@@ -29,6 +29,7 @@ from __future__ import annotations
 import copy
 import importlib
 import math
+from pathlib import Path
 from typing import Any, ClassVar
 
 from pythonfmu import (
@@ -157,6 +158,14 @@ class ContactSlave(Fmi2Slave):
     def _params(self) -> dict[str, Any]:
         return {n: v for n, v in self._values.items() if self._causality[n] == fv.PARAMETER}
 
+    def _data_dir(self) -> Path | None:
+        """This instance's copy of the vendored package (in its resources folder): where
+        the law's generated data lies. FMUs of one content key share their imported
+        modules in a process but not their resources. None outside an FMU."""
+        if not self.resources:
+            return None
+        return Path(self.resources) / __package__.split(".")[0]
+
     def _error(self, msg: str) -> None:
         self.log(msg, Fmi2Status.error)
 
@@ -173,7 +182,9 @@ class ContactSlave(Fmi2Slave):
             return False
         try:
             module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
-            model = module.build(self.cfg, self._params(), self._inputs(), self._time)
+            model = module.build(
+                self.cfg, self._params(), self._inputs(), self._time, self._data_dir()
+            )
             out = self._collect(model.outputs())
         except Exception as e:  # an exception reaching pythonfmu would be fmi2Fatal
             self._error(f"cannot initialise the model: {_describe(e)}")
@@ -278,7 +289,9 @@ class ContactSlave(Fmi2Slave):
             params, snap = s["model"]
             if self._model is None or params != self._model_params:
                 module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
-                self._model = module.build(self.cfg, params, self._inputs(), self._time)
+                self._model = module.build(
+                    self.cfg, params, self._inputs(), self._time, self._data_dir()
+                )
                 self._model_params = params
             self._model.restore(snap)
         self._out, self._dirty = s["out"], s["dirty"]
