@@ -292,6 +292,8 @@ class TableSpec:
         return self.law(data, P, mu)
 
     def law(self, data: TableData, P: float | None = None, mu: float | None = None) -> TableLaw:
+        """The run-time law of the table ``data`` at load P (N; default its first load
+        node) and friction mu (default the table's)."""
         return TableLaw(data, float(data.P[0]) if P is None else float(P), friction=mu)
 
 
@@ -334,6 +336,11 @@ class TableLaw(CreepTable):
 
     def with_mu(self, mu: float) -> TableLaw:
         return self if mu == self.mu else replace(self, friction=positive("mu", mu))
+
+    def __deepcopy__(self, memo: dict) -> TableLaw:
+        """Immutable: a copy (e.g. in an FMU state) shares the table instead of copying
+        its patches (megabytes)."""
+        return self
 
 
 def build_file(spec: Mapping[str, Any], out: str | Path) -> Path:

@@ -212,15 +212,20 @@ def by_halfspace_creepage(scene: Scene, ref: Reference, case: Case) -> dict[str,
         raise ValueError(f"{scene.name}: source 'halfspace_creepage' is longitudinal only")
     Tx = _body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
     contact = _contacts(scene, case)
-    solved: dict[tuple[float, float], tuple[float, float]] = {}
+    spec = scene.config.table_spec
+    mu = case.parameters.get("mu", spec.mu)
     xi, adhesion = np.empty(k.size), np.empty(k.size)
     for j, i in enumerate(k):
-        key = (float(u["P"][i]), float(Tx[j]))
-        if key not in solved:
-            solved[key] = _creepage(contact(key[0]), key[1])
-        xi[j], adhesion[j] = solved[key]
+        key = (spec.key, mu, float(u["P"][i]), float(Tx[j]))
+        if key not in _CREEPAGES:  # cases with the same demand share the root
+            _CREEPAGES[key] = _creepage(contact(key[2]), key[3])
+        xi[j], adhesion[j] = _CREEPAGES[key]
     return {"time": scene.grid[k], "Tx": Tx, "xi_x": xi, "adhesion": adhesion,
             "regime": np.zeros(k.size)}  # fmt: skip
+
+
+# Roots found in this process: (declaration key, mu, P, Tx) -> (xi, adhesion fraction).
+_CREEPAGES: dict[tuple[str, float, float, float], tuple[float, float]] = {}
 
 
 def _creepage(contact, Tx: float) -> tuple[float, float]:
