@@ -125,16 +125,23 @@ def _report(args: argparse.Namespace) -> int:
 
     if args.write_docs and (args.quick or args.scenes or args.case):
         raise SystemExit("--write-docs needs the full report (no --quick, scenes or --case)")
+    if args.repeats < 1:
+        raise SystemExit(f"--repeats = {args.repeats} is invalid: must be >= 1")
+    if not args.budget > 0:
+        raise SystemExit(f"--budget = {args.budget} is invalid: must be > 0 (seconds)")
     both = not (args.stiff or args.workprecision)
     reports = results = None
     fmu_dir = args.fmu_out
     if args.workprecision or both:
         paths = command.scene_paths(args.scenes, args.scenarios)
         reports = command.workprecision(
-            paths, args.out, fmu_dir, args.quick, args.repeats, args.held
+            paths, args.out, fmu_dir, args.quick, args.repeats, args.held, budget=args.budget
         )
     if args.stiff or both:
-        results = command.stiff_suite(args.out, fmu_dir, args.quick, args.case)
+        try:
+            results = command.stiff_suite(args.out, fmu_dir, args.quick, args.case)
+        except ValueError as e:
+            raise SystemExit(str(e)) from e
     if args.write_docs:
         cmd = "contact-fmu report" + (" --stiff" if args.stiff else "")
         cmd += " --workprecision" if args.workprecision else ""
@@ -188,6 +195,9 @@ def parser() -> argparse.ArgumentParser:
     rep.add_argument("--workprecision", action="store_true", help="only the error/time sweep")
     rep.add_argument("--case", action="append", default=[], help="stiff case or group (repeat)")
     rep.add_argument("--repeats", type=int, default=2, help="timed runs per point (fastest)")
+    rep.add_argument(
+        "--budget", type=float, default=12.0, help="seconds per point; finer ones are skipped"
+    )
     rep.add_argument(
         "--held", action="store_true", help="also the error against held inputs (slower)"
     )

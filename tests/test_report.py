@@ -205,9 +205,13 @@ def test_report_command_writes_tables_and_plots(tmp_path, capsys):
     assert "| eta=inf | eta |" in capsys.readouterr().out
 
 
-def test_write_docs_refuses_a_quick_report():
+def test_report_refuses_bad_options_naming_them():
     with pytest.raises(SystemExit, match="--write-docs needs the full report"):
         cli.main(["report", "--quick", "--write-docs"])
+    with pytest.raises(SystemExit, match="--repeats = 0 is invalid"):
+        cli.main(["report", "--repeats", "0"])
+    with pytest.raises(SystemExit, match="--case 'eta=7' is not a stiff case or group"):
+        cli.main(["report", "--stiff", "--case", "eta=7"])
 
 
 def test_replace_section_keeps_the_rest(tmp_path):

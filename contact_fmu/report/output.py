@@ -105,7 +105,7 @@ def scene_markdown(report: SceneReport) -> str:
             if held:
                 cells += [_fmt(r.Tx_max_held, ".2e"), _fmt(r.vx_max_held, ".2e")]
             if r.error:
-                cells[4] = f"failed: {r.error}"
+                cells[4] = r.error if r.error.startswith("skipped") else f"failed: {r.error}"
             lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Observed order per family (least squares over the steps):", ""]
     lines += ["| family | order Tx | order vx |", "|---|---|---|"]
@@ -161,7 +161,8 @@ def plot(report: SceneReport, path: Path) -> Path:
         ax.set_xlabel("wall time of the fmpy run (s)")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=7, loc="best")
+    if any(ax.get_legend_handles_labels()[0] for ax in axes):
+        axes[1].legend(fontsize=7, loc="best")
     fig.suptitle(
         f"{report.scene}: error against run time (communication step h halves along a curve)"
     )
@@ -206,7 +207,7 @@ def summary_markdown(reports: list[SceneReport], only_substeps: int | None = Non
         if only_substeps is not None and rep_row.get("substeps") not in (None, only_substeps):
             continue
         body.append("| " + " | ".join(row) + " |")
-    skipped = [f"{r.scene} ({'; '.join(dict.fromkeys(r.notes))})" for r in reports if not r.rows]
+    skipped = ["; ".join(dict.fromkeys(r.notes)) for r in reports if not r.rows]
     tail = "\nNot compared: " + ", ".join(skipped) + ".\n" if skipped else ""
     return head + "\n" + "\n".join(body) + "\n" + tail
 

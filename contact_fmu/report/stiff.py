@@ -309,6 +309,17 @@ NOTE = (
 )
 
 
+def failures(results: list[Result]) -> str:
+    """The failing cases with the first failed check's measurement (empty if none)."""
+    lines = []
+    for r in results:
+        for c in r.checks:
+            if not c.ok:
+                lines.append(f"- {r.case.name}: {c.name}: {c.note or c.value}")
+                break
+    return ("Failing:\n\n" + "\n".join(lines) + "\n") if lines else ""
+
+
 def short_markdown(results: list[Result]) -> str:
     """A compact table (README): case, what, result, bound, order, wall time."""
     rows = [

@@ -116,7 +116,7 @@ def cases() -> list[StiffCase]:
     T = 4e-3  # period of the sine loads (s): 200 steps of 2e-5 s
     for eta in (1.0, 2.5, 10.0, 1e3, math.inf):
         out.append(StiffCase(
-            f"eta={eta:g}", "eta", f"eta = {eta:g}; Tx = (0.6 - 0.3 sin) mu P",
+            f"eta={eta:g}", "eta", f"eta = {eta:g}; Tx = (0.6 - 0.3 A1 sin) mu P",
             params(eta=eta), steady_sine(ex.mu, T), 2e-5, 200,
         ))  # fmt: skip
     for eps in (1e-1, 1e-2, 1e-3, 1e-4, 1e-5):
@@ -162,7 +162,7 @@ def cases() -> list[StiffCase]:
     ))  # fmt: skip
     for mu in (1e-3, 1e-2, 1e-1, 1.0):
         out.append(StiffCase(
-            f"mu={mu:g}", "mu", f"mu = {mu:g}; Tx = (0.6 - 0.3 sin) mu P",
+            f"mu={mu:g}", "mu", f"mu = {mu:g}; Tx = (0.6 - 0.3 A1 sin) mu P",
             params(mu=mu), steady_sine(mu, T), 2e-5, 200,
         ))  # fmt: skip
     # Vx through zero: Fx_ex = -1.5 mu P/2 with eta = 2 (A1 = 2/3, A2 = 1/3) gives
@@ -206,7 +206,7 @@ def cases() -> list[StiffCase]:
     out.append(StiffCase(
         "long run", "long",
         "1e6 internal steps (1e4 communication steps of 1e-4 s, h_max = 1e-6 s), "
-        "quasistationary, Tx = (0.6 - 0.3 sin) mu P with a period of 0.2 s",
+        "quasistationary, Tx = (0.6 - 0.3 A1 sin) mu P with a period of 0.2 s",
         params(), steady_sine(ex.mu, 0.2), 1e-4, 10_000, substeps=100,
         method="quasistationary", conv_steps=100, tags=("long",),
     ))  # fmt: skip

@@ -14,7 +14,9 @@ approximates: the zero-order hold of the inputs counts as error), and optionally
 (``held=True``) against the reference with the inputs held over each step as the FMU
 receives them (the FMU's own integration error). The wall time of a run is that of
 ``fmpy.simulate_fmu`` on the extracted FMU (instantiation, every step, termination),
-the fastest of ``repeats`` runs, summed over the cases.
+the fastest of ``repeats`` runs (one if it takes more than REPEAT_BELOW), summed over
+the cases. Along a family (coarse to fine) a point predicted to cost more than
+``budget`` seconds is skipped and listed as such.
 """
 
 from __future__ import annotations
@@ -43,6 +45,12 @@ FloatArray = NDArray[np.float64]
 
 # Errors below this (relative) are rounding: not used for the observed order.
 ORDER_FLOOR = 1e-12
+# Runs longer than this (s) are not repeated (the noise of a shared machine matters for
+# short runs; a long one would only double the report's time).
+REPEAT_BELOW = 2.0
+# Default budget (s) of one point (all its cases): finer points of a family whose cost
+# would exceed it (twice the previous point's) are skipped and listed as such.
+BUDGET = 12.0
 
 
 def _body_reference(continuous, held):
@@ -167,6 +175,7 @@ def run_scene(
     held: bool = False,
     all_cases: bool = True,
     log: Callable[[str], None] = print,
+    budget: float = BUDGET,
 ) -> SceneReport:
     """The scene's sweep through its FMU (built or cached under ``fmu_dir``)."""
     fams, cfg = families(scene, quick)
@@ -189,9 +198,19 @@ def run_scene(
     try:
         fmpy.extract(str(built.path), str(tmp))
         for fam in fams:
-            for level in lv:
-                report.rows.append(_point(scene, cfg, fam, level, lv, refs, tmp, repeats, held))
-                r = report.rows[-1]
+            last = 0.0
+            for level in lv:  # coarse to fine: the cost about doubles per level
+                predicted = 2.0 * last
+                if predicted > budget:
+                    h = step(scene, level)
+                    r = Row(scene.name, fam.label, dict(fam.settings), level, h,
+                            int(round(scene.stop_time / h)))  # fmt: skip
+                    r.error = f"skipped: about {predicted:.0f} s > budget {budget:g} s"
+                    report.rows.append(r)
+                    continue
+                r = _point(scene, cfg, fam, level, lv, refs, tmp, repeats, held)
+                report.rows.append(r)
+                last = r.wall if math.isfinite(r.wall) else last
                 log(
                     f"  {scene.name:8s} {fam.label:28s} h = {r.h:9.3g} s  {r.wall:7.3f} s  "
                     f"Tx {r.Tx_max:9.2e}  vx {r.vx_max:9.2e}" + (f"  {r.error}" if r.error else "")
@@ -221,6 +240,8 @@ def _point(scene, cfg, fam: Family, level, lv, refs: list[_CaseRef], fmu_dir, re
             t0 = time.perf_counter()
             result = runner.simulate_case(fmu_dir, sc, case)
             best = min(best, time.perf_counter() - t0)
+            if best > REPEAT_BELOW:  # long runs are not repeated: noise is small there
+                break
         wall += best
         if result is None or result.error:
             row.error = result.error if result is not None else "not run"
