@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 SCENE  ?= scenarios/fig13.toml
 
-.PHONY: run test lint figures venv clean
+.PHONY: run test lint figures report venv clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -26,6 +26,9 @@ test: venv
 
 figures: venv
 	$(PY) -m contact_fmu.figures
+
+report: venv
+	$(VENV)/bin/contact-fmu report
 
 clean:
 	rm -rf out reports .pytest_cache .ruff_cache
