@@ -25,7 +25,7 @@ from contact_fmu import InputError
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import GENERATED_DATA, ModelConfig
 from contact_fmu.halfspace.railway import wheel_on_rail
-from contact_fmu.scenario import load, runner
+from contact_fmu.scenario import ScenarioError, load, runner
 from contact_fmu.scenario.instance import DISCARD, FATAL, OK, Instance
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -113,6 +113,30 @@ def test_halfspace_fmu_has_no_layer_parameters_and_a_fixed_rolling_radius():
         assert cfg.bounds(fv.BY_NAME["mu"]) == (0.0, None)  # mu stays free
         assert cfg.check("Rx", 0.46) is None and cfg.check("mu", 0.2) is None
         assert "the value this FMU's creep-force table was built for" in cfg.check("Rx", 0.5)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "fragment"),
+    [
+        (
+            "mu = 0.3\nRx = 0.46",
+            "mu = 0.3\nRy = 0.1\nRx = 0.46",
+            "takes its contact from [halfspace]",
+        ),
+        ("grid = 32 ", "grid = 4 ", "halfspace.grid = 4 is invalid: must be an integer >= 8"),
+        ("nodes = [25, 21, 3]", "nodes = [25, 21]", "halfspace.nodes = [25, 21] is invalid"),
+        ("[halfspace]", "[halfspac]", "unknown key(s) ['halfspac']"),
+    ],
+)
+def test_malformed_halfspace_scene_is_refused_naming_the_file_and_key(tmp_path, old, new, fragment):
+    """A layer-law parameter, a bad or missing [halfspace] entry: the file and key named."""
+    text = (ROOT / "scenarios" / "rail_creep.toml").read_text()
+    assert old in text
+    path = tmp_path / "rail.toml"
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(ScenarioError) as e:
+        load(path)
+    assert str(path) in str(e.value) and fragment in str(e.value), str(e.value)
 
 
 def test_config_refuses_a_scene_rx_other_than_the_tables():

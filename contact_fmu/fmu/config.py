@@ -127,7 +127,10 @@ class ModelConfig:
         for name, value in self.starts.items():
             var = fv.BY_NAME.get(name)
             if var is None or not fv.applicable(var, self):
-                raise InputError(name, value, f"a variable of this {self.mode}-mode model")
+                why = f"a variable of this {self.mode}-mode model"
+                if var is not None and var.laws and self.contact_law not in var.laws:
+                    why += f" (a {self.contact_law} model takes its contact from [halfspace])"
+                raise InputError(name, value, why)
             problem = self.check(name, value)
             if problem is not None:
                 raise InputError(name, value, problem)
