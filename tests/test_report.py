@@ -205,6 +205,17 @@ def test_report_command_writes_tables_and_plots(tmp_path, capsys):
     assert "| eta=inf | eta |" in capsys.readouterr().out
 
 
+def test_csv_round_trip_keeps_every_number(fig12_quick, tmp_path):
+    """A report written to CSV and read back (to plot again) has the same rows, exactly
+    (repr of floats)."""
+    path = output.write_csv(fig12_quick, tmp_path / "fig12.csv")
+    back = output.read_csv(path)
+    assert [(r.family, r.h, r.Tx_max, r.vx_rms, r.wall) for r in back.rows] == [
+        (r.family, r.h, r.Tx_max, r.vx_rms, r.wall) for r in fig12_quick.rows
+    ]
+    assert output.plot(back, tmp_path / "fig12.png").stat().st_size > 0
+
+
 def test_report_refuses_bad_options_naming_them():
     with pytest.raises(SystemExit, match="--write-docs needs the full report"):
         cli.main(["report", "--quick", "--write-docs"])

@@ -139,7 +139,7 @@ def plot(report: SceneReport, path: Path) -> Path:
 
     fams = report.families()
     orders = report.family_orders()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5.6))
     for ax, var, label in (
         (axes[0], "Tx", "max |Tx - Tx_ref| / (mu P)"),
         (axes[1], "vx", "max |vx - vx_ref| / v_s"),
@@ -154,22 +154,44 @@ def plot(report: SceneReport, path: Path) -> Path:
             p = orders[f][0 if var == "Tx" else 1]
             name = f"{f} (p = {p:.2f})" if math.isfinite(p) else f
             ax.loglog(t, e, ls, color=color, marker=marker, label=name, ms=5, lw=1.2)
-            ax.annotate(
-                f"h={rows[0].h:.2g}", (t[0], e[0]), fontsize=6, color=color,
-                xytext=(3, 3), textcoords="offset points",
-            )  # fmt: skip
         ax.set_xlabel("wall time of the fmpy run (s)")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
-    if any(ax.get_legend_handles_labels()[0] for ax in axes):
-        axes[1].legend(fontsize=7, loc="best")
+    handles, labels = axes[0].get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=7, frameon=False)
+    steps = sorted({r.h for r in report.rows}, reverse=True)
+    span = f"h = {steps[0]:.3g} s to {steps[-1]:.3g} s" if steps else ""
     fig.suptitle(
-        f"{report.scene}: error against run time (communication step h halves along a curve)"
+        f"{report.scene}: error against run time; along a curve the communication step "
+        f"halves, {span} (left to right); p: observed order of the Tx error",
+        fontsize=10,
     )
+    fig.tight_layout(rect=(0, 0.14, 1, 0.95))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def read_csv(path: Path, title: str = "", mode: str = "") -> SceneReport:
+    """A scene's report back from its CSV (to plot again without running it)."""
+    with path.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    rep = SceneReport(rows[0]["scene"] if rows else path.stem, title, mode, [], "")
+    for d in rows:
+        settings: dict[str, object] = {}
+        for k in ("method", "scheme"):
+            if d[k]:
+                settings[k] = d[k]
+        if d["substeps"]:
+            settings["substeps"] = int(d["substeps"])
+        r = Row(d["scene"], d["family"], settings, int(d["level"]), float(d["h"]), int(d["steps"]))
+        for c in COLUMNS[8:17]:
+            setattr(r, c, float(d[c]))
+        r.error = d["error"] or None
+        rep.rows.append(r)
+    return rep
 
 
 def summary_rows(reports: list[SceneReport]) -> list[list[str]]:
@@ -208,7 +230,7 @@ def summary_markdown(reports: list[SceneReport], only_substeps: int | None = Non
             continue
         body.append("| " + " | ".join(row) + " |")
     skipped = ["; ".join(dict.fromkeys(r.notes)) for r in reports if not r.rows]
-    tail = "\nNot compared: " + ", ".join(skipped) + ".\n" if skipped else ""
+    tail = "\nNot compared: " + ", ".join(skipped) + "\n" if skipped else ""
     return head + "\n" + "\n".join(body) + "\n" + tail
 
 
@@ -220,6 +242,26 @@ def _families_of(reports: list[SceneReport]) -> list[dict]:
             if rs:
                 out.append(rs[0].settings)
     return out
+
+
+def wrap_prose(text: str, width: int = 88) -> str:
+    """Wrap the prose paragraphs of Markdown text to ``width``; tables, lists, headings,
+    images and indented or fenced code are kept as they are."""
+    import textwrap
+
+    out, fenced = [], False
+    for block in text.split("\n\n"):
+        first = block.lstrip("\n").split("\n", 1)[0]
+        if first.startswith("```"):
+            fenced = not fenced if block.count("```") % 2 else fenced
+            out.append(block)
+            continue
+        listed = first.startswith(("- ", "* ")) or (first[:1].isdigit() and ". " in first[:4])
+        keep = fenced or not first or first[0] in "|#!" or first.startswith("    ") or listed
+        flat = " ".join(block.split())
+        wrapped = textwrap.fill(flat, width, break_long_words=False, break_on_hyphens=False)
+        out.append(block if keep else wrapped)
+    return "\n\n".join(out)
 
 
 def _heading_level(line: str) -> int:
@@ -235,7 +277,7 @@ def replace_section(path: Path, heading: str, body: str) -> None:
     append it if absent."""
     text = path.read_text() if path.exists() else ""
     level = _heading_level(heading)
-    section = (heading + "\n\n" + body.strip("\n")).split("\n")
+    section = (heading + "\n\n" + wrap_prose(body.strip("\n"))).split("\n")
     lines = text.split("\n")
     if heading not in lines:
         path.write_text(text.rstrip("\n") + "\n\n" + "\n".join(section) + "\n")

@@ -182,8 +182,11 @@ def _integrate(
         eq = RollingEquations(base.law, base.body, base.lateral, loads)
         stop = int(np.searchsorted(times, b, side="right"))
         t_eval = times[k:stop]
+        # the segment's end is always evaluated: the next segment starts from it
+        ends = t_eval.size > 0 and t_eval[-1] == b
+        t_all = t_eval if ends else np.append(t_eval, b)
         sol = integrate.solve_ivp(
-            eq.rhs, (a, b), y, method="Radau", rtol=RTOL, atol=atol, t_eval=t_eval
+            eq.rhs, (a, b), y, method="Radau", rtol=RTOL, atol=atol, t_eval=t_all
         )
         if sol.status != 0:
             raise RuntimeError(
@@ -193,15 +196,8 @@ def _integrate(
             yj = sol.y[:, j]
             out[k + j] = (yj[0], yj[1], eq.forces(t, yj)[0], t)
         k = stop
-        y = sol.y[:, -1] if t_eval.size and t_eval[-1] == b else _end_state(eq, a, b, y, atol)
+        y = sol.y[:, -1]
     return Solution(times.copy(), out[:, 2], out[:, 1], out[:, 0])
-
-
-def _end_state(eq: RollingEquations, a: float, b: float, y: FloatArray, atol) -> FloatArray:
-    sol = integrate.solve_ivp(eq.rhs, (a, b), y, method="Radau", rtol=RTOL, atol=atol)
-    if sol.status != 0:
-        raise RuntimeError(f"Radau failed on [{a}, {b}]: {sol.message}")
-    return sol.y[:, -1]
 
 
 def full_continuous(scene: Scene, case: Case, times: FloatArray) -> Solution:
