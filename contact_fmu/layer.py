@@ -83,6 +83,18 @@ def _force_fraction_slope(beta: float) -> float:
     return max((2.0 / math.pi) * (m * (8.0 + beta * beta) / 3.0 - 2.0 * beta * math.asin(m)), 0.0)
 
 
+# Below this beta, h/beta comes from its series 16/(3 pi) - beta + 2 beta^2/(3 pi)
+# (next term beta^4/(120 pi): < 3e-19 relative here), not from the division.
+BETA_SERIES = 1e-4
+
+
+def _fraction_per_beta(beta: float) -> float:
+    """h(beta)/beta for one float, finite as beta -> 0 (16/(3 pi) there)."""
+    if beta < BETA_SERIES:
+        return 16.0 / (3.0 * math.pi) - beta + 2.0 * beta * beta / (3.0 * math.pi)
+    return _force_fraction_scalar(beta) / beta
+
+
 def moment_fraction(beta: ArrayLike) -> FloatArray:
     """int x |tau| dA / (mu P a1) for rolling in +x (derived in docs/model.md).
 
@@ -280,9 +292,10 @@ class LayerContact:
     def tx_slope(self, vx: float, vy: float, Vx: float) -> tuple[float, float, float, float]:
         """Tx and its partial derivatives (dTx/dvx, dTx/dvy, dTx/dVx) for floats, no spin.
 
-        With s = |v|, beta = c s/|Vx| (c = a1/(mu p0 k)) and Tx = mu P h(beta) vx/s:
-        dTx/dvx = mu P (h' c vx^2/(|Vx| s^2) + h vy^2/s^3),
-        dTx/dvy = mu P vx vy (h' c/(|Vx| s^2) - h/s^3), dTx/dVx = -mu P h' beta vx/(s Vx).
+        With s = |v|, e = v/s, beta = c s/|Vx| (c = a1/(mu p0 k)) and Tx = mu P h(beta) e_x:
+        dTx/dvx = mu P (h' c e_x^2/|Vx| + (h/s) e_y^2),
+        dTx/dvy = mu P e_x e_y (h' c/|Vx| - h/s), dTx/dVx = -mu P h' beta e_x/Vx,
+        with h/s = (h/beta) c/|Vx| from a series at small beta (no underflow as s -> 0).
         For the integrator's Newton iterations; Vx != 0.
         """
         muP, c = self.mu * self.P, self._beta_per_creep
@@ -290,13 +303,14 @@ class LayerContact:
         s = math.hypot(vx, vy)
         if s == 0.0:  # h ~ h'(0) beta: Tx ~ mu P h'(0) c vx/|Vx|
             return 0.0, muP * _force_fraction_slope(0.0) * c / aV, 0.0, 0.0
+        ex, ey = vx / s, vy / s
         beta = s * c / aV
         h, dh = _force_fraction_scalar(beta), _force_fraction_slope(beta)
-        s2 = s * s
-        Tx = muP * h * vx / s
-        d_vx = muP * (dh * c * vx * vx / (aV * s2) + h * vy * vy / (s2 * s))
-        d_vy = muP * vx * vy * (dh * c / (aV * s2) - h / (s2 * s))
-        d_V = -muP * dh * beta * vx / (s * Vx)
+        h_per_s = _fraction_per_beta(beta) * c / aV
+        Tx = muP * h * ex
+        d_vx = muP * (dh * c * ex * ex / aV + h_per_s * ey * ey)
+        d_vy = muP * ex * ey * (dh * c / aV - h_per_s)
+        d_V = -muP * dh * beta * ex / Vx
         return Tx, d_vx, d_vy, d_V
 
     @cached_property

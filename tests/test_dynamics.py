@@ -233,6 +233,16 @@ def test_speed_through_zero_and_reversal():
     assert jumps.max() < 1e-3 * MU_P
 
 
+def test_slip_decays_to_zero_through_underflow():
+    # no loads, initial slip 1e-3 Vx: the slip decays geometrically by R(z) per step
+    # (here 1e-110 after 80 steps) down to zero; the Newton slopes must stay finite
+    # where |v|^3 underflows (a stiff-suite case found a division by zero there)
+    b = ex.body(2.0)
+    tr = simulate(C, b, Loads(), 0.02, 1e-4, Vx0=V0, Omega_y0=V0 / ex.Rx * (1 - 1e-3))
+    assert np.all(np.isfinite(tr.vx)) and np.all(np.diff(np.abs(tr.vx)) <= 0)
+    assert abs(tr.vx[-1]) < 1e-200 * V0 and abs(tr.Tx[-1]) < 1e-190 * MU_P
+
+
 # ---- lateral dynamics, Eqs. (10)-(11), (29)-(30) ------------------------------------------
 def test_lateral_force_balances_the_load_eq29():
     b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 3)
