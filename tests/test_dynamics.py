@@ -282,6 +282,23 @@ def test_held_lateral_creepage_gives_Ty_over_Tx_equal_vy_over_vx():
     np.testing.assert_allclose(tr.Ty[1:] / tr.Tx[1:], tr.vy[1:] / tr.vx[1:], rtol=1e-9)
 
 
+@pytest.mark.parametrize("vy_ratio", [0.0, 0.002])
+def test_quasistationary_takes_held_loads_in_one_step(vy_ratio):
+    # Under held loads Eq. (28) makes Vx linear in t and vx algebraic: one step over the
+    # interval equals eight substeps up to rounding (relative 1e-13: 8 additions)
+    lat = Lateral(vy_ratio=vy_ratio)
+    kw = dict(method="quasistationary", Vx0=V0, Omega_y0=V0 / ex.Rx)
+    one, many = (RollingBody(C, ex.body(3.0), lat, **kw) for _ in range(2))
+    for k in range(50):
+        L = Loads(Fx_ex=F, My_ex=0.2 * F * ex.Rx * math.sin(k / 10))
+        one.advance(TC / 20, L, substeps=8)
+        for _ in range(8):
+            many.advance(TC / 160, L)
+    a, b = one.outputs(), many.outputs()
+    for key in a:
+        assert a[key] == pytest.approx(b[key], rel=1e-13, abs=1e-300), key
+
+
 # ---- state handling ---------------------------------------------------------------------------
 def test_snapshot_and_restore_are_exact():
     rb = RollingBody(C, ex.body(3.0), Vx0=V0, Omega_y0=V0 / ex.Rx)
