@@ -19,8 +19,9 @@ displacement field is carried along with the material. Without the time derivati
 (steady state) it is the problem of ``rolling.solve_rolling``.
 
 Discretisation. Elements of the half-space solver (rectangles dx x dy with constant
-traction, dx = 2 a1/(n - 2), one element to spare on each side) on a *material*
-lattice: the columns move with the material, x_j = -X + (j + theta) dx, X = a1 + dx.
+traction, dx = 2 a1/(n - 2) as on the steady solver's n x ny grid) on a *material*
+lattice of n + 2 columns (two to spare on each side of the contact): the columns move
+with the material, x_j = -X + (j + theta) dx, X = a1 + 2 dx.
 A step that rolls ds moves theta by -ds/dx and re-indexes whole columns (the material
 of column j + 1 is in column j after rolling one cell). Because the influence
 coefficients depend only on offsets, U^n = (A + k) tau^n evaluated on the lattice is
@@ -42,18 +43,25 @@ has had its layer loaded only since it crossed the leading edge: k_e = k (|ds|/d
 for it, d its distance from the edge (the k/theta rule of the steady solver, which it
 reproduces for ds = dx).
 
-Coupling with the body (Eqs. 8-11, Eq. 9 as Iy dOmega_y/dt = +Rx Tx + My_ex): the
-trapezoidal rule on the whole system, W = h (v^n + v^(n+1))/2 and
+Coupling with the body (Eqs. 8-11, Eq. 9 as Iy dOmega_y/dt = +Rx Tx + My_ex): one
+implicit solve per step with the weights theta at the step's end and 1 - theta at its
+start on the whole system, W = h (theta v^(n+1) + (1 - theta) v^n) and
 
-    M (Vx^(n+1) - Vx^n) = h [(Fx^n + Fx^(n+1)) - (Tx^n + Tx^(n+1))]/2,
-    m (vx^(n+1) - vx^n) = h [(F^n + F^(n+1)) - (Tx^n + Tx^(n+1))]/2,   F = A2 Fx - A1 My/Rx,
+    M (Vx^(n+1) - Vx^n) = h [Fx_theta - (theta Tx^(n+1) + (1 - theta) Tx^n)],
+    m (vx^(n+1) - vx^n) = h [F_theta - (theta Tx^(n+1) + (1 - theta) Tx^n)],
 
-m = M/(1 + eta). Eliminating Tx gives Vx^(n+1) in vx^(n+1) explicitly, and the slip
-equation is one increasing function of vx^(n+1) (the map from W to the traction is
-monotone, tau = (K + N_C)^(-1)(W + U')): a Newton iteration with the exact tangent
-dTx/dvx (one linear solve on the converged active set) inside the bracket its iterates
-build. The lattice moves by the distance predicted from Tx^n; the difference to the
-distance the body actually rolled (of order h^2 dTx/M per step) is carried to the
+F = A2 Fx - A1 My/Rx, m = M/(1 + eta). theta = 1/2 (the trapezoidal rule, second
+order, no numerical damping of the body's oscillation on the contact) while that
+oscillation is resolved, z = h (K/m)^(1/2) <= 2 (K the contact's stiffness in full
+adhesion), and 1 - 1/z beyond, which tends to backward Euler (L-stable; eta = inf, m = 0,
+makes Eq. 20 algebraic and theta = 1). With constant kinematics W = v h for any
+theta, so the stationary state is the steady solution whatever the weights.
+Eliminating Tx gives Vx^(n+1) in vx^(n+1) explicitly, and the slip equation is one
+increasing function of vx^(n+1) (the map from W to the traction is monotone, tau =
+(K + N_C)^(-1)(W + U')): a Newton iteration with the exact tangent dTx/dvx (one linear
+solve on the converged active set) inside the bracket its iterates build. The lattice
+moves by the distance predicted with the last step's slip rate; the difference to the
+distance the body actually rolls (of order h^2 d(vx)/dt A2 per step) is carried to the
 next step, so it never accumulates. Vy/Vx and Omega_z/Vx are held (``Lateral``
 ratios); dynamic Vy and Omega_z (Eqs. 10-11) are not implemented for this stepper.
 """
@@ -112,8 +120,13 @@ TANGENT_RTOL = 1e-8
 # the iteration cap (typically 2 to 4 iterations).
 SOLVE_RTOL = 1e-11
 MAX_OUTER = 100
-# A step may roll at most this many cells (the lattice has one spare column ahead).
-MAX_CELLS_PER_STEP = 1.0
+# Columns to spare on each side of the contact, and the most cells a step may roll (the
+# material in the contact after a step must have been on the lattice before it). Two
+# let a step of one cell at a speed that grows within the step go without splitting it:
+# split steps move the lattice offset by half cells, and the force's ripple with the
+# offset (docs/halfspace.md) then feeds back on the speed.
+SPARE = 2
+MAX_CELLS_PER_STEP = 2.0
 # Rounding allowance on the cells rolled in a step (a step of exactly one cell).
 CELL_SLACK = 1e-9
 # The outer solve gives up when no bracket has formed this many velocity scales from the
@@ -405,13 +418,14 @@ class HalfSpaceField:
         self.scale_load = bool(scale_load)
         self.dx = 2.0 * contact.a1 / (n - 2)
         self.dy = 2.0 * contact.a2 / ny
-        self.X = contact.a1 + self.dx  # the lattice spans (-X, X) along x
+        self.X = contact.a1 + SPARE * self.dx  # the lattice spans (-X, X) along x
         self.y = -contact.a2 + (np.arange(ny) + 0.5) * self.dy
         self.theta = 0.5
         self.direction = 0.0  # sign of the last step's ds (+1: the material moves to -x)
-        self.tau = np.zeros((2, ny, n))
-        self.S = np.zeros((2, ny, n))
-        self.slip = np.zeros((ny, n), dtype=bool)
+        nx = n - 2 + 2 * SPARE
+        self.tau = np.zeros((2, ny, nx))
+        self.S = np.zeros((2, ny, nx))
+        self.slip = np.zeros((ny, nx), dtype=bool)
         self._operators: dict[tuple[int, int], BlockConvolution] = {}
         self._refresh()
 
@@ -477,7 +491,7 @@ class HalfSpaceField:
         """The step that rolls ds (m): re-indexing, contact, entered material, U'."""
         ds = finite("ds", ds)
         if abs(ds) > (MAX_CELLS_PER_STEP + CELL_SLACK) * self.dx:
-            raise InputError("ds", ds, f"at most {MAX_CELLS_PER_STEP} cell ({self.dx:.6g} m)")
+            raise InputError("ds", ds, f"at most {MAX_CELLS_PER_STEP} cells ({self.dx:.6g} m each)")
         u = self.theta - ds / self.dx
         shift = math.floor(u)
         theta = u - shift
@@ -535,7 +549,7 @@ class HalfSpaceField:
     def roll(self, h: float, vx: float, vy: float, Vx: float, phi: float = 0.0) -> StepResult:
         """One step of h (s) at constant rigid slip (vx, vy) (m/s), spin phi = Omega_z
         (rad/s) and speed Vx (m/s): the transient contact problem with prescribed
-        kinematics (Kalker 1970). Rolls Vx h, at most one cell."""
+        kinematics (Kalker 1970). Rolls Vx h, at most MAX_CELLS_PER_STEP cells."""
         h = positive("h", h)
         for name, val in (("vx", vx), ("vy", vy), ("Vx", Vx), ("phi", phi)):
             finite(name, val)
@@ -760,7 +774,7 @@ class TransientHalfSpaceBody(BodyState):
     ``set_shift`` (Cattaneo start), ``start_steady``, ``substeps_for`` and ``cell_time``.
     ``contact``, ``n``, ``ny``, ``G``, ``nu``: the field's (``HalfSpaceField``). Vy/Vx and
     Omega_z/Vx are held at the ratios of ``lateral`` (Eqs. 10-11 are not integrated by
-    this stepper). Each step rolls at most one element; ``advance`` splits its
+    this stepper). Each step rolls at most two elements; ``advance`` splits its
     substeps further where needed.
     """
 
@@ -810,7 +824,7 @@ class TransientHalfSpaceBody(BodyState):
 
     def substeps_for(self, h: float, cells: float = 1.0) -> int:
         """Substeps that keep each step within ``cells`` elements rolled at the present
-        speed (``advance`` splits further if the speed grows within a step)."""
+        speed (``advance`` splits further only beyond MAX_CELLS_PER_STEP)."""
         h = positive("h", h)
         cells = positive("cells", cells)
         return max(1, math.ceil(h * abs(self.Vx) / (cells * self.field.dx) - 1e-9))
@@ -895,7 +909,7 @@ class TransientHalfSpaceBody(BodyState):
         self.__dict__.pop("stiffness", None)
 
     def advance(self, h: float, loads: LoadInput, substeps: int = 1) -> None:
-        """Advance by h (s) in at least ``substeps`` equal steps, each rolling at most one
+        """Advance by h (s) in at least ``substeps`` equal steps, each rolling at most two
         element, under the load history (constant: zero-order hold; callable: sampled at
         the step ends). On error the state is left unchanged."""
         h = positive("h", h)
@@ -917,12 +931,14 @@ class TransientHalfSpaceBody(BodyState):
 
     # ---- stepping ------------------------------------------------------------------------
     def _interval(self, t_n: float, h: float, load_at: Callable[[float], Loads]) -> None:
-        """Advance from t_n by h in as many equal steps as keep each within one cell."""
-        parts = max(1, math.ceil(abs(self._predicted_ds(t_n, h, load_at)) / self.field.dx - 1e-9))
+        """Advance from t_n by h in as many equal steps as keep each within
+        MAX_CELLS_PER_STEP cells."""
+        most = MAX_CELLS_PER_STEP * self.field.dx
+        parts = max(1, math.ceil(abs(self._predicted_ds(t_n, h, load_at)) / most - 1e-9))
         dt = h / parts
         for k in range(parts):
             tk = t_n + k * dt
-            if abs(self._predicted_ds(tk, dt, load_at)) > self.field.dx * (1.0 + CELL_SLACK):
+            if abs(self._predicted_ds(tk, dt, load_at)) > most * (1.0 + CELL_SLACK):
                 self._interval(tk, dt, load_at)  # the speed grew: split this step again
             else:
                 self._step(tk, dt, load_at)
