@@ -50,7 +50,8 @@ def run_scene(path: Path, out: Path, rebuild: bool = False, make_plot: bool = Tr
     state = "cached" if built.cached else f"built in {t_build:.1f} s"
     print(f"  FMU  {built.path} ({state}; {n_vars} variables, {size / 1024:.0f} KiB)")
     t0 = time.perf_counter()
-    results = runner.simulate(built.path, scene)
+    field_dir = out / "scenes" / scene.name / "fields"  # the FMU's field files, if any
+    results = runner.simulate(built.path, scene, field_dir=field_dir)
     wall = time.perf_counter() - t0
     print(
         f"  ran  {len(results)} case(s) x {scene.n_steps} steps of {scene.step:g} s in {wall:.2f} s"
@@ -71,6 +72,9 @@ def run_scene(path: Path, out: Path, rebuild: bool = False, make_plot: bool = Tr
     scene_dir = out / "scenes" / scene.name
     runner.write_csv(scene_dir / f"{scene.name}.csv", scene, results)
     print(f"  CSV  {scene_dir / (scene.name + '.csv')}")
+    if scene.field is not None:  # written by the FMU during the run (phase "transient")
+        for c in scene.cases:
+            print(f"  field {scene.field.path(field_dir, c.name)}")
     if make_plot:
         from .scenario.plot import plot
 

@@ -66,6 +66,12 @@ def patch(xml: bytes, cfg: ModelConfig) -> bytes:
                 typed.set("max", _num(hi))
             if typed.get("start") is not None:
                 typed.set("start", _num(cfg.start(var)))
+        elif var.type == "Integer":  # e.g. the field's grid sizes (phase "transient")
+            lo, hi = cfg.bounds(var)
+            if lo is not None:
+                typed.set("min", str(int(lo)))
+            if hi is not None:
+                typed.set("max", str(int(hi)))
 
     unit_defs = ET.Element("UnitDefinitions")
     for name in sorted(set(units)):

@@ -81,8 +81,12 @@ def test_full_body_fmu_declares_every_body_variable():
     full = ModelConfig.full("body")
     names = {v.name for v in full.variables}
     body_vars = {v.name for v in fv.VARIABLES if "body" in v.causality}
-    # held-ratio parameters belong to the ratio variants; the full FMU integrates Eqs. (10)-(11)
-    assert names == body_vars - {"vy_ratio", "spin_ratio"}
+    # held-ratio parameters belong to the ratio variants; the full FMU integrates Eqs. (10)-(11);
+    # the traction field's variables belong to phase "transient"
+    field = {v.name for v in fv.VARIABLES if v.needs == "transient"}
+    assert field == {"nx", "ny", "cells_per_step", "field_file", "field_times",
+                     "slip_centroid_x", "slip_centroid_y", "tau_peak"}  # fmt: skip
+    assert names == body_vars - {"vy_ratio", "spin_ratio"} - field
     assert full.methods == ("full", "quasistationary") and "method" in names
 
 
@@ -106,7 +110,9 @@ def test_contact_outputs_declare_their_direct_dependencies():
     [
         ({"contact_law": "halfspace"}, "halfspace", "required keys of the table"),
         ({"law_spec": {"grid": 16}}, "halfspace", 'only with contact_law = "halfspace"'),
-        ({"phase": "transient"}, "phase", "not implemented yet"),
+        ({"phase": "unsteady"}, "phase", "one of ('steady', 'transient')"),
+        ({"phase": "transient", "contact_law": "halfspace"}, "halfspace", "required keys"),
+        ({"phase": "transient", "methods": ("quasistationary",)}, "method", "left out"),
         ({"contact_law": "hertz"}, "contact_law", "one of"),
         ({"methods": ("implicit",)}, "method", "one of"),
         ({"outputs": ("Vy",)}, "outputs", "one of"),  # no lateral dof without vy

@@ -86,7 +86,11 @@ P = 1000.0
         (("step = 1.0e-4", "step = -1.0e-4"), "run.step: -0.0001 must be a finite number > 0"),
         (('outputs = ["Tx"]', 'outputs = ["Ty"]'), "outputs"),
         (('mode = "body"', 'mode = "body"\ncontact_law = "halfspace"'), "required keys"),
-        (('mode = "body"', 'mode = "body"\nphase = "transient"'), "not implemented yet"),
+        (('mode = "body"', 'mode = "contact"\nphase = "transient"'), "used in body mode"),
+        (
+            ('outputs = ["Tx"]', 'outputs = ["Tx"]\nfield = { times = [0.0], file = "f.csv" }'),
+            'needs phase = "transient"',
+        ),
         (('mode = "body"', 'mode = "body"\nmethod = "euler"'), "method = 'euler'"),
         (("P = 1000.0", "P = 1000.0\nFx_ex = { pulse = 1 }"), "unknown piece 'pulse'"),
         (("P = 1000.0", ""), "to include P"),
@@ -165,7 +169,17 @@ def results():
 
 
 @pytest.mark.parametrize(
-    "name", ["fig13", "fig12", "railway", "brake", "sweep", "rail_creep", "rail_traction"]
+    "name",
+    [
+        "fig13",
+        "fig12",
+        "railway",
+        "brake",
+        "sweep",
+        "rail_creep",
+        "rail_traction",
+        "fig12_transient",
+    ],
 )
 def test_scene_matches_its_reference(results, name):
     scene, res = results[name]

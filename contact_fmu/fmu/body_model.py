@@ -76,7 +76,7 @@ class BodyModel:
             self.stepper.set_load(P)
             self.P = P
         loads = Loads(*(inputs.get(k, 0.0) for k in Loads._fields))
-        n = substeps(h, self.h_max)
+        n = self.internal_steps(h)
         self.stepper.advance(h, loads, n)
         if n == MAX_SUBSTEPS and h / self.h_max > MAX_SUBSTEPS:
             return (
@@ -84,6 +84,10 @@ class BodyModel:
                 f"h_max = {self.h_max:g} s: taken in {MAX_SUBSTEPS} steps of {h / n:g} s"
             )
         return None
+
+    def internal_steps(self, h: float) -> int:
+        """Stepper steps for a communication step h (s): ceil(h / h_max), bounded."""
+        return substeps(h, self.h_max)
 
     def evaluate(self, inputs: Mapping[str, float]) -> None:  # no feedthrough
         return None

@@ -2,8 +2,15 @@
 
 A ``ModelConfig`` is plain data (JSON through ``to_dict``/``from_dict``): the build
 writes it into the generated FMU script, and the adapter reads it back. Values that
-later issues add to the scene schema (``phase = "transient"``) are recognised and
-refused here with a clear error until implemented.
+later issues add to the scene schema are listed in ``PLANNED`` and refused here with a
+clear error until implemented.
+
+``phase = "transient"`` (issue 5): the body-mode FMU carries the traction field of the
+thin-layer law as its state (``transient.TransientRollingBody``) instead of the steady
+creep law; its grid and step are parameters (nx, ny, cells_per_step), and it can write
+the field to a file at chosen times (field_file, field_times). The steady methods and
+schemes do not apply to it, and the transient half-space field is not offered in an
+FMU (see ``TRANSIENT_HALFSPACE``).
 
 The half-space law (``contact_law = "halfspace"``) carries its declaration in
 ``law_spec`` (``halfspace.spec.TableSpec`` as plain data: materials, radii, layers, the
@@ -29,6 +36,8 @@ MODEL_MODULES = {
     "contact": "fmu.contact_model",
     "rigid_body": "fmu.rigid_body",
 }
+# The body model of phase "transient" (body mode, thin-layer field).
+TRANSIENT_MODULE = "fmu.body_transient"
 LAW_MODULES = {"layer": "layer", "halfspace": "halfspace.spec"}
 # Data files a law reads at run time (paths relative to the package, e.g. a table .npz):
 # the build copies them next to the law's module in the FMU's resources.
@@ -36,13 +45,25 @@ LAW_DATA: dict[str, tuple[str, ...]] = {"layer": (), "halfspace": ()}
 # Data files the build generates for a law from ``law_spec`` (path relative to the
 # package): the half-space law's creep-force table, built by the numerics layer.
 GENERATED_DATA: dict[str, str] = {"halfspace": "halfspace/creep_table.npz"}
-PHASES = ("steady",)
+PHASES = ("steady", "transient")
 METHODS = ("full", "quasistationary")
 # Time-stepping schemes of the body-mode stepper (``integrator.SCHEMES``; a test keeps the
 # two equal: importing the integrator here would put it into every FMU, contact mode too).
 SCHEMES = ("lobatto3c", "sdirk2")
 # Recognised scene values that later issues implement.
-PLANNED = {"phase": ("transient",)}
+PLANNED: dict[str, tuple[str, ...]] = {}
+# Why phase = "transient" is refused with the half-space law (measured in
+# docs/halfspace.md, "Transient rolling"): each step of Kalker's transient solves a
+# contact problem with the influence coefficients (two to three per step for the
+# body), 1 to 4 s of computing per contact length rolled on 16 x 16 to 32 x 32 elements,
+# and its transients last 2 to 12 contact lengths: a railway scene of 0.1 s at 30 m/s
+# rolls 400 contact lengths, about 10 to 30 minutes per case.
+TRANSIENT_HALFSPACE = (
+    '"layer" with phase = "transient": the transient half-space field costs 1 to 4 s of '
+    "computing per contact length rolled (a railway scene of 0.1 s at 30 m/s rolls 400 "
+    'of them); use phase = "steady" with the half-space law, or '
+    "contact_fmu.halfspace.transient.TransientHalfSpaceBody outside an FMU"
+)
 
 VY_MODES = ("zero", "ratio", "eq10")
 SPIN_MODES = ("zero", "ratio", "eq11")
@@ -99,6 +120,26 @@ class ModelConfig:
                 "halfspace", self.law_spec, 'given only with contact_law = "halfspace"'
             )
         _choice("phase", self.phase, PHASES)
+        if self.transient:
+            if self.mode != "body":
+                raise InputError(
+                    "phase", self.phase, "used in body mode (the field is the body's state)"
+                )
+            if self.contact_law != "layer":
+                raise InputError("contact_law", self.contact_law, TRANSIENT_HALFSPACE)
+            if tuple(self.methods) != ("full",):
+                raise InputError(
+                    "method",
+                    list(self.methods),
+                    'left out with phase = "transient" (the steady methods do not apply)',
+                )
+            if tuple(self.schemes) != SCHEMES[:1]:
+                raise InputError(
+                    "scheme",
+                    list(self.schemes),
+                    'left out with phase = "transient" (its field and body share one '
+                    "L-stable SDIRK2 step)",
+                )
         if not self.methods:
             raise InputError("method", self.methods, f"at least one of {METHODS}")
         for m in self.methods:
@@ -166,6 +207,11 @@ class ModelConfig:
             return self.starts.get("mu", self.table_spec.mu)
         return self.starts.get(var.name, var.start)
 
+    @property
+    def transient(self) -> bool:
+        """Whether the FMU carries the traction field as state (phase "transient")."""
+        return self.phase == "transient"
+
     # ---- the half-space law's table --------------------------------------------------
     @property
     def has_table(self) -> bool:
@@ -205,7 +251,9 @@ class ModelConfig:
 
     @property
     def model_module(self) -> str:
-        return MODEL_MODULES[self.mode]
+        """The model's module; phase "transient" has its own, so that only its FMUs carry
+        the transient field."""
+        return TRANSIENT_MODULE if self.transient else MODEL_MODULES[self.mode]
 
     @property
     def law_module(self) -> str | None:

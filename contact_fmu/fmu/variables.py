@@ -50,6 +50,7 @@ class Structure(Protocol):
     methods: tuple[str, ...]
     schemes: tuple[str, ...]
     contact_law: str  # "layer" | "halfspace"
+    phase: str  # "steady" | "transient"
 
 
 # Conditions on the structure, by name (only the body mode has optional parts).
@@ -63,6 +64,7 @@ CONDITIONS = {
     "lateral": lambda s: s.vy != "zero" or s.spin != "zero",
     "methods": lambda s: len(s.methods) > 1,
     "schemes": lambda s: len(s.schemes) > 1,
+    "transient": lambda s: s.phase == "transient",
 }
 
 
@@ -104,6 +106,8 @@ class Var:
             return "a number"
         if v != v or v in (float("inf"), float("-inf")):
             return "finite"
+        if self.type == "Integer" and v != int(v):
+            return "an integer"
         if self.min is not None and (v < self.min or (self.open_min and v == self.min)):
             return f"{'>' if self.open_min else '>='} {self.min:g}"
         if self.max is not None and v > self.max:
@@ -234,6 +238,58 @@ VARIABLES: tuple[Var, ...] = (
         modes=_BODY,
         min=0.0,
         open_min=True,
+    ),
+    Var(
+        "nx",
+        None,
+        'Phase "transient": cells of the traction field along the contact length 2 a1 (>= 4)',
+        {"body": PARAMETER},
+        64,
+        min=4,
+        type="Integer",
+        needs="transient",
+    ),
+    Var(
+        "ny",
+        None,
+        'Phase "transient": strips of the traction field across the contact width 2 a2 (>= 2)',
+        {"body": PARAMETER},
+        32,
+        min=2,
+        type="Integer",
+        needs="transient",
+    ),
+    _p(
+        "cells_per_step",
+        "1",
+        'Phase "transient": largest distance rolled per internal step, in cells of the field '
+        "(> 0); the internal steps also respect h_max",
+        0.5,
+        modes=_BODY,
+        min=0.0,
+        open_min=True,
+        needs="transient",
+    ),
+    Var(
+        "field_file",
+        None,
+        'Phase "transient": CSV file the traction field is written to at field_times '
+        '(columns requested, time, i, j, x, y, tau_x, tau_y, p, slip, inside, weight; "": '
+        "none)",
+        {"body": PARAMETER},
+        "",
+        type="String",
+        needs="transient",
+    ),
+    Var(
+        "field_times",
+        None,
+        'Phase "transient": times (s), separated by spaces or commas, at which the field is '
+        "written: at the end of the communication step that reaches each",
+        {"body": PARAMETER},
+        "",
+        type="String",
+        needs="transient",
     ),
     Var(
         "method",
@@ -418,6 +474,27 @@ VARIABLES: tuple[Var, ...] = (
         0,
         type="Integer",
         feedthrough=("P", "Vx", "Vy", "Omega_y"),
+    ),
+    Var(
+        "slip_centroid_x",
+        "m",
+        'Phase "transient": x of the centroid of the slip area (0 without slip)',
+        {"body": OUTPUT},
+        needs="transient",
+    ),
+    Var(
+        "slip_centroid_y",
+        "m",
+        'Phase "transient": y of the centroid of the slip area (0 without slip)',
+        {"body": OUTPUT},
+        needs="transient",
+    ),
+    Var(
+        "tau_peak",
+        "Pa",
+        'Phase "transient": largest traction magnitude of the field',
+        {"body": OUTPUT},
+        needs="transient",
     ),
 )
 

@@ -20,6 +20,9 @@ the scene's data on a path that does not go through the FMU, its adapter or fmpy
 - ``halfspace_creepage``: body mode, half-space law; the quasistationary state of
   Eq. (26): Tx = A2 Fx_ex - A1 My_ex/Rx, and the creepage xi_x and adhesion fraction at
   which direct solves give that Tx (bracketed root finding on the solver, no table).
+- ``transient``: body mode, phase "transient"; the numerics' transient stepper
+  (``transient.TransientRollingBody``) on a finer field grid ``grid = [nx, ny]`` with
+  internal steps of at most ``cells`` cells, driven step by step with the held loads.
 
 Samples: every ``every``-th grid point within ``t_from`` <= t <= ``t_to``, or within
 each ``[from, to]`` of ``windows``, or the grid points nearest to the listed ``times``.
@@ -144,6 +147,46 @@ def by_simulation(
     return {"time": t[k], **{v: rec[v][k] for v in ref.tolerance}}
 
 
+def by_transient(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
+    """The transient thin-layer stepper outside the FMU, at the reference's resolution:
+    field grid ``grid`` = [nx, ny] and internal steps of at most ``cells`` cells rolled
+    (and at most the scene's h_max), the loads of each communication step held."""
+    from ..transient import TransientRollingBody
+
+    cfg, p, o = scene.config, case.parameters, ref.options
+    t = scene.grid
+    P = held(case.inputs["P"](t))
+    lateral = Lateral(
+        vy_ratio={"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy],
+        spin_ratio={"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin],
+    )
+    nx, ny = (int(n) for n in o["grid"])
+    cells = float(o["cells"])
+    tb = TransientRollingBody(
+        _law(p, float(P[0])), _body(p), lateral, Vx0=p["Vx0"], Omega_y0=p["Omega_y0"],
+        Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0), nx=nx, ny=ny,
+    )  # fmt: skip
+    loads = np.array([case.inputs[n](t) if n in case.inputs else np.zeros(t.size)
+                      for n in Loads._fields])  # fmt: skip
+    names = list(ref.tolerance)
+    rec = {v: np.empty(t.size) for v in names}
+
+    def record(i: int) -> None:
+        out = tb.outputs()
+        for v in names:
+            rec[v][i] = out[v]
+
+    record(0)
+    for i in range(t.size - 1):
+        if P[i + 1] != tb.law.P:
+            tb.set_load(float(P[i + 1]))
+        n = max(math.ceil(scene.step / p["h_max"] - 1e-9), tb.substeps_for(scene.step, cells))
+        tb.advance(scene.step, Loads(*(float(x) for x in loads[:, i])), n)
+        record(i + 1)
+    k = _samples(scene, ref)
+    return {"time": t[k], **{v: rec[v][k] for v in names}}
+
+
 def by_traction(scene: Scene, ref: Reference, case: Case, refine: int = 1) -> dict[str, FloatArray]:
     nx, ny = (refine * int(n) - (refine - 1) for n in ref.options["grid"])
     p = case.parameters
@@ -251,6 +294,7 @@ SOURCES: dict[str, Callable[[Scene, Reference, Case], dict[str, FloatArray]]] = 
     "traction": by_traction,
     "halfspace": by_halfspace,
     "halfspace_creepage": by_halfspace_creepage,
+    "transient": by_transient,
 }
 
 

@@ -60,23 +60,30 @@ def input_table(scene: Scene, case: Case) -> np.ndarray:
     return table
 
 
-def start_values(scene: Scene, case: Case) -> dict[str, Any]:
-    """Every parameter of the case (and the stepper and scheme, when the FMU offers several)."""
+def start_values(scene: Scene, case: Case, field_dir: Path | None = None) -> dict[str, Any]:
+    """Every parameter of the case (and the stepper and scheme, when the FMU offers several);
+    with ``field_dir``, the file and times of the scene's field output (one file per case)."""
     values = dict(case.parameters)
     if len(scene.config.methods) > 1:
         values["method"] = case.method
     if len(scene.config.schemes) > 1:
         values["scheme"] = case.scheme
+    if scene.field is not None and field_dir is not None:
+        values["field_file"] = str(scene.field.path(Path(field_dir).resolve(), case.name))
+        values["field_times"] = " ".join(repr(t) for t in scene.field.times)
     return values
 
 
-def simulate_case(fmu_dir: Path, scene: Scene, case: Case) -> CaseResult:
-    """Run one case of the scene on the extracted FMU ``fmu_dir``."""
+def simulate_case(
+    fmu_dir: Path, scene: Scene, case: Case, field_dir: Path | None = None
+) -> CaseResult:
+    """Run one case of the scene on the extracted FMU ``fmu_dir`` (field files, if the
+    scene asks for them, under ``field_dir``)."""
     inputs = input_table(scene, case)
     try:
         res = fmpy.simulate_fmu(
             str(fmu_dir),
-            start_values=start_values(scene, case),
+            start_values=start_values(scene, case, field_dir),
             input=inputs,
             output=list(scene.outputs),
             stop_time=scene.stop_time,
@@ -97,12 +104,13 @@ def simulate_case(fmu_dir: Path, scene: Scene, case: Case) -> CaseResult:
     return CaseResult(case.name, cols)
 
 
-def simulate(fmu: Path, scene: Scene) -> list[CaseResult]:
-    """Every case of the scene on the FMU file ``fmu`` (extracted once)."""
+def simulate(fmu: Path, scene: Scene, field_dir: Path | None = None) -> list[CaseResult]:
+    """Every case of the scene on the FMU file ``fmu`` (extracted once); the scene's field
+    files, if any, are written under ``field_dir`` (none without it)."""
     tmp = Path(tempfile.mkdtemp(prefix=f"{scene.name}-"))
     try:
         fmpy.extract(str(fmu), str(tmp))
-        return [simulate_case(tmp, scene, c) for c in scene.cases]
+        return [simulate_case(tmp, scene, c, field_dir) for c in scene.cases]
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

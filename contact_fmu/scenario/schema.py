@@ -8,7 +8,8 @@ grid, the outputs to record, reference results with tolerances and a plot layout
     [model]
     mode = "body"                       # body | contact
     contact_law = "layer"               # layer | halfspace (needs [halfspace])
-    phase = "steady"                    # steady  ("transient": issue 5)
+    phase = "steady"                    # steady | transient (body mode, layer law: the
+                                        # traction field as state; no method/scheme)
     method = "full"                     # full | quasistationary (a case may override)
     scheme = "lobatto3c"                # lobatto3c | sdirk2 (a case may override)
     vy = 0.0                            # Vy/Vx held at this value, or "eq10"
@@ -17,6 +18,9 @@ grid, the outputs to record, reference results with tolerances and a plot layout
     stop_time = 0.056                   # s
     step = 1.75e-4                      # communication step (s)
     outputs = ["Tx", "vx"]
+    field = { times = [1e-3], file = "f.csv" }  # phase = "transient": the field written
+                                        # at these times, one file per case, under
+                                        # out/scenes/<name>/fields/ (fmu/body_transient.py)
     [halfspace]                         # contact_law = "halfspace": materials, radii,
                                         # layers and the creep-force table's range and
                                         # resolution (contact_fmu.halfspace.spec.TableSpec)
@@ -35,6 +39,7 @@ The runner uses only what is here; how a reference was produced is recorded in i
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -62,7 +67,8 @@ TOP_KEYS = {
     "halfspace",
 }
 MODEL_KEYS = {"mode", "contact_law", "phase", "method", "scheme", "vy", "spin"}
-RUN_KEYS = {"stop_time", "step", "outputs"}
+RUN_KEYS = {"stop_time", "step", "outputs", "field"}
+FIELD_KEYS = {"times", "file"}
 CASE_KEYS = {"name", "parameters", "inputs", "method", "scheme"}
 REFERENCE_KEYS = {"file", "source", "note", "tolerance", "cases", "options"}
 PLOT_KEYS = {"x", "panels", "scale"}
@@ -100,6 +106,21 @@ class Reference:
 
 
 @dataclass(frozen=True)
+class FieldRequest:
+    """[run].field: the traction field written at ``times`` (s) to ``file`` (a file name;
+    the runner puts one per case under the run's output folder)."""
+
+    times: tuple[float, ...]
+    file: str
+
+    def path(self, folder: Path, case: str) -> Path:
+        """The file of one case under ``folder``: <stem>_<case as an identifier><suffix>."""
+        stem, suffix = Path(self.file).stem, Path(self.file).suffix
+        slug = re.sub(r"[^A-Za-z0-9]+", "_", case).strip("_") or "case"
+        return Path(folder) / f"{stem}_{slug}{suffix}"
+
+
+@dataclass(frozen=True)
 class Plot:
     x: str = "time"
     panels: tuple[tuple[str, ...], ...] = ()
@@ -120,6 +141,7 @@ class Scene:
     references: tuple[Reference, ...]
     plot: Plot
     config: ModelConfig
+    field: FieldRequest | None = None
 
     @property
     def n_steps(self) -> int:
@@ -174,6 +196,25 @@ def _halfspace(path: Path, d: Any) -> dict[str, Any]:
     if not isinstance(d, dict):
         raise _err(path, "halfspace", f"expected a table, got {d!r}")
     return dict(d)
+
+
+def _field(path: Path, d: Any, config: ModelConfig, stop: float) -> FieldRequest | None:
+    """[run].field: times within the run, a plain file name; phase "transient" only."""
+    if d is None:
+        return None
+    d = _table(path, "run.field", d, FIELD_KEYS)
+    if not config.transient:
+        raise _err(path, "run.field", 'needs phase = "transient" (the field is its state)')
+    times = d.get("times")
+    if not (isinstance(times, list) and times):
+        raise _err(path, "run.field.times", f"{times!r} must be a non-empty list of times (s)")
+    for t in times:
+        if isinstance(t, bool) or not isinstance(t, int | float) or not 0.0 <= t <= stop:
+            raise _err(path, "run.field.times", f"{t!r} must be a time in [0, stop_time]")
+    name = d.get("file")
+    if not isinstance(name, str) or not name or Path(name).name != name:
+        raise _err(path, "run.field.file", f"{name!r} must be a file name (no folders)")
+    return FieldRequest(tuple(sorted(float(t) for t in times)), name)
 
 
 def load(path: str | Path) -> Scene:
@@ -304,6 +345,7 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
             )
         )
 
+    field_req = _field(path, run.get("field"), config, stop)
     p = _table(path, "plot", raw.get("plot", {}), PLOT_KEYS)
     panels = tuple(tuple(panel) for panel in p.get("panels", [[outputs[0]]]))
     xs = p.get("x", "time")
@@ -330,6 +372,7 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
         references=tuple(refs),
         plot=Plot(xs, panels, scale),
         config=config,
+        field=field_req,
     )
 
 

@@ -1,0 +1,209 @@
+"""Body mode, phase "transient": the body on the thin-layer traction field (issue 5).
+
+The stepper is ``transient.TransientRollingBody``: the traction field of Eq. (15) with
+its time-derivative term on a material grid of nx cells along the contact and ny
+strips across it, advanced together with Eqs. (8)-(11) by an L-stable SDIRK2 step
+(docs/transient.md). The field is part of the state (FMU get/set state restores it).
+A communication step h is split into the larger of ceil(h/h_max) and the number of
+steps that keeps each within ``cells_per_step`` cells at the present speed, loads held
+(zero-order hold); any step is stable, these two only set the accuracy.
+
+The field can be written to a CSV file (``field_file``) at chosen times
+(``field_times``): at the end of the communication step that reaches each requested
+time, one row per node of the field's grid,
+
+    requested, time, i, j, x, y, tau_x, tau_y, p, slip, inside, weight
+
+(s, s, strip index i (y), column index j (x), m, m, Pa, Pa, Pa, 0/1, 0/1, m^2): tau is
+the traction the body exerts on the substrate (Eq. 8 convention), ``weight`` the
+quadrature weight of the node in the resultant (sum weight tau = (Tx, Ty)). The file
+is rewritten whole at each capture and after a restore of the FMU state, so it always
+holds the captures of the trajectory the FMU is on.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._validate import InputError
+from ..dynamics import Body, Lateral
+from ..transient import TransientRollingBody
+from .body_model import MAX_SUBSTEPS, BodyModel, substeps
+from .config import ModelConfig
+from .laws import make_law
+
+# CSV columns of the field file, in order.
+FIELD_COLUMNS = (
+    "requested",
+    "time",
+    "i",
+    "j",
+    "x",
+    "y",
+    "tau_x",
+    "tau_y",
+    "p",
+    "slip",
+    "inside",
+    "weight",
+)
+# A requested time counts as reached by a step ending within this relative margin of
+# it (the step's end is a sum of communication steps: rounding only).
+TIME_RTOL = 1e-9
+
+
+def parse_times(text: str) -> tuple[float, ...]:
+    """The field times (s) of ``field_times``: numbers separated by spaces or commas,
+    finite, sorted; InputError naming field_times otherwise."""
+    parts = [p for p in re.split(r"[\s,;]+", str(text).strip()) if p]
+    try:
+        times = [float(p) for p in parts]
+    except ValueError:
+        raise InputError("field_times", text, "times in s separated by spaces or commas") from None
+    if not all(math.isfinite(t) for t in times):
+        raise InputError("field_times", text, "finite times in s")
+    return tuple(sorted(times))
+
+
+class FieldRecorder:
+    """Captures of the traction field at requested times, written to a CSV file."""
+
+    def __init__(self, path: str, times: tuple[float, ...]) -> None:
+        self.path = Path(path) if path else None
+        self.times = times if self.path is not None else ()
+        self.captures: list[tuple[float, float, dict[str, np.ndarray]]] = []
+
+    def capture_due(self, t: float, arrays: Any) -> bool:
+        """Capture the field ``arrays()`` at time t (s) for every requested time reached
+        and not yet captured; write the file if anything was captured."""
+        before = len(self.captures)
+        while len(self.captures) < len(self.times):
+            wanted = self.times[len(self.captures)]
+            if wanted > t + TIME_RTOL * max(1.0, abs(t)):
+                break
+            self.captures.append((wanted, t, arrays()))
+        if len(self.captures) == before:
+            return False
+        try:
+            self.write()
+        except InputError:
+            del self.captures[before:]  # the recorder's state is as before the call
+            raise
+        return True
+
+    def write(self) -> None:
+        """Write every capture (OSError names the file)."""
+        if self.path is None:
+            return
+        rows = []
+        for wanted, t, a in self.captures:
+            ny, nx = a["tau_x"].shape
+            j, i = np.meshgrid(np.arange(nx), np.arange(ny))
+            X, Y = np.meshgrid(a["x"], a["y"])
+            cols = (np.full(i.size, wanted), np.full(i.size, t), i.ravel(), j.ravel(),
+                    X.ravel(), Y.ravel(), a["tau_x"].ravel(), a["tau_y"].ravel(),
+                    a["p"].ravel(), a["slip"].ravel(), a["inside"].ravel(),
+                    a["weights"].ravel())  # fmt: skip
+            rows.append(np.column_stack(cols))
+        table = np.vstack(rows) if rows else np.zeros((0, len(FIELD_COLUMNS)))
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            fmt = ["%.17g", "%.17g", "%d", "%d"] + ["%.17g"] * 5 + ["%d", "%d", "%.17g"]
+            np.savetxt(self.path, table, fmt=fmt, delimiter=",",
+                       header=",".join(FIELD_COLUMNS), comments="")  # fmt: skip
+        except OSError as e:
+            raise InputError("field_file", str(self.path), f"a writable file ({e})") from None
+
+    def state(self) -> tuple:
+        return tuple(self.captures)
+
+    def set_state(self, s: tuple) -> None:
+        """Restore the captures and rewrite the file (best effort: a file that cannot be
+        written is reported by the next capture, not by a restore)."""
+        changed = len(s) != len(self.captures)
+        self.captures = list(s)
+        if changed:
+            try:
+                self.write()
+            except InputError:
+                pass
+
+
+class TransientBodyModel(BodyModel):
+    """BodyModel with the transient stepper: internal steps also bounded in cells rolled,
+    the field written at the requested times."""
+
+    def __init__(
+        self,
+        stepper: TransientRollingBody,
+        h_max: float,
+        P: float,
+        cells: float,
+        recorder: FieldRecorder,
+    ) -> None:
+        super().__init__(stepper, h_max, P)
+        self.cells = cells
+        self.recorder = recorder
+
+    def internal_steps(self, h: float) -> int:
+        """max(ceil(h/h_max), steps of at most ``cells`` cells at the present speed),
+        bounded by MAX_SUBSTEPS."""
+        by_cells = self.stepper.substeps_for(h, self.cells)
+        return min(max(substeps(h, self.h_max), by_cells), MAX_SUBSTEPS)
+
+    def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
+        note = super().step(h, inputs)
+        self.recorder.capture_due(self.stepper.t, self.stepper.field_arrays)
+        return note
+
+    def snapshot(self) -> Any:
+        return (super().snapshot(), self.recorder.state())
+
+    def restore(self, snap: Any) -> None:
+        body_snap, rec = snap
+        super().restore(body_snap)
+        self.recorder.set_state(rec)
+
+
+def make_stepper(
+    cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float, data_dir: Path | None = None
+) -> TransientRollingBody:
+    """The transient stepper at the initial state: field at rest (tau = 0)."""
+    law = make_law(cfg, p, P, data_dir)
+    body = Body(M=p["M"], Rx=p["Rx"], Iy=p["Iy"], Iz=p.get("Iz"))
+    vy_ratio = {"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy]
+    spin_ratio = {"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin]
+    return TransientRollingBody(
+        law,
+        body,
+        Lateral(vy_ratio=vy_ratio, spin_ratio=spin_ratio),
+        Vx0=p["Vx0"],
+        Omega_y0=p["Omega_y0"],
+        Vy0=p.get("Vy0", 0.0),
+        Omega_z0=p.get("Omega_z0", 0.0),
+        t0=t0,
+        nx=int(p["nx"]),
+        ny=int(p["ny"]),
+    )
+
+
+def build(
+    cfg: ModelConfig,
+    params: Mapping[str, Any],
+    inputs: Mapping[str, float],
+    t0: float,
+    data_dir: Path | None = None,
+) -> TransientBodyModel:
+    """The transient body model from the FMU's parameters and inputs at t0 (s)."""
+    P = inputs["P"]
+    recorder = FieldRecorder(str(params["field_file"]), parse_times(params["field_times"]))
+    stepper = make_stepper(cfg, params, P, t0, data_dir)
+    model = TransientBodyModel(stepper, params["h_max"], P, params["cells_per_step"], recorder)
+    recorder.capture_due(t0, stepper.field_arrays)
+    return model
