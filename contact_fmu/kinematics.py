@@ -42,6 +42,6 @@ def contact_quantities(
         "a1": law.a1,
         "a2": law.a2,
         "p0": law.p0,
-        "adhesion": float(law.adhesion_fraction(vx, vy, Vx)),
+        "adhesion": float(law.adhesion_fraction(vx, vy, Vx, Omega_z)),
         "regime": SLIDING if is_full_slip(law, vx, vy, Vx) else ROLLING,
     }

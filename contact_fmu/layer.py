@@ -341,8 +341,16 @@ class LayerContact:
             hi *= 2.0
         return sign * brentq(gap, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
 
-    def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
-        """Adhesion area over contact area (-), without spin."""
+    def adhesion_fraction(
+        self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike, phi: float = 0.0
+    ) -> FloatArray:
+        """Adhesion area over contact area (-). Closed form without spin; with spin
+        phi = Omega_z (rad/s), the area of the non-slipping nodes of the strip solution
+        on the SPIN_GRID grid (first order in the cell size)."""
+        if phi != 0.0:
+            f = self.traction(float(vx), float(vy), float(Vx), *SPIN_GRID, phi=float(phi))
+            stuck = f.inside & ~f.slip
+            return float(np.sum(f.weights * stuck) / np.sum(f.weights * f.inside))
         if isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float):
             s = math.hypot(vx, vy)  # float path: (2 asin m - beta m)/pi in math
             if s == 0.0:

@@ -345,6 +345,20 @@ def test_inverse_creep_law_of_eq28():
         C.inverse_creep(1.01 * MU_P)
 
 
+def test_adhesion_fraction_with_spin_is_continuous_symmetric_and_vanishes():
+    # at phi -> 0 the grid's area tends to the closed form (first order in the 64-cell
+    # grid: 2 %); phi -> -phi mirrors y -> -y for a longitudinal slip, so the area is
+    # even in phi; a spin slip far beyond the longitudinal one leaves adhesion only
+    # near the spin pole (a few % of the contact)
+    speed = 0.004 * VX
+    closed = float(C.adhesion_fraction(speed, 0.0, VX))
+    assert C.adhesion_fraction(speed, 0.0, VX, phi=1e-9) == pytest.approx(closed, abs=2e-2)
+    for phi in (3.0, 30.0):
+        plus = C.adhesion_fraction(speed, 0.0, VX, phi=phi)
+        assert C.adhesion_fraction(speed, 0.0, VX, phi=-phi) == pytest.approx(plus, abs=1e-12)
+    assert C.adhesion_fraction(speed, 0.0, VX, phi=1e3) < 0.05
+
+
 # ---- bad input --------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "name,value",
