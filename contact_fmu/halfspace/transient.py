@@ -713,7 +713,7 @@ class HalfSpaceField:
         self.contact = self.contact.with_load(positive("P", P))
         self.__dict__.pop("_ell", None)
         a1, a2 = self.contact.a1, self.contact.a2
-        grow_x = max(0, math.ceil((a1 + self.dx - self.X) / self.dx - 1e-12))
+        grow_x = max(0, math.ceil((a1 + SPARE * self.dx - self.X) / self.dx - 1e-12))
         grow_y = max(0, math.ceil((a2 - (-float(self.y[0]) + 0.5 * self.dy)) / self.dy - 1e-12))
         if grow_x or grow_y:
             pad = ((0, 0), (grow_y, grow_y), (grow_x, grow_x))
