@@ -53,15 +53,15 @@ SCHEMES = ("lobatto3c", "sdirk2")
 # Recognised scene values that later issues implement.
 PLANNED: dict[str, tuple[str, ...]] = {}
 # Why phase = "transient" is refused with the half-space law (measured in
-# docs/halfspace.md, "Transient rolling"): each step of Kalker's transient solves a
-# contact problem with the influence coefficients (two to three per step for the
-# body), 1 to 4 s of computing per contact length rolled on 16 x 16 to 32 x 32 elements,
-# and its transients last 2 to 12 contact lengths: a railway scene of 0.1 s at 30 m/s
-# rolls 400 contact lengths, about 10 to 30 minutes per case.
+# docs/halfspace.md, "Transient rolling"): each step of Kalker's transient solves two to
+# three contact problems with the influence coefficients (the body's slip iteration),
+# 1 to 6 s of computing per contact length rolled on 16 x 16 to 32 x 32 elements; a
+# railway scene of 0.1 s at 30 m/s rolls about 200 contact lengths, 4 to 20 minutes per
+# case, for transients that last 2 to 10 contact lengths.
 TRANSIENT_HALFSPACE = (
-    '"layer" with phase = "transient": the transient half-space field costs 1 to 4 s of '
-    "computing per contact length rolled (a railway scene of 0.1 s at 30 m/s rolls 400 "
-    'of them); use phase = "steady" with the half-space law, or '
+    '"layer" with phase = "transient": the transient half-space field costs 1 to 6 s of '
+    "computing per contact length rolled (a railway scene of 0.1 s at 30 m/s rolls "
+    'about 200 of them); use phase = "steady" with the half-space law, or '
     "contact_fmu.halfspace.transient.TransientHalfSpaceBody outside an FMU"
 )
 
