@@ -134,6 +134,19 @@ def test_sweep_follows_the_scene():
     assert [f.label for f in contact] == ["law evaluation"] and ccfg == scene("sweep").config
 
 
+def test_scene_without_a_reference_is_listed_not_run():
+    """The transient phase has no reference here yet: its scene gets no stepper or
+    scheme axis (they are the steady phase's), and the report lists it as not compared
+    without building or running its FMU."""
+    s = scene("fig12_transient")
+    fams, _ = sweep.families(s, quick=True)
+    assert {name for f in fams for name, _ in f.settings} == {"substeps"}
+    rep = run_scene(s, OUT, quick=True, repeats=1, log=lambda _m: None)
+    assert rep.rows == [] and rep.fmu == ""
+    assert any("phase 'transient'" in n for n in rep.notes)
+    assert "Not compared: fig12_transient" in output.summary_markdown([rep])
+
+
 def test_orders_and_norms():
     h = np.array([4.0, 2.0, 1.0])
     e = 3.0 * h**2
@@ -223,6 +236,23 @@ def test_report_refuses_bad_options_naming_them():
         cli.main(["report", "--repeats", "0"])
     with pytest.raises(SystemExit, match="--case 'eta=7' is not a stiff case or group"):
         cli.main(["report", "--stiff", "--case", "eta=7"])
+
+
+def test_readme_section_gets_both_parts_and_keeps_the_other(tmp_path):
+    """The report's README section is created with its two subsections; writing one part
+    leaves the other's text alone."""
+    from contact_fmu.report import command
+
+    readme = tmp_path / "README.md"
+    readme.write_text("# X\n\n## Other\n\ntext\n")
+    command.ensure_readme_section(readme)
+    output.replace_section(readme, command.README_STIFF, "stiff table")
+    command.ensure_readme_section(readme)  # idempotent
+    output.replace_section(readme, command.README_WP, "wp table")
+    text = readme.read_text()
+    assert text.count(command.README_SECTION) == 1 and "## Other\n\ntext" in text
+    assert text.index("wp table") < text.index(command.README_STIFF) < text.index("stiff table")
+    assert "Not run yet" not in text
 
 
 def test_replace_section_keeps_the_rest(tmp_path):

@@ -43,7 +43,7 @@ def test_stiff_and_extreme_case(case: StiffCase, fmu_dir: Path):
 
 def test_case_list_covers_the_issue():
     """eta 1 .. inf, epsilon 1e-1 .. 1e-5, loads to 0.999 and beyond, mu 1e-3 .. 1, Vx
-    through zero, kb + ks -> 0 and large, h from 1e-7 s to 10 s, a 1e6-step run."""
+    through zero, kb + ks -> 0 and large, h from 1e-7 s to 10 s, a run of 1e6 steps."""
     cs = cases()
     eta = [c.params["M"] * c.params["Rx"] ** 2 / c.params["Iy"] if c.params["Iy"] else math.inf
            for c in cs if c.group == "eta"]  # fmt: skip
@@ -58,7 +58,7 @@ def test_case_list_covers_the_issue():
     assert {c.h for c in cs if c.group == "step"} == {1e-7, 1e-5, 1e-3, 1e-1, 10.0}
     assert {c.params["mu"] for c in cs if c.group == "mu"} == {1e-3, 1e-2, 1e-1, 1.0}
     long = [c for c in cs if "long" in c.tags]
-    assert long and long[0].steps * long[0].substeps == 1_000_000
+    assert long and long[0].steps == 1_000_000 and long[0].substeps == 1
     assert len({c.name for c in cs}) == len(cs)
 
 

@@ -25,6 +25,8 @@ from .workprecision import BUDGET, SceneReport, run_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 README_SECTION = "## Report: error against run time, stiff and extreme cases"
+README_WP = "### Error against run time"
+README_STIFF = "### Stiff and extreme cases"
 PERF_WP_SECTION = "## Error against run time (work-precision)"
 PERF_STIFF_SECTION = "## Stiff and extreme cases"
 DOC_PLOT_SCENE = "fig13"
@@ -124,7 +126,8 @@ def stiff_suite(
 def write_docs(
     reports: list[SceneReport] | None, results: list[stiff.Result] | None, out: Path, command: str
 ) -> None:
-    """README and docs/performance.md sections, and the Fig. 13 plot in docs/figures."""
+    """README and docs/performance.md sections of the parts that ran (the other part's
+    sections are kept), and the Fig. 13 plot in docs/figures."""
     readme, perf = ROOT / "README.md", ROOT / "docs" / "performance.md"
     how = (
         "Run by `" + command + "` (numbers from a shared 2-core machine: times vary with its "
@@ -132,39 +135,56 @@ def write_docs(
         "`reports/stiff.md` (gitignored; `contact-fmu report --quick` is the short version "
         "the tests run)."
     )
-    parts_readme = [USAGE, how, ""]
+    ensure_readme_section(readme)
     if reports:
         src = out / "workprecision" / f"{DOC_PLOT_SCENE}.png"
         if src.exists():
             dst = ROOT / "docs" / "figures" / f"workprecision_{DOC_PLOT_SCENE}.png"
             shutil.copyfile(src, dst)
-        parts_readme += [
-            "**Error against run time.** Each scene's FMU run by fmpy over a sweep of "
-            "communication steps h (the scene's step x 2^k), internal steps n per "
-            "communication step, scheme (Lobatto IIIC, SDIRK2) and stepper (full, "
-            "quasistationary where the loads stay admissible), against a reference of "
-            "the same equations outside the FMU. " + output.ERROR_NOTE,
-            "",
+        readme_wp = [
+            how,
+            "Each scene's FMU run by fmpy over a sweep of communication steps h (the scene's "
+            "step x 2^k), internal steps n per communication step, scheme (Lobatto IIIC, "
+            "SDIRK2) and stepper (full, quasistationary where the loads stay admissible), "
+            "against a reference of the same equations outside the FMU. " + output.ERROR_NOTE,
             f"![work-precision, {DOC_PLOT_SCENE}](docs/figures/workprecision_{DOC_PLOT_SCENE}.png)",
-            "",
             "With n = 4 internal steps (every family: `docs/performance.md`):",
-            "",
             output.summary_markdown(reports, only_substeps=4),
             READING,
         ]
+        output.replace_section(readme, README_WP, "\n\n".join(readme_wp))
         figure = f"![work-precision, {DOC_PLOT_SCENE}](figures/workprecision_{DOC_PLOT_SCENE}.png)"
         body = [how, output.ERROR_NOTE, output.summary_markdown(reports), figure]
         output.replace_section(perf, PERF_WP_SECTION, "\n\n".join(body))
     if results:
-        table = stiff.markdown(results)
-        parts_readme += [
-            "**Stiff and extreme cases** (`tests/test_stiff.py` runs the same list). " + stiff.NOTE,
-            "",
+        readme_stiff = [
+            how,
+            "`tests/test_stiff.py` runs the same list. " + stiff.NOTE,
             stiff.short_markdown(results),
             stiff.failures(results),
         ]
+        output.replace_section(readme, README_STIFF, "\n\n".join(readme_stiff))
+        table = stiff.markdown(results)
         output.replace_section(perf, PERF_STIFF_SECTION, how + "\n\n" + stiff.NOTE + "\n\n" + table)
-    output.replace_section(readme, README_SECTION, "\n".join(parts_readme))
+
+
+def ensure_readme_section(readme: Path) -> None:
+    """The README's report section with its usage and two subsections (placeholders
+    until a part has run), appended if absent; a missing subsection is added at its end."""
+    text = readme.read_text()
+    lines = text.split("\n")
+    if README_SECTION not in lines:
+        parts = [README_SECTION, USAGE.rstrip("\n"), README_WP, "Not run yet.", README_STIFF,
+                 "Not run yet."]  # fmt: skip
+        readme.write_text(text.rstrip("\n") + "\n\n" + "\n\n".join(parts) + "\n")
+        return
+    start = lines.index(README_SECTION)
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
+    for sub in (README_WP, README_STIFF):
+        if sub not in lines[start:end]:
+            lines[end:end] = [sub, "", "Not run yet.", ""]
+            end += 4
+    readme.write_text("\n".join(lines))
 
 
 def scene_paths(scenes: list[Path], scenarios: Path) -> list[Path]:

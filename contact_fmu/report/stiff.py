@@ -36,7 +36,9 @@ from numpy.typing import NDArray
 
 import fmu_build
 
+from ..dynamics import Body, Loads
 from ..fmu.config import METHODS, SCHEMES, ModelConfig
+from ..integrator import RollingBody
 from ..layer import LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
@@ -72,8 +74,8 @@ CONV_FLOOR = 1e4 * SOLVE_RTOL
 # objects allocated up to bounded sizes and fill slowly over a run: measured over the
 # second half of 800-step runs, the count moves by tens of blocks (<= 41 for the eta
 # cases). A leak of one object per step adds >= 256 blocks over the measured windows
-# (>= 256 steps). RSS: pymalloc arenas are 1 MiB; a leak of 8 bytes per internal step
-# over the long run's measured 5e5 internal steps reaches 4 MiB.
+# (>= 256 steps). RSS: pymalloc arenas are 1 MiB; a leak of 8 bytes per step over the
+# long run's measured 5e5 steps reaches 4 MiB.
 MEM_BLOCKS = 128
 MEM_RSS_BYTES = 4 << 20
 PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
@@ -113,7 +115,10 @@ def _rss() -> int:
 
 
 def simulate(fmu_dir: Path, case: StiffCase, h: float, steps: int, memory: bool = False) -> Run:
-    """``steps`` communication steps of h through the FMU extracted at ``fmu_dir``."""
+    """``steps`` communication steps of h through the FMU extracted at ``fmu_dir`` (or
+    of its stepper called directly, for a case ``via = "core"``)."""
+    if case.via == "core":
+        return simulate_core(case, h, steps, memory)
     t = np.arange(steps + 1) * h
     u = {n: parse(n, case.inputs[n])(t) for n in INPUTS}
     vals = {n: np.full(steps, np.nan) for n in OUTPUTS}
@@ -143,6 +148,42 @@ def simulate(fmu_dir: Path, case: StiffCase, h: float, steps: int, memory: bool 
             gc.collect()
             run.blocks = (b1, sys.getallocatedblocks())
             run.rss = (r1, _rss())
+    run.wall = time.perf_counter() - t0
+    return run
+
+
+def simulate_core(case: StiffCase, h: float, steps: int, memory: bool = False) -> Run:
+    """As ``simulate``, with the FMU's stepper (integrator.RollingBody) called directly:
+    the inputs sampled at each step's start and held over it, as the FMU holds them."""
+    p = case.params
+    t = np.arange(steps + 1) * h
+    u = {n: parse(n, case.inputs[n])(t) for n in INPUTS}
+    if np.ptp(u["P"]) != 0.0:
+        raise ValueError(f"{case.name}: via = 'core' needs a constant P")
+    law = LayerContact(float(u["P"][0]), p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"],
+                       p["mu"])  # fmt: skip
+    rb = RollingBody(law, Body(p["M"], p["Rx"], p["Iy"]), method=case.method,
+                     Vx0=p["Vx0"], Omega_y0=p["Omega_y0"], scheme=case.scheme)  # fmt: skip
+    vals = {n: np.full(steps, np.nan) for n in OUTPUTS}
+    run = Run(t[1:], vals)
+    Fx, My = u["Fx_ex"].tolist(), u["My_ex"].tolist()
+    half = steps // 2
+    t0 = time.perf_counter()
+    for k in range(steps):
+        if memory and k == half:
+            gc.collect()
+            b1, r1 = sys.getallocatedblocks(), _rss()
+        try:
+            rb.advance(h, Loads(Fx[k], 0.0, My[k], 0.0), case.substeps)
+        except Exception as e:  # what the FMU would answer with fmi2Discard
+            run.status = f"step {k + 1} at t = {t[k]:.6g} s: {type(e).__name__}: {e}"
+            break
+        vals["Tx"][k], vals["vx"][k], vals["Vx"][k] = rb.out.Tx, rb.vx, rb.Vx
+        vals["regime"][k] = float(rb.out.sliding)
+    if memory and run.status is None:
+        gc.collect()
+        run.blocks = (b1, sys.getallocatedblocks())
+        run.rss = (r1, _rss())
     run.wall = time.perf_counter() - t0
     return run
 

@@ -9,7 +9,8 @@ configured, and which start values select one. Adding a setting (the contact law
 ``contact_law = "halfspace"``, a grid size for field-based laws, ``phase =
 "transient"``) is one more entry in ``AXES``: its ``configure`` returns the FMU
 configuration of the family (one FMU per value when the value changes the model), its
-``start`` the parameters, and ``workprecision.REFERENCES`` needs a reference for it.
+``start`` the parameters, and ``workprecision.REFERENCES`` (by mode, phase and method)
+or ``reference.LAWS`` (by contact law) needs a reference for it.
 """
 
 from __future__ import annotations
@@ -55,8 +56,13 @@ class Axis:
     label: Callable[[Any], str] = str
 
 
+def _steady_body(scene: Scene) -> bool:
+    """Steppers and schemes are the steady phase's (the transient phase has its own)."""
+    return scene.config.mode == "body" and scene.config.phase == "steady"
+
+
 def _methods(scene: Scene, quick: bool) -> tuple[str, ...]:
-    if scene.config.mode != "body":
+    if not _steady_body(scene):
         return ()
     grid = fine_grid(scene, LEVELS_QUICK if quick else LEVELS)
     qs = all(quasistationary_allowed(scene, c, grid) is None for c in scene.cases)
@@ -91,7 +97,7 @@ AXES: tuple[Axis, ...] = (
     Axis(
         "scheme",
         "integrator scheme (Lobatto IIIC, SDIRK2)",
-        lambda s, q: SCHEMES if s.config.mode == "body" else (),
+        lambda s, q: SCHEMES if _steady_body(s) else (),
         _offer("schemes", "scheme"),
         lambda v, h: {"scheme": v},
     ),

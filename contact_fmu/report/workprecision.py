@@ -57,13 +57,24 @@ def _body_reference(continuous, held):
     return {"continuous": continuous, "held": held}
 
 
-# Reference sources by (mode, method); a new law or phase adds its own entry.
-REFERENCES: dict[tuple[str, str], dict[str, Callable]] = {
-    ("body", "full"): _body_reference(ref.full_continuous, ref.full_held),
-    ("body", "quasistationary"): _body_reference(
+# Reference sources by (mode, phase, method): functions (scene, case, grid) -> Solution
+# under the continuous and the held inputs. A new phase adds its own entries (a law is
+# added in reference.LAWS); a setting without one is listed as not compared.
+REFERENCES: dict[tuple[str, str, str], dict[str, Callable]] = {
+    ("body", "steady", "full"): _body_reference(ref.full_continuous, ref.full_held),
+    ("body", "steady", "quasistationary"): _body_reference(
         ref.quasistationary_continuous, ref.quasistationary_held
     ),
 }
+
+
+def _source(scene: Scene, method: str) -> dict[str, Callable]:
+    key = (scene.config.mode, scene.config.phase, method)
+    if key not in REFERENCES:
+        raise ref.NoReferenceError(
+            f"{scene.name}: no reference for mode {key[0]}, phase {key[1]!r}, method {key[2]!r}"
+        )
+    return REFERENCES[key]
 
 
 @dataclass
@@ -159,7 +170,7 @@ def _references(scene: Scene, case: Case, methods: list[str], lv: tuple[int, ...
         index = np.arange(grid.size)
         for m in methods:
             try:
-                sols[m] = REFERENCES[(scene.config.mode, m)]["continuous"](scene, case, grid)
+                sols[m] = _source(scene, m)["continuous"](scene, case, grid)
             except ref.NoReferenceError as e:
                 notes.append(str(e))
         Vx = next(iter(sols.values())).Vx if sols else np.array([np.nan])
@@ -272,7 +283,7 @@ def _held_errors(scene, sc, case, result, key, idx, cr: _CaseRef) -> dict[str, F
         sol = ref.contact_held(sc, case, grid, idx)
         want = {"Tx": sol.Tx, "vx": sol.vx}
     else:
-        sol = REFERENCES[(scene.config.mode, key)]["held"](sc, case, grid)
+        sol = _source(scene, key)["held"](sc, case, grid)
         want = {"Tx": sol.Tx[idx], "vx": sol.vx[idx]}
     scale = {"Tx": cr.Tx_scale, "vx": cr.v_scale}
     return {v: (result.columns[v][idx] - want[v]) / scale[v] for v in ("Tx", "vx")}
