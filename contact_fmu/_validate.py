@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 
 class InputError(ValueError):
     """A parameter or input is outside its admissible range.
@@ -37,3 +39,10 @@ def nonnegative(name: str, value: float) -> float:
     if value < 0.0:
         raise InputError(name, value, ">= 0")
     return value
+
+
+def count(name: str, n: object, least: int) -> int:
+    """An integer >= least (grid sizes and the like; bools are refused)."""
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < least:
+        raise InputError(name, n, f"an integer >= {least}")
+    return int(n)

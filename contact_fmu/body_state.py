@@ -7,6 +7,8 @@ either follow their own equations (10)-(11) or are held at ratios to Vx (``Later
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -14,6 +16,17 @@ from ._validate import InputError, finite
 from .dynamics import Body, Lateral
 
 FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ContactOutputs:
+    """The contact at the end of a step: Tx, Ty (N), Mz (N m) and whether the body
+    slides grossly (no adhesion area)."""
+
+    Tx: float = 0.0
+    Ty: float = 0.0
+    Mz: float = 0.0
+    sliding: bool = False
 
 
 class BodyState:

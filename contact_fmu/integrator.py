@@ -39,13 +39,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ._validate import InputError, finite, positive
-from .body_state import BodyState
+from .body_state import BodyState, ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .kinematics import contact_quantities, is_full_slip
 from .law import ContactLaw
@@ -75,16 +74,6 @@ CAPACITY_MARGIN = 1e-9
 LoadInput = Loads | Callable[[float], Loads]
 
 __all__ = ["ContactLaw", "ContactOutputs", "LoadInput", "RollingBody", "StageSolveError"]
-
-
-@dataclass
-class ContactOutputs:
-    """Contact quantities at the end of a step (SI)."""
-
-    Tx: float = 0.0
-    Ty: float = 0.0
-    Mz: float = 0.0
-    sliding: bool = False
 
 
 class RollingBody(BodyState):

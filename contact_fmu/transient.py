@@ -54,7 +54,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import root
 
-from ._validate import InputError, finite, positive
+from ._validate import InputError, count, finite, positive
+from .body_state import BodyState, ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import LoadInput, StageSolveError
 from .kinematics import ROLLING, SLIDING, creepage
@@ -165,7 +166,7 @@ class LayerField:
     ) -> None:
         if not isinstance(law, LayerContact):
             raise InputError("law", type(law).__name__, "a LayerContact")
-        nx, ny = _grid_size("nx", nx, MIN_NX), _grid_size("ny", ny, MIN_NY)
+        nx, ny = count("nx", nx, MIN_NX), count("ny", ny, MIN_NY)
         if strips not in STRIP_RULES:
             raise InputError("strips", strips, " or ".join(f'"{r}"' for r in STRIP_RULES))
         self.law = law
@@ -652,23 +653,7 @@ def _strips(rule: str, ny: int, a2: float) -> tuple[FloatArray, FloatArray]:
     return a2 * np.sin(phi), a2 * np.cos(phi) * dphi
 
 
-def _grid_size(name: str, n: int, least: int) -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < least:
-        raise InputError(name, n, f"an integer >= {least}")
-    return int(n)
-
-
-@dataclass(frozen=True)
-class TransientOutputs:
-    """Contact force at the end of a step (N, N, N m) and whether no node adheres."""
-
-    Tx: float = 0.0
-    Ty: float = 0.0
-    Mz: float = 0.0
-    sliding: bool = False
-
-
-class TransientRollingBody:
+class TransientRollingBody(BodyState):
     """The rolling body of Eqs. (8)-(11) on the transient thin-layer field.
 
     The same interface as ``integrator.RollingBody`` (advance, set_load, outputs,
@@ -696,22 +681,8 @@ class TransientRollingBody:
     ) -> None:
         if not isinstance(body, Body):
             raise InputError("body", type(body).__name__, "a Body")
-        if lateral.dynamic_spin and body.Iz is None:
-            raise InputError("Iz", None, "given when Omega_z follows Eq. (11)")
         self.field = LayerField(law, nx, ny, strips)
-        self.body = body
-        self.lateral = lateral
-        self.t = finite("t0", t0)
-        Vx0 = finite("Vx0", Vx0)
-        vx0 = Vx0 - finite("Omega_y0", Omega_y0) * body.Rx
-        self.y = np.array([Vx0, vx0, finite("Vy0", Vy0), finite("Omega_z0", Omega_z0)])
-        self._apply_ratios(self.y)
-        self._idx = (
-            [1] + ([2] if lateral.dynamic_vy else []) + ([3] if lateral.dynamic_spin else [])
-        )
-        self._act = (
-            [0] + ([1] if lateral.dynamic_vy else []) + ([2] if lateral.dynamic_spin else [])
-        )
+        super().__init__(body, lateral, Vx0, Omega_y0, Vy0, Omega_z0, t0)
         # contact impulse int T dt of the scheme since t0 (N s, N s, N m s)
         self.impulse = np.zeros(3)
         self.out = self._outputs_now()
@@ -720,31 +691,6 @@ class TransientRollingBody:
     @property
     def law(self) -> LayerContact:
         return self.field.law
-
-    @property
-    def Vx(self) -> float:
-        return float(self.y[0])
-
-    @property
-    def vx(self) -> float:
-        return float(self.y[1])
-
-    @property
-    def Vy(self) -> float:
-        return float(self.y[2])
-
-    @property
-    def Omega_z(self) -> float:
-        return float(self.y[3])
-
-    @property
-    def Omega_y(self) -> float:
-        return (self.Vx - self.vx) / self.body.Rx
-
-    @property
-    def vy(self) -> float:
-        """Lateral rigid slip at the contact centre, Eq. (3) at x = 0: Vy."""
-        return self.Vy
 
     def cell_time(self) -> float:
         """dx/|Vx| (s): the step that rolls one grid cell (inf at Vx = 0)."""
@@ -783,25 +729,22 @@ class TransientRollingBody:
         centroid (m) and peak traction (Pa)."""
         s = self.field.summary()
         law = self.law
-        o = {
-            "Vx": self.Vx,
-            "Vy": self.Vy,
-            "Omega_y": self.Omega_y,
-            "Omega_z": self.Omega_z,
-            "vx": self.vx,
-            "vy": self.vy,
-            "Tx": self.out.Tx,
-            "Ty": self.out.Ty,
-            "Mz": self.out.Mz,
-            "xi_x": creepage(self.vx, self.Vx),
-            "xi_y": creepage(self.vy, self.Vx),
-            "xi_sp": creepage(self.Omega_z, self.Vx),
-            "a1": law.a1,
-            "a2": law.a2,
-            "p0": law.p0,
-            "adhesion": s["adhesion"],
-            "regime": SLIDING if self.out.sliding else ROLLING,
-        }
+        o = self.kinematics()
+        o.update(
+            {
+                "Tx": self.out.Tx,
+                "Ty": self.out.Ty,
+                "Mz": self.out.Mz,
+                "xi_x": creepage(self.vx, self.Vx),
+                "xi_y": creepage(self.vy, self.Vx),
+                "xi_sp": creepage(self.Omega_z, self.Vx),
+                "a1": law.a1,
+                "a2": law.a2,
+                "p0": law.p0,
+                "adhesion": s["adhesion"],
+                "regime": SLIDING if self.out.sliding else ROLLING,
+            }
+        )
         o.update({k: v for k, v in s.items() if k != "adhesion"})
         return o
 
@@ -874,7 +817,7 @@ class TransientRollingBody:
         self.y = y2  # stiffly accurate: the last stage is the step's result
         self.field.commit(st2)
         self.impulse += h * (A21 * T1 + GAMMA * T2)
-        self.out = TransientOutputs(*(float(v) for v in T2), sliding=self._no_adhesion(st2))
+        self.out = ContactOutputs(*(float(v) for v in T2), sliding=self._no_adhesion(st2))
 
     @staticmethod
     def _no_adhesion(st: StageField) -> bool:
@@ -895,13 +838,6 @@ class TransientRollingBody:
         b = self.body
         full = np.array([b.M, b.m_slip, b.M, b.Iz if b.Iz is not None else 0.0])
         return full[self._idx]
-
-    def _apply_ratios(self, y: FloatArray) -> FloatArray:
-        if self.lateral.vy_ratio is not None:
-            y[2] = self.lateral.vy_ratio * y[0]
-        if self.lateral.spin_ratio is not None:
-            y[3] = self.lateral.spin_ratio * y[0]
-        return y
 
     def _stage(
         self,
@@ -1049,6 +985,6 @@ class TransientRollingBody:
             raise StageSolveError(f"stage solve failed: {sol.message}")
         return evaluate(u + np.asarray(sol.x) * scale)
 
-    def _outputs_now(self) -> TransientOutputs:
+    def _outputs_now(self) -> ContactOutputs:
         Tx, Ty, Mz = self.field.resultant()
-        return TransientOutputs(Tx, Ty, Mz, self._no_adhesion(self.field.current()))
+        return ContactOutputs(Tx, Ty, Mz, self._no_adhesion(self.field.current()))

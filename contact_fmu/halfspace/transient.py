@@ -77,8 +77,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.sparse.linalg import LinearOperator, gmres
 
-from .._validate import InputError, finite, positive
-from ..body_state import BodyState
+from .._validate import InputError, count, finite, positive
+from ..body_state import BodyState, ContactOutputs
 from ..dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from ..integrator import LoadInput
 from ..kinematics import ROLLING, SLIDING, creepage
@@ -410,8 +410,8 @@ class HalfSpaceField:
             raise InputError(
                 "contact", type(contact).__name__, "a HalfSpaceContact or LayerContact"
             )
-        n = _size("n", n, MIN_N)
-        ny = n if ny is None else _size("ny", ny, MIN_NY)
+        n = count("n", n, MIN_N)
+        ny = n if ny is None else count("ny", ny, MIN_NY)
         self.contact = contact
         self.G, self.nu = float(G), float(nu)
         self.tol = positive("tol", tol)
@@ -749,23 +749,7 @@ class HalfSpaceField:
         self._refresh()
 
 
-def _size(name: str, n: int, least: int) -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < least:
-        raise InputError(name, n, f"an integer >= {least}")
-    return int(n)
-
-
 # ---- the body on the field -----------------------------------------------------------------
-@dataclass(frozen=True)
-class StepOutputs:
-    """Contact force at the end of a step (N, N, N m) and whether no element adheres."""
-
-    Tx: float = 0.0
-    Ty: float = 0.0
-    Mz: float = 0.0
-    sliding: bool = False
-
-
 class TransientHalfSpaceBody(BodyState):
     """The rolling body of Eqs. (8)-(9) on Kalker's transient half-space field.
 
@@ -1022,7 +1006,7 @@ class TransientHalfSpaceBody(BodyState):
         T1 = np.array([res.Tx, res.Ty, res.Mz])
         T0 = np.array([T_n, self.out.Ty, self.out.Mz])
         self.impulse += h * (th * T1 + (1.0 - th) * T0)
-        self.out = StepOutputs(res.Tx, res.Ty, res.Mz, _no_adhesion(res.solution))
+        self.out = ContactOutputs(res.Tx, res.Ty, res.Mz, _no_adhesion(res.solution))
         self.counts = (counts[0], counts[1], counts[2])
 
     def _velocity_scale(self, h: float) -> float:
@@ -1032,11 +1016,11 @@ class TransientHalfSpaceBody(BodyState):
         shift = law.mu * law.P / self.stiffness
         return shift * (max(abs(self.Vx), V_SCALE_FLOOR) / (2.0 * law.a1) + 1.0 / h)
 
-    def _outputs_now(self) -> StepOutputs:
+    def _outputs_now(self) -> ContactOutputs:
         Tx, Ty, Mz = self.field.resultant()
         C = self.field.in_contact
         sliding = bool(np.any(C)) and not np.any(C & ~self.field.slip)
-        return StepOutputs(Tx, Ty, Mz, sliding)
+        return ContactOutputs(Tx, Ty, Mz, sliding)
 
 
 def _no_adhesion(sol: CoulombSolution) -> bool:
