@@ -336,7 +336,8 @@ def row_text(r: Result) -> str:
 CHECK_NAMES = ("finite", "bound", "dissipation", "oscillation", "convergence", "memory")
 NOTE = (
     "Each case runs the body-mode FMU through fmpy call by call at its communication "
-    "step h, and again at h/2 and h/4 (same internal steps per communication step). "
+    "step h (the long run: the FMU's stepper called directly), and again at h/2 and h/4 "
+    "(same internal steps per communication step). "
     "Checks: every doStep fmi2OK and every output finite; max |Tx|/(mu P) <= 1 + 16 eps; "
     "min Tx vx/(mu P v_s) >= -1e-11 (friction power never negative; v_s = creepage at "
     "full slip x |Vx|); no step-to-step oscillation: a zig-zag (three successive "
