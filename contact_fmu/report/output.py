@@ -230,7 +230,7 @@ def summary_markdown(reports: list[SceneReport], only_substeps: int | None = Non
             continue
         body.append("| " + " | ".join(row) + " |")
     skipped = ["; ".join(dict.fromkeys(r.notes)) for r in reports if not r.rows]
-    tail = "\nNot compared: " + ", ".join(skipped) + "\n" if skipped else ""
+    tail = "\nNot compared: " + "; ".join(skipped) + "\n" if skipped else ""
     return head + "\n" + "\n".join(body) + "\n" + tail
 
 
