@@ -9,7 +9,8 @@ runs; the cost per communication step is the mean over the steps of each step's 
 run (the machine is shared: the minimum filters out the other processes). "model" is
 the same model object called directly in Python (no FMI), to separate the FMI/pythonfmu
 overhead from the numerics.
-``--write`` replaces the section "## FMU step cost" of docs/performance.md.
+``--write`` replaces the section "## FMU step cost" of docs/performance.md and the table
+between the README_MARKS comments in README.md.
 """
 
 from __future__ import annotations
@@ -26,13 +27,16 @@ import numpy as np
 
 import fmu_build
 from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.report.output import replace_section
 from contact_fmu.scenario import discover, load, runner
 from contact_fmu.scenario.instance import OK, Instance
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
+README = ROOT / "README.md"
 SECTION = "## FMU step cost"
+README_MARKS = ("<!-- bench_fmu_step.py: table -->", "<!-- bench_fmu_step.py: end -->")
 
 
 def time_fmu(path: Path, scene, case, n: int, repeats: int) -> tuple[float, dict[str, float]]:
@@ -86,6 +90,8 @@ def measure(steps: int, repeats: int) -> list[dict]:
         scene = load(path)
         if scene.config.contact_law != "layer":  # the full FMUs hold the layer law; the
             continue  # half-space FMUs' cost: benchmarks/bench_halfspace_fmu.py
+        if scene.config.phase != "steady":  # the full FMU has the steady phase only; the
+            continue  # field's cost: bench_cosim.py, docs/performance.md
         case = scene.cases[0]
         n = min(steps, scene.n_steps)
         own = fmu_build.build(scene.config, OUT)
@@ -114,21 +120,9 @@ def measure(steps: int, repeats: int) -> list[dict]:
     return rows
 
 
-def markdown(rows: list[dict], steps: int, repeats: int) -> str:
-    today = datetime.date.today().isoformat()
-    cpu = platform.processor() or platform.machine()
+def table(rows: list[dict]) -> str:
+    """The step-cost table with its footnote (Markdown)."""
     lines = [
-        SECTION,
-        "",
-        f"Measured by `benchmarks/bench_fmu_step.py` on {today} ({cpu}, "
-        f"Python {platform.python_version()}, {steps} steps; each step the fastest of "
-        f"{repeats} runs, full FMU {max(2, repeats // 2)}; shared 2-core machine). Per "
-        "communication step: setReal of the "
-        "inputs, doStep, getReal of the scene's outputs through fmpy's FMU2Slave. The full "
-        "FMU of a mode holds every variable and model part (Eqs. 10-11 integrated, both "
-        "steppers); it runs the scene's inputs with its extra inputs at 0. *model*: the "
-        "scene's model object stepped in Python without FMI.",
-        "",
         "| scene | mode | variables (full) | FMU size KiB (full) | modules (full) "
         "| step ms | full FMU step ms | model ms | abs(Tx - Tx_full) N |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -145,22 +139,35 @@ def markdown(rows: list[dict], steps: int, repeats: int) -> str:
         "",
         "(*) Fig. 12 holds vy/Vx = 0.002; the full FMU has no held ratio and integrates "
         "Eq. (10) from Vy = 0 instead, so its Tx differs by the lateral creep.",
-        "",
     ]
     return "\n".join(lines)
 
 
-def write(section: str) -> None:
-    text = DOC.read_text() if DOC.exists() else "# Performance\n\n"
-    if SECTION in text:
-        head, rest = text.split(SECTION, 1)
-        nxt = rest.find("\n## ")
-        tail = rest[nxt + 1 :] if nxt >= 0 else ""
-        text = head + section + ("\n" + tail if tail else "")
-    else:
-        text = text.rstrip("\n") + "\n\n" + section
-    DOC.parent.mkdir(parents=True, exist_ok=True)
-    DOC.write_text(text)
+def markdown(rows: list[dict], steps: int, repeats: int) -> str:
+    """The body of the docs section: how it was measured, then the table."""
+    today = datetime.date.today().isoformat()
+    cpu = platform.processor() or platform.machine()
+    return (
+        f"Measured by `benchmarks/bench_fmu_step.py --write` on {today} ({cpu}, "
+        f"Python {platform.python_version()}, {steps} steps; each step the fastest of "
+        f"{repeats} runs, full FMU {max(2, repeats // 2)}; shared 2-core machine). Per "
+        "communication step: setReal of the inputs, doStep, getReal of the scene's outputs "
+        "through fmpy's FMU2Slave. The full FMU of a mode holds every variable and model "
+        "part (Eqs. 10-11 integrated, both steppers); it runs the scene's inputs with its "
+        "extra inputs at 0. *model*: the scene's model object stepped in Python without "
+        "FMI.\n\n" + table(rows) + "\n"
+    )
+
+
+def write_readme(text: str) -> None:
+    """Replace the table between README_MARKS in README.md."""
+    readme = README.read_text()
+    begin, end = README_MARKS
+    if begin not in readme or end not in readme:
+        raise SystemExit(f"README.md lacks the markers {begin} ... {end}")
+    head, rest = readme.split(begin, 1)
+    tail = rest.split(end, 1)[1]
+    README.write_text(head + begin + "\n" + text + "\n" + end + tail)
 
 
 def main() -> None:
@@ -169,10 +176,12 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
     args = ap.parse_args()
-    section = markdown(measure(args.steps, args.repeats), args.steps, args.repeats)
+    rows = measure(args.steps, args.repeats)
+    section = markdown(rows, args.steps, args.repeats)
     print(section)
     if args.write:
-        write(section)
+        replace_section(DOC, SECTION, section)
+        write_readme(table(rows))
 
 
 if __name__ == "__main__":
