@@ -1,0 +1,31 @@
+"""Session-wide pytest hooks.
+
+The suite loads several dozen pythonfmu FMUs (fmpy and libcosim) into this one process.
+pythonfmu's native wrapper can corrupt the heap when its libraries are torn down at
+interpreter exit (NTNU-IHB/PythonFMU issue 228, "free(): corrupted unsorted chunks";
+seen here once, as "corrupted double-linked list" after every test had passed). The
+results are reported by then, so the process ends without the interpreter's
+finalisation, keeping pytest's exit status: a failing test still fails the run.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import pytest
+
+_status: list[int] = []
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    _status.append(int(exitstatus))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """After the summary and every plugin's own unconfigure: exit with pytest's status."""
+    if _status and not hasattr(sys, "ps1"):  # not inside an interactive session
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(_status[-1])
