@@ -266,4 +266,5 @@ def _mirror(sol: RollingSolution) -> RollingSolution:
         -sol.Mz,
         sol.newton_iterations,
         sol.gmres_iterations,
+        sol.levels,
     )
