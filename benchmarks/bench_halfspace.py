@@ -14,6 +14,15 @@ exceed --dense-limit-mb. Times are the median of --repeat cold solves (no warm
 start; the patch, i.e. kernels, symbols and the FASTSIM calibration of the initial
 guess, is built once per grid and timed separately as "setup").
 
+The solver's default is nested iteration (coarse levels of n/2, n/4, ... down to 16
+elements per side give the initial guess, docs/halfspace.md); "single-level" is the
+same solver started from the calibrated FASTSIM guess on the fine grid
+(``replace(patch, coarsen=None)``), and "previous" the solver as it was before nested
+iteration (single level, slip rows preconditioned by their diagonal alone, no
+oversolving guard), all three timed alternately. Newton and GMRES counts are the fine
+grid's; "GMRES all levels" weights each coarse level's iterations by its share of the
+elements.
+
 Threaded BLAS is switched off (the environment variables below are set before numpy
 is imported): on the shared 2-core machine OpenBLAS threads contend with the other
 process and slow GMRES's vector operations down by an order of magnitude.
@@ -36,6 +45,7 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from contact_fmu.halfspace import rolling  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
 
@@ -54,6 +64,37 @@ def _time(fn, repeat: int) -> tuple[float, object]:
     return statistics.median(times), out
 
 
+def _time_interleaved(fns: list, repeat: int) -> list[tuple[float, object]]:
+    """Median times of several solves run alternately (the same machine load for each)."""
+    times: list[list[float]] = [[] for _ in fns]
+    outs: list[object] = [None] * len(fns)
+    for _ in range(repeat):
+        for k, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            outs[k] = fn()
+            times[k].append(time.perf_counter() - t0)
+    return [(statistics.median(t), o) for t, o in zip(times, outs, strict=True)]
+
+
+def _previous(patch, *args):
+    """The solver as it was before nested iteration (2026-11-22): on a single-level patch,
+    the slip rows preconditioned by their diagonal alone and no oversolving guard."""
+    saved = rolling.OVERSOLVE, rolling.SLIP_BLOCK_RATIO
+    rolling.OVERSOLVE, rolling.SLIP_BLOCK_RATIO = 0.0, 0.0
+    try:
+        return solve_rolling(patch, *args)
+    finally:
+        rolling.OVERSOLVE, rolling.SLIP_BLOCK_RATIO = saved
+
+
+def _levels(patch) -> list:
+    """The patch and its coarse levels, finest first."""
+    out = [patch]
+    while out[-1].coarse is not None:
+        out.append(out[-1].coarse)
+    return out
+
+
 def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
     results = {"grids": grids, "cases": {}, "setup": {}, "machine": platform.platform()}
     for n in grids:
@@ -61,32 +102,61 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
         xref = contact.mu * contact.P / (contact.elastic.G * contact.c**2)
         t0 = time.perf_counter()
         patch = contact.patch
-        _ = patch.op.symbols, patch.op.inverse_symbols, patch.op.inverse_offsets
-        _ = patch.flexibilities
+        levels = _levels(patch)
+        for lev in levels:
+            _ = lev.op.symbols, lev.op.inverse_symbols, lev.op.inverse_offsets
+        _ = levels[-1].flexibilities
         setup = time.perf_counter() - t0
+        # the single-level solver (FASTSIM guess on the fine grid, no coarse levels)
+        single = replace(patch, coarsen=None)
+        t0 = time.perf_counter()
+        _ = single.op.symbols, single.op.inverse_symbols, single.op.inverse_offsets
+        _ = single.flexibilities
+        single_setup = time.perf_counter() - t0
         m = int(patch.contact.sum())
         dense_mb = 8.0 * (2 * m) * (2 * (m + patch.grid.ny)) / 1e6
         dense_patch = None
         dense_setup = math.nan
         if dense_mb <= dense_limit_mb:
             dense_patch = replace(patch, backend="dense")
-            dense_patch.__dict__["flexibilities"] = patch.flexibilities  # same initial guess
             t0 = time.perf_counter()
-            _ = dense_patch._dense
+            for lev in _levels(dense_patch):
+                _ = lev._dense
+            coarsest = _levels(dense_patch)[-1]
+            coarsest.__dict__["flexibilities"] = levels[-1].flexibilities  # same guess
             dense_setup = time.perf_counter() - t0
         results["setup"][n] = {
             "elements_in_contact": m,
             "fft_setup_s": setup,
+            "single_setup_s": single_setup,
             "dense_matrix_MB": dense_mb,
             "dense_setup_s": dense_setup,
         }
         for name, w in CASES.items():
             args = (w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
-            t_fft, sol = _time(lambda a=args, p=patch: solve_rolling(p, *a), repeat)
+            (t_fft, sol), (t_single, s1), (t_prev, s0) = _time_interleaved(
+                [
+                    lambda a=args, p=patch: solve_rolling(p, *a),
+                    lambda a=args, p=single: solve_rolling(p, *a),
+                    lambda a=args, p=single: _previous(p, *a),
+                ],
+                repeat,
+            )
+            g = float(patch.g.max())
             entry = {
                 "fft_s": t_fft,
                 "newton": sol.newton_iterations,
                 "gmres": sol.gmres_iterations,
+                "levels": [list(lv) for lv in sol.levels],
+                "gmres_work": sol.gmres_work,
+                "single_s": t_single,
+                "single_newton": s1.newton_iterations,
+                "single_gmres": s1.gmres_iterations,
+                "max_dtau_single_over_g": float(np.abs(s1.tau - sol.tau).max() / g),
+                "previous_s": t_prev,
+                "previous_newton": s0.newton_iterations,
+                "previous_gmres": s0.gmres_iterations,
+                "max_dtau_previous_over_g": float(np.abs(s0.tau - sol.tau).max() / g),
                 "Tx/muP": sol.Tx / (contact.mu * contact.P),
                 "Ty/muP": sol.Ty / (contact.mu * contact.P),
                 "adhesion": sol.adhesion_fraction,
@@ -100,9 +170,14 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
                 entry["dense_s"] = None
             results["cases"].setdefault(name, {})[n] = entry
             print(
-                f"n={n:4d} {name:14s} fft {t_fft:8.4f} s  dense "
+                f"n={n:4d} {name:14s} fft {t_fft:8.4f} s  single-level {t_single:8.4f} s  "
+                f"previous {t_prev:8.4f} s  dense "
                 f"{entry['dense_s'] if entry['dense_s'] is not None else float('nan'):8.4f} s  "
-                f"Newton {sol.newton_iterations:2d}  GMRES {sol.gmres_iterations:4d}",
+                f"Newton {sol.newton_iterations:2d} (single {s1.newton_iterations:2d}, "
+                f"previous {s0.newton_iterations:2d})  "
+                f"GMRES {sol.gmres_iterations:4d} (single {s1.gmres_iterations:4d}, "
+                f"previous {s0.gmres_iterations:4d}, "
+                f"all levels {sol.gmres_work:.0f} fine-equivalent)  levels {sol.levels}",
                 flush=True,
             )
     return results
@@ -125,31 +200,39 @@ def markdown(res: dict) -> str:
             f"\n**{case}** (railway wheel on rail, {CASES[case]} in units of mu P/(G c^2))\n"
         )
         lines.append(
-            "| grid | elements in contact | FFT (s) | dense (s) | dense/FFT | Newton | GMRES "
-            "| GMRES/Newton |"
+            "| grid | elements in contact | FFT (s) | single-level (s) | previous (s) | dense (s) "
+            "| dense/FFT | Newton (single, previous) | GMRES (single, previous) | GMRES/Newton "
+            "| GMRES all levels | coarse levels Newton/GMRES |"
         )
-        lines.append("|---|---|---|---|---|---|---|---|")
+        lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
         for n in res["grids"]:
             e = res["cases"][case][n]
             s = res["setup"][n]
             d = e.get("dense_s")
+            coarse = ", ".join(f"{lv[0]}: {lv[2]}/{lv[3]}" for lv in e["levels"][:-1]) or "-"
             lines.append(
-                f"| {n}x{n} | {s['elements_in_contact']} | {e['fft_s']:.4f} | "
+                f"| {n}x{n} | {s['elements_in_contact']} | {e['fft_s']:.4f} "
+                f"| {e['single_s']:.4f} | {e['previous_s']:.4f} | "
                 + (f"{d:.4f} | {e['dense_over_fft']:.1f}" if d else "skipped (memory) | -")
-                + f" | {e['newton']} | {e['gmres']} | {e['gmres'] / max(e['newton'], 1):.1f} |"
+                + f" | {e['newton']} ({e['single_newton']}, {e['previous_newton']})"
+                f" | {e['gmres']} ({e['single_gmres']}, {e['previous_gmres']})"
+                f" | {e['gmres'] / max(e['newton'], 1):.1f} | {e['gmres_work']:.0f} | {coarse} |"
             )
         fx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "fft_s", case))
         dx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "dense_s", case))
         lines.append(
             f"\nScaling exponent p of time ~ N^p (N = n^2 elements): FFT {fx}; dense {dx}."
         )
-    lines.append("\n| grid | FFT setup (s) | dense matrix (MB) | dense setup (s) |")
-    lines.append("|---|---|---|---|")
+    lines.append(
+        "\n| grid | FFT setup, all levels (s) | single-level setup (s) | dense matrix (MB) "
+        "| dense setup (s) |"
+    )
+    lines.append("|---|---|---|---|---|")
     for n in res["grids"]:
         s = res["setup"][n]
         lines.append(
-            f"| {n}x{n} | {s['fft_setup_s']:.3f} | {s['dense_matrix_MB']:.0f} "
-            f"| {s['dense_setup_s']:.3f} |"
+            f"| {n}x{n} | {s['fft_setup_s']:.3f} | {s['single_setup_s']:.3f} "
+            f"| {s['dense_matrix_MB']:.0f} | {s['dense_setup_s']:.3f} |"
         )
     return "\n".join(lines)
 
