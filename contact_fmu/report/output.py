@@ -32,7 +32,15 @@ COLUMNS = (
     "Tx_max_held",
     "vx_max_held",
     "error",
+    "refined",
+    "value",
+    "spacing",
+    "setup",
+    "Ty_max",
+    "Ty_rms",
 )
+# Numeric columns written with repr (every digit) and read back as floats.
+NUMBERS = COLUMNS[8:17] + ("spacing", "setup", "Ty_max", "Ty_rms")
 
 
 def _fmt(x: object, spec: str = ".3g") -> str:
@@ -52,7 +60,8 @@ def write_csv(report: SceneReport, path: Path) -> Path:
                 [r.scene, r.family, s.get("method", ""), s.get("scheme", ""),
                  s.get("substeps", ""), r.level, repr(r.h), r.steps]
                 + [repr(getattr(r, c)) for c in COLUMNS[8:17]]
-                + [r.error or ""]
+                + [r.error or "", r.refined, r.value, repr(r.spacing), repr(r.setup),
+                   repr(r.Ty_max), repr(r.Ty_rms)]
             )  # fmt: skip
     return path
 
@@ -69,6 +78,32 @@ ERROR_NOTE = (
     "slope. Wall time: fmpy.simulate_fmu (instantiate, all steps, terminate), fastest "
     "of the repeats, summed over the cases."
 )
+# Scenes whose ladder refines the model at their own step h (sweep.LADDERS), by ladder.
+LADDER_NOTES = {
+    "grid": (
+        "fig12_transient (phase transient) refines the traction field's grid nx x ny at "
+        "its own step h (nx = 16, 32, 64, ny = nx/2; cells_per_step 0.5, so the internal "
+        "step halves with the cell; quick: 16 and 32 over the first 50 steps), against "
+        "TransientRollingBody outside the FMU under the loads as the FMU receives them, "
+        "on 64 x 32 and 128 x 64 combined by Richardson's extrapolation for second "
+        "order (within 1.2e-4 of v_s and 5e-5 of mu P of the extrapolation from 128 x 64 "
+        "and 256 x 128, measured over the first ms of eta = 10.9; the nx = 64 row's error "
+        "is therefore Richardson's estimate 4/3 |F64 - R128|). Order: in the cell 1/nx."
+    ),
+    "table": (
+        "rail_creep (half-space law, contact mode) refines the creep-force table's nodes "
+        "along xi and eta at its own step h (the node spacing halved per row, 13 x 11, "
+        "25 x 21, 49 x 41; spin axis as the scene's; quick: the first two, first case), "
+        "against direct solves of the steady-rolling problem on the table's solver grid "
+        "at the kinematics the FMU holds (41 points per case), with the table's radial "
+        "saturation applied: the saturation itself moves |T| by at most (4/27) 0.02 = "
+        "3.0e-3 of mu P (2.4e-3 to 2.9e-3 at these points), and the solver grid's own "
+        "discretisation error is docs/halfspace.md's. Order: in the node spacing. Cost: "
+        "the fmpy run, and apart the table's build (recorded in the table; built once, "
+        "cached in out/tables). Ty relative to mu P."
+    ),
+}
+LADDER_NOTE = " ".join(LADDER_NOTES.values())
 HELD_NOTE = (
     "*held*: max error against the reference with the inputs held over each step as "
     "the FMU receives them (the FMU's own integration error)."
@@ -78,34 +113,49 @@ HELD_NOTE = (
 def scene_markdown(report: SceneReport) -> str:
     orders = report.family_orders()
     held = report.held
+    ladder = report.refined != "h"
+    with_ty = any(math.isfinite(r.Ty_max) for r in report.rows)
+    with_setup = any(math.isfinite(r.setup) for r in report.rows)
+    note = ERROR_NOTE + (" " + LADDER_NOTES.get(report.refined, "") if ladder else "")
+    note += " " + HELD_NOTE if held else ""
     lines = [
         f"## {report.scene}: {report.title}",
         "",
         f"Mode {report.mode}; cases: {', '.join(report.cases)}; FMU `{report.fmu or '-'}`.",
         "",
-        ERROR_NOTE + (" " + HELD_NOTE if held else ""),
+        f"Refined along a family: {report.refined_doc}.",
+        "",
+        note,
         "",
     ]
-    head = (
-        "| family | h (s) | steps | wall (s) | Tx max | Tx RMS | vx max | vx RMS "
-        "| order Tx | order vx |"
-    )
-    sep = "|---|---|---|---|---|---|---|---|---|---|"
+    first = f"{report.refined} | h (s)" if ladder else "h (s)"
+    head = f"| family | {first} | steps | wall (s) |"
+    if with_setup:
+        head += " table build (s) |"
+    head += " Tx max | Tx RMS | vx max | vx RMS |"
+    if with_ty:
+        head += " Ty max | Ty RMS |"
+    head += " order Tx | order vx |"
     if held:
         head += " Tx max held | vx max held |"
-        sep += "---|---|"
+    sep = "|" + "---|" * (head.count("|") - 1)
     lines += [head, sep]
     for f in report.families():
         for r in report.of(f):
-            cells = [
-                r.family, _fmt(r.h), str(r.steps), _fmt(r.wall), _fmt(r.Tx_max, ".2e"),
-                _fmt(r.Tx_rms, ".2e"), _fmt(r.vx_max, ".2e"), _fmt(r.vx_rms, ".2e"),
-                _fmt(r.order_Tx, ".2f"), _fmt(r.order_vx, ".2f"),
-            ]  # fmt: skip
+            cells = [r.family] + ([r.value] if ladder else []) + [_fmt(r.h), str(r.steps),
+                                                                 _fmt(r.wall)]  # fmt: skip
+            if with_setup:
+                cells.append(_fmt(r.setup))
+            at_error = len(cells)
+            cells += [_fmt(r.Tx_max, ".2e"), _fmt(r.Tx_rms, ".2e"), _fmt(r.vx_max, ".2e"),
+                      _fmt(r.vx_rms, ".2e")]  # fmt: skip
+            if with_ty:
+                cells += [_fmt(r.Ty_max, ".2e"), _fmt(r.Ty_rms, ".2e")]
+            cells += [_fmt(r.order_Tx, ".2f"), _fmt(r.order_vx, ".2f")]
             if held:
                 cells += [_fmt(r.Tx_max_held, ".2e"), _fmt(r.vx_max_held, ".2e")]
             if r.error:
-                cells[4] = r.error if r.error.startswith("skipped") else f"failed: {r.error}"
+                cells[at_error] = r.error if r.error.startswith("skipped") else f"failed: {r.error}"
             lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Observed order per family (least squares over the steps):", ""]
     lines += ["| family | order Tx | order vx |", "|---|---|---|"]
@@ -148,23 +198,30 @@ def plot(report: SceneReport, path: Path) -> Path:
             rows = [r for r in report.of(f) if not r.error]
             if not rows:
                 continue
-            t = np.array([r.wall for r in rows])
+            t = np.array([r.wall + (r.setup if math.isfinite(r.setup) else 0.0) for r in rows])
             e = np.maximum([getattr(r, f"{var}_max") for r in rows], PLOT_FLOOR)
             color, marker, ls = _style(rows[0], fams)
             p = orders[f][0 if var == "Tx" else 1]
             name = f"{f} (p = {p:.2f})" if math.isfinite(p) else f
             ax.loglog(t, e, ls, color=color, marker=marker, label=name, ms=5, lw=1.2)
-        ax.set_xlabel("wall time of the fmpy run (s)")
+        setup = any(math.isfinite(r.setup) for r in report.rows)
+        ax.set_xlabel("wall time of the fmpy run" + (" + table build" if setup else "") + " (s)")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
     handles, labels = axes[0].get_legend_handles_labels()
     if handles:
         fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=7, frameon=False)
-    steps = sorted({r.h for r in report.rows}, reverse=True)
-    span = f"h = {steps[0]:.3g} s to {steps[-1]:.3g} s" if steps else ""
+    if report.refined == "h":
+        steps = sorted({r.h for r in report.rows}, reverse=True)
+        span = f"h = {steps[0]:.3g} s to {steps[-1]:.3g} s" if steps else ""
+        along = f"the communication step halves, {span}"
+    else:
+        values = [r.value for r in report.of(fams[0])] if fams else []
+        span = f"{values[0]} to {values[-1]}" if values else ""
+        along = f"{report.refined} is refined, {span}"
     fig.suptitle(
-        f"{report.scene}: error against run time; along a curve the communication step "
-        f"halves, {span} (left to right); p: observed order of the Tx error",
+        f"{report.scene}: error against run time; along a curve {along} (left to right); "
+        "p: observed order of the Tx error",
         fontsize=10,
     )
     fig.tight_layout(rect=(0, 0.14, 1, 0.95))
@@ -187,10 +244,15 @@ def read_csv(path: Path, title: str = "", mode: str = "") -> SceneReport:
         if d["substeps"]:
             settings["substeps"] = int(d["substeps"])
         r = Row(d["scene"], d["family"], settings, int(d["level"]), float(d["h"]), int(d["steps"]))
-        for c in COLUMNS[8:17]:
-            setattr(r, c, float(d[c]))
+        for c in NUMBERS:
+            if d.get(c):
+                setattr(r, c, float(d[c]))
         r.error = d["error"] or None
+        r.refined = d.get("refined") or "h"
+        r.value = d.get("value") or r.value
         rep.rows.append(r)
+    if rep.rows:
+        rep.refined = rep.rows[0].refined
     return rep
 
 
@@ -204,16 +266,23 @@ def summary_rows(reports: list[SceneReport]) -> list[list[str]]:
             if not rs:
                 continue
             pT, pv = orders[f]
+            if rep.refined == "h":
+                span = f"{rs[0].h:.3g} .. {rs[-1].h:.3g}"
+            else:
+                span = f"{rs[0].h:.3g}; {rep.refined} {rs[0].value} .. {rs[-1].value}"
+            wall = f"{rs[0].wall:.3g} .. {rs[-1].wall:.3g}"
+            if math.isfinite(rs[0].setup):
+                wall += f" (+ table build {rs[0].setup:.3g} .. {rs[-1].setup:.3g})"
             rows.append(
                 [
                     rep.scene,
                     f,
-                    f"{rs[0].h:.3g} .. {rs[-1].h:.3g}",
+                    span,
                     f"{rs[0].Tx_max:.1e} .. {rs[-1].Tx_max:.1e}",
                     f"{rs[0].vx_max:.1e} .. {rs[-1].vx_max:.1e}",
                     _fmt(pT, ".2f"),
                     _fmt(pv, ".2f"),
-                    f"{rs[0].wall:.3g} .. {rs[-1].wall:.3g}",
+                    wall,
                 ]
             )
     return rows
@@ -221,7 +290,7 @@ def summary_rows(reports: list[SceneReport]) -> list[list[str]]:
 
 def summary_markdown(reports: list[SceneReport], only_substeps: int | None = None) -> str:
     head = (
-        "| scene | family | h (s) | Tx max error / (mu P) | vx max error / v_s "
+        "| scene | family | h (s) or refined | Tx max error / (mu P) | vx max error / v_s "
         "| order Tx | order vx | wall (s) |\n|---|---|---|---|---|---|---|---|"
     )
     body = []

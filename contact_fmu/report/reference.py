@@ -16,10 +16,21 @@ Sources, by model:
 - body mode, ``method = "quasistationary"``: the closed form, Tx of Eq. (26),
   Vx(t) = Vx(0) + (A1/M) int (Fx_ex + My_ex/Rx) dt and vx = |Vx| T_x^-1(Tx) of
   Eq. (28) (the integral by scipy's ``quad``, exact sums for held inputs);
-- contact mode: the resultant of the traction of Eq. (36) (|tau| = min((l - x)|v| /
-  (|Vx| k), mu p)) integrated by nested ``quad`` over the ellipse, at up to
-  CONTACT_SAMPLES points per case: independent of the closed form H(beta) of
-  Eqs. (40)-(43) that the FMU evaluates.
+- body mode, phase "transient": the thin-layer field of Eq. (15) with its time
+  derivative, coupled with Eqs. (8)-(11) (``transient.TransientRollingBody``, outside
+  the FMU) on TRANSIENT_REFINE and 2 TRANSIENT_REFINE times the scene's grid (nx, ny)
+  at its cells_per_step (the internal step refined with the cell), combined by
+  Richardson's extrapolation for a second-order method, R = R_f + (R_f - R_c)/3
+  (docs/transient.md: second order in the cell, 1.9-2.0 measured);
+- contact mode, thin-layer law: the resultant of the traction of Eq. (36) (|tau| =
+  min((l - x)|v| / (|Vx| k), mu p)) integrated by nested ``quad`` over the ellipse, at
+  up to CONTACT_SAMPLES points per case: independent of the closed form H(beta) of
+  Eqs. (40)-(43) that the FMU evaluates;
+- contact mode, half-space law: direct solves of the steady-rolling problem
+  (``HalfSpaceContact`` of the scene's [halfspace] declaration, on the solver grid of
+  its table) at the same points, (Tx, Ty) mapped by the table's radial saturation
+  (``halfspace.table.saturate``, the C1 cap at mu P): the law the table converges to
+  as its nodes are refined, independent of its interpolation.
 
 Values at a communication point are those at the end of the step that reaches it: the
 left limit where an input jumps there.
@@ -36,7 +47,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import integrate
 
-from ..dynamics import Body, Lateral
+from ..dynamics import Body, Lateral, Loads
+from ..kinematics import rigid_slip
 from ..layer import LayerContact
 from ..scenario.schema import Case, Scene
 from .equations import RollingEquations, quasistationary_force, quasistationary_slip
@@ -52,6 +64,12 @@ ATOL_FRACTION = 1e-13
 CONTACT_SAMPLES = 41
 # Nested quadrature tolerance (relative) of the contact-mode reference.
 QUAD_RTOL = 1e-12
+# Transient phase: the reference fields are on this factor and twice it times the
+# scene's grid. Measured on fig12_transient (eta = 10.9, first ms, against the
+# extrapolation from 128 x 64 and 256 x 128): the extrapolation from 64 x 32 and
+# 128 x 64 is within 1.2e-4 of v_s in vx and 4.6e-5 of mu P in Tx, 128 x 64 alone
+# within 7.5e-4 and 2.5e-4 (docs/performance.md).
+TRANSIENT_REFINE = 2
 LOAD_NAMES = ("P", "Fx_ex", "Fy_ex", "My_ex", "Mz_ex")
 KINEMATICS = ("P", "Vx", "Vy", "Omega_y", "Omega_z")
 
@@ -62,12 +80,14 @@ class NoReferenceError(ValueError):
 
 @dataclass(frozen=True)
 class Solution:
-    """Reference values on the times ``time`` (s): Tx (N), vx (m/s), Vx (m/s)."""
+    """Reference values on the times ``time`` (s): Tx (N), vx (m/s), Vx (m/s), and Ty (N)
+    where the reference has it."""
 
     time: FloatArray
     Tx: FloatArray
     vx: FloatArray
     Vx: FloatArray
+    Ty: FloatArray | None = None
 
 
 # ---- case data ------------------------------------------------------------------------
@@ -234,6 +254,102 @@ def _require_full(scene: Scene, case: Case) -> None:
         raise NoReferenceError(f"{scene.name}/{case.name}: eta = inf (Iy = 0) has no ODE reference")
 
 
+# ---- body mode, phase "transient": the field on finer grids, extrapolated ------------------------
+def _require_transient(scene: Scene) -> None:
+    cfg = scene.config
+    if cfg.mode != "body" or cfg.phase != "transient" or cfg.contact_law != "layer":
+        raise NoReferenceError(f"{scene.name}: the field reference is the transient thin layer's")
+
+
+def transient_grids(case: Case) -> tuple[tuple[int, int], tuple[int, int]]:
+    """The (nx, ny) of the two reference fields: TRANSIENT_REFINE and twice that times
+    the case's grid."""
+    from ..transient import DEFAULT_NX, DEFAULT_NY
+
+    p = case.parameters
+    nx, ny = int(p.get("nx", DEFAULT_NX)), int(p.get("ny", DEFAULT_NY))
+    return (TRANSIENT_REFINE * nx, TRANSIENT_REFINE * ny), (
+        2 * TRANSIENT_REFINE * nx,
+        2 * TRANSIENT_REFINE * ny,
+    )
+
+
+def _transient_run(
+    scene: Scene, case: Case, times: FloatArray, nx: int, ny: int, continuous: bool
+) -> Solution:
+    """Eqs. (8)-(11) on the thin-layer field of Eq. (15) (TransientRollingBody) on an
+    nx x ny grid, stepped over the communication steps of ``times`` as the FMU steps
+    them: max(ceil(h/h_max), steps of cells_per_step cells) internal steps, the load P
+    of the step's start. The other loads held over each step, or (``continuous``) the
+    signals sampled at the stage times."""
+    from ..fmu.body_model import substeps
+    from ..transient import TransientRollingBody
+
+    p = case.parameters
+    u = signal_values(case, LOAD_NAMES, times)
+    if continuous and np.ptp(u["P"]) != 0.0:
+        raise NoReferenceError(
+            f"{scene.name}/{case.name}: the transient field takes P per step (no continuous P)"
+        )
+    tb = TransientRollingBody(
+        law(p, float(u["P"][0])), body(p), lateral(scene, p), Vx0=p["Vx0"],
+        Omega_y0=p["Omega_y0"], Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0),
+        nx=nx, ny=ny,
+    )  # fmt: skip
+    cells = float(p.get("cells_per_step", 0.5))
+    out = np.empty((times.size, 4))  # Tx, Ty, vx, Vx
+
+    def record(k: int) -> None:
+        o = tb.outputs()
+        out[k] = (o["Tx"], o["Ty"], o["vx"], o["Vx"])
+
+    record(0)
+    for k in range(times.size - 1):
+        h = float(times[k + 1] - times[k])
+        if u["P"][k] != tb.law.P:
+            tb.set_load(float(u["P"][k]))
+        n = max(substeps(h, p["h_max"]), tb.substeps_for(h, cells))
+        if continuous:
+            t0 = float(times[k])
+            loads = _loads_of(case, _inside(t0, t0 + h))
+            tb.advance(h, lambda t, f=loads: Loads(*f(t)[1:]), n)
+        else:
+            tb.advance(h, Loads(*(float(u[m][k]) for m in LOAD_NAMES[1:])), n)
+        record(k + 1)
+    return Solution(times.copy(), out[:, 0], out[:, 2], out[:, 3], out[:, 1])
+
+
+def _transient(scene: Scene, case: Case, times: FloatArray, continuous: bool) -> Solution:
+    """Richardson's extrapolation of the fields on the two grids of ``transient_grids``
+    (second order): R = R_f + (R_f - R_c)/3."""
+    _require_transient(scene)
+    (nc, mc), (nf, mf) = transient_grids(case)
+    coarse = _transient_run(scene, case, times, nc, mc, continuous)
+    fine = _transient_run(scene, case, times, nf, mf, continuous)
+
+    def extrapolate(name: str) -> FloatArray:
+        f, c = getattr(fine, name), getattr(coarse, name)
+        return f + (f - c) / 3.0
+
+    return Solution(
+        times.copy(),
+        extrapolate("Tx"),
+        extrapolate("vx"),
+        extrapolate("Vx"),
+        extrapolate("Ty"),
+    )
+
+
+def transient_continuous(scene: Scene, case: Case, times: FloatArray) -> Solution:
+    """The transient field under the continuous load signals (constant P), at ``times``."""
+    return _transient(scene, case, times, continuous=True)
+
+
+def transient_held(scene: Scene, case: Case, grid: FloatArray) -> Solution:
+    """The transient field with the loads sampled on ``grid`` and held over each step."""
+    return _transient(scene, case, grid, continuous=False)
+
+
 # ---- body mode: the quasistationary closed form ------------------------------------------------
 def quasistationary_allowed(scene: Scene, case: Case, times: FloatArray) -> str | None:
     """None if Eqs. (26), (28) describe the case: rolling straight or at a held lateral
@@ -375,17 +491,47 @@ def _contact(scene: Scene, case: Case, times: FloatArray, u: dict[str, FloatArra
     if scene.config.mode != "contact":
         raise NoReferenceError(f"{scene.name}: the traction quadrature is the contact mode's")
     _require_steady(scene)
+    if scene.config.contact_law == "halfspace":
+        return _halfspace_contact(scene, case, times, u)
     if scene.config.contact_law != "layer":
         raise NoReferenceError(f"{scene.name}: the quadrature of Eq. (36) is the layer law's")
     p = case.parameters
     Tx = np.empty(times.size)
+    Ty = np.empty(times.size)
     vx = np.empty(times.size)
     for k in range(times.size):
         if u["Omega_z"][k] != 0.0:
             raise NoReferenceError(f"{scene.name}/{case.name}: no quadrature reference with spin")
         vx[k] = u["Vx"][k] - u["Omega_y"][k] * p["Rx"]
-        Tx[k] = traction_resultant(law(p, float(u["P"][k])), vx[k], u["Vy"][k], u["Vx"][k])[0]
-    return Solution(times.copy(), Tx, vx, u["Vx"].copy())
+        c = law(p, float(u["P"][k]))
+        Tx[k], Ty[k] = traction_resultant(c, vx[k], u["Vy"][k], u["Vx"][k])
+    return Solution(times.copy(), Tx, vx, u["Vx"].copy(), Ty)
+
+
+def _halfspace_contact(
+    scene: Scene, case: Case, times: FloatArray, u: dict[str, FloatArray]
+) -> Solution:
+    """Direct solves of the steady-rolling half-space problem (the scene's declaration on
+    its table's solver grid, the case's mu) at the kinematics ``u``, (Tx, Ty) scaled
+    radially by s(m)/m with m = |T|/(mu P), the table's saturation: what the table
+    interpolates, up to its nodes' tolerance (TABLE_TOL, 1e-6)."""
+    from ..halfspace.table import saturate
+
+    spec = scene.config.table_spec
+    p = case.parameters
+    mu, Rx = p.get("mu", spec.mu), p.get("Rx", spec.Rx)
+    contacts: dict[float, Any] = {}
+    Tx, Ty, vx = np.empty(times.size), np.empty(times.size), np.empty(times.size)
+    for k in range(times.size):
+        P = float(u["P"][k])
+        if P not in contacts:
+            contacts[P] = spec.contact(P=P, mu=mu)
+        vx[k], vy = rigid_slip(u["Vx"][k], u["Omega_y"][k], u["Vy"][k], Rx)
+        s = contacts[P].traction(vx[k], vy, u["Omega_z"][k], u["Vx"][k])
+        m = math.hypot(s.Tx, s.Ty) / (mu * P)
+        scale = float(saturate(np.array(m))) / m if m > 0.0 else 1.0
+        Tx[k], Ty[k] = s.Tx * scale, s.Ty * scale
+    return Solution(times.copy(), Tx, vx, u["Vx"].copy(), Ty)
 
 
 def contact_samples(grid: FloatArray) -> FloatArray:

@@ -3,24 +3,32 @@ and compared with references computed outside the FMU.
 
 Errors (per case, then over the cases: the largest max, the RMS of all points):
 
-- Tx relative to mu P (P the largest normal load of the run);
+- Tx relative to mu P (P the largest normal load of the run), and Ty likewise where
+  the scene outputs it and the reference has it;
 - vx relative to the slip scale v_s = (creepage at the onset of full slip) x max |Vx|,
   the slip at which the law saturates at the run's largest speed (``creep_full_slip``
   of the contact law at the largest load).
 
-They are taken at every communication point after t = 0 of the point's grid, against
-the reference of the same equations under the *continuous* inputs (what co-simulation
-approximates: the zero-order hold of the inputs counts as error), and optionally
-(``held=True``) against the reference with the inputs held over each step as the FMU
-receives them (the FMU's own integration error). The wall time of a run is that of
+They are taken at every communication point after t = 0 of the point's grid (in
+contact mode at up to CONTACT_SAMPLES of them), against the reference of the same
+equations. Along the communication step (``sweep.STEP_LADDER``) the reference takes
+the *continuous* inputs (what co-simulation approximates: the zero-order hold of the
+inputs counts as error), and optionally (``held=True``) also the inputs held over each
+step as the FMU receives them (the FMU's own integration error). Along a ladder that
+refines the model at the scene's step (the transient field's grid, the half-space
+table's nodes) the reference takes the inputs as the FMU receives them: the error is
+that of the refined discretisation. The wall time of a run is that of
 ``fmpy.simulate_fmu`` on the extracted FMU (instantiation, every step, termination),
 the fastest of ``repeats`` runs (one if it takes more than REPEAT_BELOW), summed over
-the cases. Along a family (coarse to fine) a point predicted to cost more than
-``budget`` seconds is skipped and listed as such.
+the cases; ``setup`` is a rung's one-off cost outside the runs (the build of its
+creep-force table, as recorded in the table). Along a family (coarse to fine) a point
+predicted to cost more than ``budget`` (times the ladder's ``budget_scale``) seconds is
+skipped and listed as such.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import shutil
 import tempfile
@@ -35,11 +43,12 @@ from numpy.typing import NDArray
 
 import fmu_build
 
+from ..fmu.config import ModelConfig
 from ..scenario import runner
 from ..scenario.schema import Case, Scene
 from . import reference as ref
 from .metrics import norms, observed_order, pairwise_orders
-from .sweep import Family, families, fine_grid, levels, point, step
+from .sweep import Family, Ladder, Rung, families, for_report, point, rungs
 
 FloatArray = NDArray[np.float64]
 
@@ -65,6 +74,7 @@ REFERENCES: dict[tuple[str, str, str], dict[str, Callable]] = {
     ("body", "steady", "quasistationary"): _body_reference(
         ref.quasistationary_continuous, ref.quasistationary_held
     ),
+    ("body", "transient", "full"): _body_reference(ref.transient_continuous, ref.transient_held),
 }
 
 
@@ -79,7 +89,9 @@ def _source(scene: Scene, method: str) -> dict[str, Callable]:
 
 @dataclass
 class Row:
-    """One point of one family: a communication step, its cost and its errors."""
+    """One point of one family: a rung of the scene's ladder (a communication step h, or
+    a refined setting at the scene's h), its cost and its errors. ``spacing``: the
+    length the observed order refers to (h along the communication step)."""
 
     scene: str
     family: str
@@ -97,6 +109,18 @@ class Row:
     order_Tx: float = math.nan
     order_vx: float = math.nan
     error: str | None = None
+    refined: str = "h"
+    value: str = ""
+    spacing: float = math.nan
+    setup: float = math.nan
+    Ty_max: float = math.nan
+    Ty_rms: float = math.nan
+
+    def __post_init__(self) -> None:
+        if math.isnan(self.spacing):
+            self.spacing = self.h
+        if not self.value:
+            self.value = f"{self.h:.3g}"
 
 
 @dataclass
@@ -109,19 +133,23 @@ class SceneReport:
     rows: list[Row] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     held: bool = False
+    refined: str = "h"
+    refined_doc: str = "the communication step h"
 
     def families(self) -> list[str]:
         return list(dict.fromkeys(r.family for r in self.rows))
 
     def of(self, family: str) -> list[Row]:
-        return sorted((r for r in self.rows if r.family == family), key=lambda r: -r.h)
+        """The family's rows, coarse to fine."""
+        return sorted((r for r in self.rows if r.family == family), key=lambda r: -r.spacing)
 
     def family_orders(self) -> dict[str, tuple[float, float]]:
-        """Least-squares observed order of the max errors of Tx and vx, per family."""
+        """Least-squares observed order of the max errors of Tx and vx, per family (in
+        the ladder's spacing)."""
         out = {}
         for f in self.families():
             rows = self.of(f)
-            h = [r.h for r in rows]
+            h = [r.spacing for r in rows]
             out[f] = (
                 observed_order(h, [r.Tx_max for r in rows], ORDER_FLOOR),
                 observed_order(h, [r.vx_max for r in rows], ORDER_FLOOR),
@@ -153,15 +181,24 @@ def _scales(scene: Scene, case: Case, grid: FloatArray, Vx: FloatArray) -> tuple
     return p["mu"] * P, creep * Vmax
 
 
-def _references(scene: Scene, case: Case, methods: list[str], lv: tuple[int, ...]):
-    grid = fine_grid(scene, lv)
+def _fine_grid(scene: Scene, rs: list[Rung]) -> FloatArray:
+    """The grid of the finest step among the rungs: every rung's grid is a subset."""
+    h = min(r.h for r in rs)
+    return np.arange(int(round(scene.stop_time / h)) + 1) * h
+
+
+def _references(scene: Scene, case: Case, methods: list[str], lad: Ladder, rs: list[Rung]):
+    grid = _fine_grid(scene, rs)
     sols: dict[str, ref.Solution] = {}
     notes = []
     if scene.config.mode == "contact":
-        coarse = int(round(2 ** (max(lv) - min(lv))))
+        coarse = int(round(max(r.h for r in rs) / min(r.h for r in rs)))
         index = ref.contact_samples(grid[::coarse]) * coarse
         try:
-            sols["contact"] = ref.contact_continuous(scene, case, grid[index])
+            if lad.reading == "held":
+                sols["contact"] = ref.contact_held(scene, case, grid, index)
+            else:
+                sols["contact"] = ref.contact_continuous(scene, case, grid[index])
             Vx = sols["contact"].Vx
         except ref.NoReferenceError as e:
             notes.append(str(e))
@@ -170,12 +207,26 @@ def _references(scene: Scene, case: Case, methods: list[str], lv: tuple[int, ...
         index = np.arange(grid.size)
         for m in methods:
             try:
-                sols[m] = _source(scene, m)["continuous"](scene, case, grid)
+                sols[m] = _source(scene, m)[lad.reading](scene, case, grid)
             except ref.NoReferenceError as e:
                 notes.append(str(e))
         Vx = next(iter(sols.values())).Vx if sols else np.array([np.nan])
     Tx_scale, v_scale = _scales(scene, case, grid, Vx)
     return _CaseRef(case, sols, index, Tx_scale, v_scale), notes
+
+
+def setup_cost(cfg: ModelConfig) -> float:
+    """One-off cost (s) of an FMU's generated data outside its runs: the build time of
+    its creep-force table as the table records it (built here first if missing); NaN
+    for an FMU without generated data."""
+    if not cfg.has_table:
+        return math.nan
+    from fmu_build import tables
+
+    from ..halfspace.table import TableData
+
+    meta = json.loads(TableData.load(tables.ensure(cfg)).meta)
+    return float(meta.get("seconds", math.nan))
 
 
 def run_scene(
@@ -188,43 +239,64 @@ def run_scene(
     log: Callable[[str], None] = print,
     budget: float = BUDGET,
 ) -> SceneReport:
-    """The scene's sweep through its FMU (built or cached under ``fmu_dir``)."""
+    """The scene's sweep through its FMU (built or cached under ``fmu_dir``; one per rung
+    where the ladder changes the model)."""
+    scene = for_report(scene, quick)
     fams, cfg = families(scene, quick)
-    lv = levels(quick)
+    lad, rs = rungs(scene, quick)
     cases = list(scene.cases if all_cases and not quick else scene.cases[:1])
     report = SceneReport(scene.name, scene.title, scene.config.mode, [c.name for c in cases], "")
     report.held = held
+    report.refined, report.refined_doc = lad.name, lad.doc
     methods = sorted({f.value("method", "full") for f in fams})
     refs = []
     for c in cases:
-        r, notes = _references(scene, c, methods, lv)
+        r, notes = _references(scene, c, methods, lad, rs)
         refs.append(r)
         report.notes += notes
     if not any(r.by_method for r in refs):  # nothing to compare with: not run
         log(f"  {scene.name}: skipped, " + "; ".join(dict.fromkeys(report.notes)))
         return report
-    built = fmu_build.build(cfg, fmu_dir)
-    report.fmu = built.path.name
     tmp = Path(tempfile.mkdtemp(prefix=f"report-{scene.name}-"))
+    extracted: dict[str, Path] = {}
+    setups: dict[str, float] = {}
+
+    def fmu_of(c: ModelConfig) -> Path:
+        """The extracted FMU of configuration c (built, or taken from the cache, once)."""
+        key = _config_key(c)
+        if key not in extracted:
+            setups[key] = setup_cost(c)
+            built = fmu_build.build(c, fmu_dir)
+            extracted[key] = tmp / str(len(extracted))
+            fmpy.extract(str(built.path), str(extracted[key]))
+            report.fmu = ", ".join(filter(None, [report.fmu, built.path.name]))
+        return extracted[key]
+
     try:
-        fmpy.extract(str(built.path), str(tmp))
         for fam in fams:
             last = 0.0
-            for level in lv:  # coarse to fine: the cost about doubles per level
-                predicted = 2.0 * last
-                if predicted > budget:
-                    h = step(scene, level)
-                    r = Row(scene.name, fam.label, dict(fam.settings), level, h,
-                            int(round(scene.stop_time / h)))  # fmt: skip
-                    r.error = f"skipped: about {predicted:.0f} s > budget {budget:g} s"
+            for rung in rs:  # coarse to fine: the cost grows by about lad.growth per rung
+                predicted = lad.growth * last
+                n_steps = int(round(scene.stop_time / rung.h))
+                if predicted > budget * lad.budget_scale:
+                    r = Row(scene.name, fam.label, dict(fam.settings), rung.level, rung.h,
+                            n_steps, refined=lad.name, value=rung.label,
+                            spacing=rung.spacing)  # fmt: skip
+                    r.error = (
+                        f"skipped: about {predicted:.0f} s > budget {budget * lad.budget_scale:g} s"
+                    )
                     report.rows.append(r)
                     continue
-                r = _point(scene, cfg, fam, level, lv, refs, tmp, repeats, held)
+                rcfg = lad.configure(cfg, rung.value)
+                fmu = fmu_of(rcfg)
+                r = _point(scene, rcfg, fam, lad, rung, rs, refs, fmu, repeats, held)
+                r.setup = setups[_config_key(rcfg)]
                 report.rows.append(r)
                 last = r.wall if math.isfinite(r.wall) else last
                 log(
-                    f"  {scene.name:8s} {fam.label:28s} h = {r.h:9.3g} s  {r.wall:7.3f} s  "
-                    f"Tx {r.Tx_max:9.2e}  vx {r.vx_max:9.2e}" + (f"  {r.error}" if r.error else "")
+                    f"  {scene.name:8s} {fam.label:28s} {lad.name} = {rung.label:>9s}  "
+                    f"{r.wall:7.3f} s  Tx {r.Tx_max:9.2e}  vx {r.vx_max:9.2e}"
+                    + (f"  {r.error}" if r.error else "")
                 )
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -232,16 +304,34 @@ def run_scene(
     return report
 
 
-def _point(scene, cfg, fam: Family, level, lv, refs: list[_CaseRef], fmu_dir, repeats, held):
-    h = step(scene, level)
+def _config_key(cfg: ModelConfig) -> str:
+    return json.dumps(cfg.to_dict(), sort_keys=True, default=str)
+
+
+def _point(
+    scene: Scene,
+    cfg: ModelConfig,
+    fam: Family,
+    lad: Ladder,
+    rung: Rung,
+    rs: list[Rung],
+    refs: list[_CaseRef],
+    fmu_dir: Path,
+    repeats: int,
+    held: bool,
+) -> Row:
+    h = rung.h
     n = int(round(scene.stop_time / h))
-    row = Row(scene.name, fam.label, dict(fam.settings), level, h, n)
+    row = Row(scene.name, fam.label, dict(fam.settings), rung.level, h, n, refined=lad.name,
+              value=rung.label, spacing=rung.spacing)  # fmt: skip
     method = fam.value("method", "full")
-    stride = int(round(2 ** (level - min(lv))))
-    errs: dict[str, list[FloatArray]] = {"Tx": [], "vx": [], "Tx_held": [], "vx_held": []}
+    stride = int(round(h / min(r.h for r in rs)))
+    errs: dict[str, list[FloatArray]] = {
+        "Tx": [], "vx": [], "Ty": [], "Tx_held": [], "vx_held": []
+    }  # fmt: skip
     wall = 0.0
     for cr in refs:
-        sc, case = point(scene, cr.case, cfg, fam, h)
+        sc, case = point(scene, cr.case, cfg, fam, h, lad.start(rung.value))
         key = "contact" if scene.config.mode == "contact" else method
         if key not in cr.by_method:
             row.error = f"no reference for {method}"
@@ -260,19 +350,26 @@ def _point(scene, cfg, fam: Family, level, lv, refs: list[_CaseRef], fmu_dir, re
         sol = cr.by_method[key]
         on = (cr.index % stride == 0) & (cr.index > 0)  # this level's points after t = 0
         idx = cr.index[on] // stride
-        for var, scale in (("Tx", cr.Tx_scale), ("vx", cr.v_scale)):
+        compared = [("Tx", cr.Tx_scale), ("vx", cr.v_scale)]
+        if sol.Ty is not None and "Ty" in result.columns:
+            compared.append(("Ty", cr.Tx_scale))
+        for var, scale in compared:
             errs[var].append((result.columns[var][idx] - getattr(sol, var)[on]) / scale)
-        if held:
+        if held and lad.reading == "continuous":
             for var, e in _held_errors(scene, sc, case, result, key, idx, cr).items():
                 errs[f"{var}_held"].append(e)
     row.wall = wall
-    for var in ("Tx", "vx"):
+    for var in ("Tx", "vx", "Ty"):
+        if not errs[var]:
+            continue
         e = np.concatenate(errs[var])
         mx, rms = norms(e, 1.0)
         setattr(row, f"{var}_max", mx)
         setattr(row, f"{var}_rms", rms)
-        if held:
-            setattr(row, f"{var}_max_held", norms(np.concatenate(errs[f"{var}_held"]), 1.0)[0])
+    if held:  # a ladder whose reference takes the held inputs: the same errors
+        for var in ("Tx", "vx"):
+            e = errs[f"{var}_held"] or errs[var]
+            setattr(row, f"{var}_max_held", norms(np.concatenate(e), 1.0)[0])
     return row
 
 
@@ -292,7 +389,7 @@ def _held_errors(scene, sc, case, result, key, idx, cr: _CaseRef) -> dict[str, F
 def _orders(report: SceneReport) -> None:
     for f in report.families():
         rows = report.of(f)
-        h = [r.h for r in rows]
+        h = [r.spacing for r in rows]
         for var in ("Tx", "vx"):
             e = np.array([getattr(r, f"{var}_max") for r in rows])
             p = pairwise_orders(h, e)
