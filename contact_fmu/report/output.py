@@ -218,7 +218,7 @@ def plot(report: SceneReport, path: Path) -> Path:
     else:
         values = [r.value for r in report.of(fams[0])] if fams else []
         span = f"{values[0]} to {values[-1]}" if values else ""
-        along = f"{report.refined} is refined, {span}"
+        along = f"the {report.refined} is refined, {span}"
     fig.suptitle(
         f"{report.scene}: error against run time; along a curve {along} (left to right); "
         "p: observed order of the Tx error",
