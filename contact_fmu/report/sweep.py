@@ -18,12 +18,13 @@ Quick mode drops the finest rung (``h``: LEVELS_QUICK); a ladder with
 ``quick_steps`` also cuts the run to that many communication steps.
 
 An axis says which of its values apply to a scene, how an FMU offering them is
-configured, and which start values select one. Adding a setting (the contact law
-``contact_law = "halfspace"``, a grid size for field-based laws, ``phase =
-"transient"``) is one more entry in ``AXES``: its ``configure`` returns the FMU
-configuration of the family (one FMU per value when the value changes the model), its
-``start`` the parameters, and ``workprecision.REFERENCES`` (by mode, phase and method)
-or ``reference.LAWS`` (by contact law) needs a reference for it.
+configured, and which start values select one. Adding a setting compared across
+families (a contact law, a stepper) is one more entry in ``AXES``: its ``configure``
+returns the FMU configuration of the family, its ``start`` the parameters. A setting
+whose refinement the report follows (a grid, a table's resolution) is a ``Ladder``:
+its ``configure`` returns the FMU of a rung (one per rung when it changes the model).
+Either way ``workprecision.REFERENCES`` (by mode, phase and method) or
+``reference.LAWS`` (by contact law) needs a reference for it.
 """
 
 from __future__ import annotations
