@@ -7,8 +7,8 @@ the same inputs through fmpy's FMU2Slave, call by call as a master does (setReal
 inputs, doStep, getReal of the scene's outputs). Each of the N steps is timed in R fresh
 runs; the cost per communication step is the mean over the steps of each step's fastest
 run (the machine is shared: the minimum filters out the other processes). "model" is
-the same model object called directly in Python (no FMI), to separate the FMI/pythonfmu
-overhead from the numerics.
+the same model object called directly in Python (no FMI), timed between the scene FMU's
+steps, to separate the FMI/pythonfmu overhead from the numerics.
 ``--write`` replaces the section "## FMU step cost" of docs/performance.md and the table
 between the README_MARKS comments in README.md.
 """
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import importlib
 import platform
 import sys
 import time
@@ -36,51 +37,55 @@ OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
 README = ROOT / "README.md"
 SECTION = "## FMU step cost"
+# Untimed runs before the timed ones: the first runs in a process are slower (caches,
+# lazy imports), measured up to 1.8x for the model stepped outside the FMU.
+WARMUP = 1
 README_MARKS = ("<!-- bench_fmu_step.py: table -->", "<!-- bench_fmu_step.py: end -->")
 
 
-def time_fmu(path: Path, scene, case, n: int, repeats: int) -> tuple[float, dict[str, float]]:
-    """Best mean seconds per step over fresh runs, and the outputs after n steps."""
+def time_fmu(
+    path: Path, scene, case, n: int, repeats: int, with_model: bool = False
+) -> tuple[float, float, dict[str, float]]:
+    """Best mean seconds per step over fresh runs of the FMU and, with ``with_model``, of
+    the scene's model object stepped directly (what the adapter calls per doStep),
+    interleaved step by step so that both see the same machine speed (it drifts by up
+    to 1.5x within a minute here); NaN without. Also the FMU's outputs after n steps."""
     table = runner.input_table(scene, case)
     names = {v.name for v in fmpy.read_model_description(str(path)).modelVariables}
     starts = {k: v for k, v in runner.start_values(scene, case).items() if k in names}
-    times, last = np.full((repeats, n), np.inf), {}
-    for r in range(repeats):
+    rows = [{i: float(table[i][k]) for i in scene.inputs} for k in range(n)]
+    times = np.full((2, WARMUP + repeats, n), np.inf)
+    last: dict[str, float] = {}
+    for r in range(WARMUP + repeats):
+        model = _model(scene, case, rows[0]) if with_model else None
         with Instance(path, f"bench{r}", starts) as inst:
-            refs = {k: inst.vars[k].valueReference for k in scene.inputs}
+            refs = [inst.vars[k].valueReference for k in scene.inputs]
             outs = [inst.vars[k].valueReference for k in scene.outputs if k != "regime"]
             fmu = inst.fmu
             for k in range(n):
                 t0 = time.perf_counter()
-                fmu.setReal(list(refs.values()), [float(table[i][k]) for i in refs])
+                fmu.setReal(refs, list(rows[k].values()))
                 if inst.step(scene.step) != OK:
                     raise RuntimeError(f"{path.name}: {inst.messages[-1:]}")
                 fmu.getReal(outs)
-                times[r, k] = time.perf_counter() - t0
+                times[0, r, k] = time.perf_counter() - t0
+                if model is not None:
+                    t0 = time.perf_counter()
+                    model.step(scene.step, rows[k])
+                    model.outputs()
+                    times[1, r, k] = time.perf_counter() - t0
             last = {k: inst.get(k) for k in scene.outputs}
-    return float(np.mean(np.min(times, axis=0))), last
+    t_fmu, t_model = np.mean(np.min(times[:, WARMUP:], axis=1), axis=1)
+    return float(t_fmu), float(t_model) if with_model else float("nan"), last
 
 
-def time_model(scene, case, n: int, repeats: int) -> float:
-    """The scene's model object stepped directly (what the adapter calls per doStep)."""
-    import importlib
-
+def _model(scene, case, inputs: dict[str, float]):
+    """The scene's model object as the adapter builds it, outside any FMU."""
     cfg = scene.config
     module = importlib.import_module(f"contact_fmu.{cfg.model_module}")
-    table = runner.input_table(scene, case)
     params = {v.name: cfg.start(v) for v in cfg.variables if v.causality[cfg.mode] == "parameter"}
     params.update(runner.start_values(scene, case))
-    times = np.full((repeats, n), np.inf)
-    for r in range(repeats):
-        inputs = {k: float(table[k][0]) for k in scene.inputs}
-        model = module.build(cfg, params, inputs, 0.0)
-        for k in range(n):
-            t0 = time.perf_counter()
-            inputs = {i: float(table[i][k]) for i in scene.inputs}
-            model.step(scene.step, inputs)
-            model.outputs()
-            times[r, k] = time.perf_counter() - t0
-    return float(np.mean(np.min(times, axis=0)))
+    return module.build(cfg, params, inputs, 0.0)
 
 
 def measure(steps: int, repeats: int) -> list[dict]:
@@ -96,8 +101,8 @@ def measure(steps: int, repeats: int) -> list[dict]:
         n = min(steps, scene.n_steps)
         own = fmu_build.build(scene.config, OUT)
         big = full[scene.config.mode]
-        t_own, out_own = time_fmu(own.path, scene, case, n, repeats)
-        t_full, out_full = time_fmu(big.path, scene, case, n, max(2, repeats // 2))
+        t_own, t_model, out_own = time_fmu(own.path, scene, case, n, repeats, with_model=True)
+        t_full, _, out_full = time_fmu(big.path, scene, case, n, max(2, repeats // 2))
         rows.append(
             {
                 "scene": scene.name,
@@ -110,7 +115,7 @@ def measure(steps: int, repeats: int) -> list[dict]:
                 "files_full": len(big.modules),
                 "step": t_own,
                 "step_full": t_full,
-                "model": time_model(scene, case, n, repeats),
+                "model": t_model,
                 "dTx": abs(out_own["Tx"] - out_full["Tx"]),
                 "n": n,
                 "lateral": scene.config.vy != "zero",
@@ -150,12 +155,13 @@ def markdown(rows: list[dict], steps: int, repeats: int) -> str:
     return (
         f"Measured by `benchmarks/bench_fmu_step.py --write` on {today} ({cpu}, "
         f"Python {platform.python_version()}, {steps} steps; each step the fastest of "
-        f"{repeats} runs, full FMU {max(2, repeats // 2)}; shared 2-core machine). Per "
+        f"{repeats} runs after {WARMUP} untimed, full FMU {max(2, repeats // 2)}; shared "
+        "2-core machine). Per "
         "communication step: setReal of the inputs, doStep, getReal of the scene's outputs "
         "through fmpy's FMU2Slave. The full FMU of a mode holds every variable and model "
         "part (Eqs. 10-11 integrated, both steppers); it runs the scene's inputs with its "
         "extra inputs at 0. *model*: the scene's model object stepped in Python without "
-        "FMI.\n\n" + table(rows) + "\n"
+        "FMI, timed step by step between the scene FMU's steps.\n\n" + table(rows) + "\n"
     )
 
 
