@@ -59,6 +59,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -484,7 +485,7 @@ def solve_rolling(
     to ``tol``: the converged solution does not depend on the guess beyond ``tol``."""
     for name, val in (("xi", xi), ("eta", eta), ("phi", phi)):
         finite(name, val)
-    C, g, r = patch.contact, patch.g, patch.r
+    C = patch.contact
     W = patch.rhs(xi, eta, phi)
     levels: tuple[tuple[int, int, int, int], ...] = ()
     tau = None
@@ -502,6 +503,48 @@ def solve_rolling(
             levels = cs.levels or ((gc.nx, gc.ny, cs.newton_iterations, cs.gmres_iterations),)
     if tau is None:
         tau = patch.fastsim_guess(xi, eta, phi)
+    tau, S, slip, _, _, newton, inner = coulomb_newton(
+        patch,
+        W,
+        tau,
+        tol,
+        maxit,
+        "steady rolling",
+        slip_block=SLIP_BLOCK_RATIO,
+        oversolve=OVERSOLVE,
+    )
+    tau = np.where(C, tau, 0.0)
+    X, Y = patch.grid.mesh()
+    dA = patch.grid.area
+    Tx = float(tau[0].sum() * dA)
+    Ty = float(tau[1].sum() * dA)
+    Mz = float(np.sum(X * tau[1] - Y * tau[0]) * dA)
+    adhesion = C & ~slip
+    if levels:
+        levels = (*levels, (patch.grid.nx, patch.grid.ny, newton, inner))
+    return RollingSolution(patch.grid, tau, S, C, adhesion, slip, Tx, Ty, Mz, newton, inner, levels)
+
+
+def coulomb_newton(
+    patch: Any,
+    W: FloatArray,
+    tau: FloatArray,
+    tol: float,
+    maxit: int,
+    what: str,
+    slip_block: float = 0.0,
+    oversolve: float = 0.0,
+    error: type[RuntimeError] = RuntimeError,
+) -> tuple[FloatArray, FloatArray, BoolArray, FloatArray, FloatArray, int, int]:
+    """F(tau) = tau - Proj_{|.| <= g}(tau + r S) = 0 with S = W - K tau on the contact of
+    ``patch`` (a RollingPatch, or the transient's step patch), by the semismooth Newton
+    method of the module docstring from tau (2, ny, nx) (Pa): GMRES directions with the
+    block preconditioner (``_newton_direction``, ``slip_block``), forcing terms after
+    Eisenstat & Walker, no smaller than ``oversolve`` times the reduction still needed
+    (0: no such bound), backtracking on |F|. Converged when max |F| <= tol max g; after
+    ``maxit`` steps raises ``error`` naming ``what``. Returns tau, S, slip, z, |z| and
+    the Newton and GMRES iteration counts."""
+    C, g, r = patch.contact, patch.g, patch.r
     gmax = float(g.max())
 
     def residual(t: FloatArray):
@@ -515,21 +558,18 @@ def solve_rolling(
 
     F, S, z, nz, slip = residual(tau)
     fnorm = float(np.sqrt(np.sum(F * F)))
-    newton = 0
-    inner = 0
+    newton = inner = 0
     prev_ratio = GMRES_RTOL_MAX
     while float(np.abs(F).max()) > tol * gmax:
         if newton >= maxit:
-            raise RuntimeError(
-                f"steady rolling: no convergence in {maxit} Newton steps "
+            raise error(
+                f"{what}: no convergence in {maxit} Newton steps "
                 f"(max |F| / max g = {float(np.abs(F).max()) / gmax:.3g})"
             )
         newton += 1
         rtol = min(GMRES_RTOL_MAX, max(prev_ratio, GMRES_RTOL_MIN))
-        rtol = min(GMRES_RTOL_MAX, max(rtol, OVERSOLVE * tol * gmax / float(np.abs(F).max())))
-        dtau, its = _newton_direction(
-            patch, tau, F, S, z, nz, slip, rtol, slip_block=SLIP_BLOCK_RATIO
-        )
+        rtol = min(GMRES_RTOL_MAX, max(rtol, oversolve * tol * gmax / float(np.abs(F).max())))
+        dtau, its = _newton_direction(patch, tau, F, S, z, nz, slip, rtol, slip_block=slip_block)
         inner += its
         step = 1.0
         while True:
@@ -542,16 +582,7 @@ def solve_rolling(
         prev_ratio = fn_t / fnorm if fnorm > 0 else GMRES_RTOL_MIN
         tau, F, S, z, nz, slip = trial, F_t, S_t, z_t, nz_t, slip_t
         fnorm = fn_t
-    tau = np.where(C, tau, 0.0)
-    X, Y = patch.grid.mesh()
-    dA = patch.grid.area
-    Tx = float(tau[0].sum() * dA)
-    Ty = float(tau[1].sum() * dA)
-    Mz = float(np.sum(X * tau[1] - Y * tau[0]) * dA)
-    adhesion = C & ~slip
-    if levels:
-        levels = (*levels, (patch.grid.nx, patch.grid.ny, newton, inner))
-    return RollingSolution(patch.grid, tau, S, C, adhesion, slip, Tx, Ty, Mz, newton, inner, levels)
+    return tau, S, slip, z, nz, newton, inner
 
 
 def prolong(tau_c: FloatArray, coarse: RollingPatch, fine: RollingPatch) -> FloatArray:

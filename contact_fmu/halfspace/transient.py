@@ -87,14 +87,10 @@ from ..solvers import StageSolveError
 from .contact import HalfSpaceContact
 from .influence import BlockConvolution, Grid, tangential_operator
 from .rolling import (
-    ARMIJO,
     GMRES_MAXIT,
     GMRES_RESTART,
-    GMRES_RTOL_MAX,
-    GMRES_RTOL_MIN,
-    MIN_STEP,
     RollingPatch,
-    _newton_direction,
+    coulomb_newton,
     normalise_load,
     solve_rolling,
 )
@@ -207,48 +203,20 @@ def solve_coulomb(
     F(tau) = tau - Proj_{|.| <= g}(tau + r S) = 0, S = b - K tau, by the semismooth
     Newton method of ``rolling.solve_rolling`` (same direction, GMRES forcing and
     backtracking), from tau0. b (2, ny, nx) (m)."""
-    C, g, r = patch.contact, patch.g, patch.r
+    C = patch.contact
     if not np.any(C):
         z = np.zeros_like(b)
         return CoulombSolution(z, z.copy(), C, np.zeros_like(C), z.copy(), z[0].copy(), 0, 0)
     b = np.where(C, b, 0.0)
-    tau = np.where(C, tau0, 0.0)
-    gmax = float(g.max())
-
-    def residual(t: FloatArray):
-        S = np.where(C, b - patch.apply_K(t), 0.0)
-        z = t + r * S
-        nz = np.hypot(z[0], z[1])
-        slip = C & (nz > g)
-        scale = np.where(slip, g / np.where(slip, nz, 1.0), 1.0)
-        F = np.where(C, t - z * scale, 0.0)
-        return F, S, z, nz, slip
-
-    F, S, z, nz, slip = residual(tau)
-    fnorm = float(np.sqrt(np.sum(F * F)))
-    newton = inner = 0
-    prev_ratio = GMRES_RTOL_MAX
-    while float(np.abs(F).max()) > tol * gmax:
-        if newton >= NEWTON_MAXIT:
-            raise StageSolveError(
-                f"transient contact problem: no convergence in {NEWTON_MAXIT} Newton steps "
-                f"(max |F| / max g = {float(np.abs(F).max()) / gmax:.3g})"
-            )
-        newton += 1
-        rtol = min(GMRES_RTOL_MAX, max(prev_ratio, GMRES_RTOL_MIN))
-        dtau, its = _newton_direction(patch, tau, F, S, z, nz, slip, rtol)  # type: ignore[arg-type]
-        inner += its
-        step = 1.0
-        while True:
-            trial = tau + step * dtau
-            F_t, S_t, z_t, nz_t, slip_t = residual(trial)
-            fn_t = float(np.sqrt(np.sum(F_t * F_t)))
-            if fn_t <= (1.0 - ARMIJO * step) * fnorm or step <= MIN_STEP:
-                break
-            step *= 0.5
-        prev_ratio = fn_t / fnorm if fnorm > 0 else GMRES_RTOL_MIN
-        tau, F, S, z, nz, slip = trial, F_t, S_t, z_t, nz_t, slip_t
-        fnorm = fn_t
+    tau, S, slip, z, nz, newton, inner = coulomb_newton(
+        patch,
+        b,
+        np.where(C, tau0, 0.0),
+        tol,
+        NEWTON_MAXIT,
+        "transient contact problem",
+        error=StageSolveError,
+    )
     tau = np.where(C, tau, 0.0)
     return CoulombSolution(tau, S, C, slip, z, nz, newton, inner)
 
