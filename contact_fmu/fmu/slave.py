@@ -76,9 +76,12 @@ class ContactSlave(Fmi2Slave):
             self.default_experiment = DefaultExperiment(start, stop, step_size=step)
         self._vars = {v.name: v for v in cfg.variables}
         self._causality = {n: v.causality[cfg.mode] for n, v in self._vars.items()}
+        # parameter and input values; the inputs also by themselves, the argument of
+        # every step (kept in step with _values by _set)
         self._values: dict[str, Any] = {
             n: cfg.start(v) for n, v in self._vars.items() if self._causality[n] != fv.OUTPUT
         }
+        self._in = {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
         self._out: dict[str, float] = {
             n: float(v.start) for n, v in self._vars.items() if self._causality[n] == fv.OUTPUT
         }
@@ -102,17 +105,26 @@ class ContactSlave(Fmi2Slave):
                 Fmi2Variability.continuous if v.type == "Real" else Fmi2Variability.discrete
             )
             initial = Fmi2Initial.calculated
+        if c == fv.OUTPUT and v.type == "Real":  # the per-step reads: no detour
+            getter = lambda n=v.name: self._get_real_output(n)  # noqa: E731
+        else:
+            getter = lambda n=v.name: self._get(n)  # noqa: E731
         return _TYPES[v.type](
             v.name,
             causality=_CAUSALITY[c],
             variability=variability,
             initial=initial,
             description=v.description,
-            getter=lambda n=v.name: self._get(n),
+            getter=getter,
             setter=lambda value, n=v.name: self._set(n, value),
         )
 
     # ---- get/set -------------------------------------------------------------------------
+    def _get_real_output(self, name: str) -> float:
+        if self._dirty and self._model is not None and self._model.feedthrough:
+            self._refresh()
+        return self._out[name]  # floats, checked finite by _collect
+
     def _get(self, name: str) -> Any:
         var = self._vars[name]
         if self._causality[name] == fv.OUTPUT:
@@ -143,8 +155,11 @@ class ContactSlave(Fmi2Slave):
         self._values[name] = (
             value if var.type == "String" or problem == "a number" else float(value)
         )
+        if c == fv.INPUT:
+            self._in[name] = self._values[name]
         if problem is None:
-            self._bad.pop(name, None)
+            if self._bad:
+                self._bad.pop(name, None)
         else:
             msg = f"{name} = {value!r} is invalid: must be {problem}"
             self._bad[name] = msg
@@ -153,7 +168,7 @@ class ContactSlave(Fmi2Slave):
             self._dirty = True
 
     def _inputs(self) -> dict[str, float]:
-        return {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+        return dict(self._in)
 
     def _params(self) -> dict[str, Any]:
         return {n: v for n, v in self._values.items() if self._causality[n] == fv.PARAMETER}
@@ -283,6 +298,7 @@ class ContactSlave(Fmi2Slave):
     def _set_fmu_state(self, state: dict[str, Any]) -> None:
         s = copy.deepcopy(state)
         self._time, self._values, self._bad = s["time"], s["values"], s["bad"]
+        self._in = {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
         if s["model"] is None:
             self._model = self._model_params = None
         else:

@@ -14,6 +14,7 @@ figures) with eta = 3; tests check that they agree.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Protocol
@@ -104,7 +105,7 @@ class Var:
             v = float(value)  # type: ignore[arg-type]
         except (TypeError, ValueError):
             return "a number"
-        if v != v or v in (float("inf"), float("-inf")):
+        if not math.isfinite(v):
             return "finite"
         if self.type == "Integer" and v != int(v):
             return "an integer"
