@@ -43,6 +43,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from . import native, solvers
 from ._validate import InputError, finite, positive
 from .body_state import BodyState, ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
@@ -111,6 +112,7 @@ class RollingBody(BodyState):
         self._dv = 0.0  # last step's dvx/dt (m/s^2): the predictor of the stage solves
         T = self._forces(self.y[None, :])[0]
         self.out = ContactOutputs(*map(float, T), _saturated(law, self.y))
+        self._kernel = self._native_kernel()
 
     # ---- public -----------------------------------------------------------------
     def outputs(self) -> dict[str, float]:
@@ -146,6 +148,14 @@ class RollingBody(BodyState):
         h = positive("h", h)
         if substeps < 1:
             raise InputError("substeps", substeps, ">= 1")
+        if self._kernel is not None and not callable(loads):
+            L = _checked(loads)
+            new = self._kernel.advance(self, h, L.Fx_ex, L.My_ex, substeps)
+            if new is not None:  # else a case the kernel leaves to this code
+                Vx, vx, self.t, self._dv, Tx, Ty, Mz, out_sliding, self.sliding = new
+                self.y = self._state(Vx, vx)
+                self.out = ContactOutputs(Tx, Ty, Mz, out_sliding)
+                return
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
         saved = (self.y.copy(), self.t, self.sliding, self.out, self._dv)
         try:
@@ -162,6 +172,32 @@ class RollingBody(BodyState):
         except Exception:
             self.y, self.t, self.sliding, self.out, self._dv = saved
             raise
+
+    def _native_kernel(self) -> native.Kernel | None:
+        """The compiled twin of this stepper's path (contact_fmu/native), where it
+        covers it: Lobatto IIIC, the thin-layer law, vx the only unknown, no lateral
+        slip or spin. Same results as the Python path, bit for bit."""
+        law_constants = getattr(type(self.law), "native_constants", None)
+        covered = (
+            law_constants is not None
+            and self.scheme == "lobatto3c"
+            and len(self._idx) == 1
+            and self.lateral.vy_ratio is not None
+            and self.lateral.spin_ratio == 0.0
+        )
+        lib = native.library() if covered else None
+        if lib is None:
+            return None
+        constants = law_constants | {
+            "v_standstill": V_STANDSTILL,
+            "v_scale_floor": V_SCALE_FLOOR,
+            "z_algebraic": Z_ALGEBRAIC,
+            "capacity_margin": CAPACITY_MARGIN,
+            "solve_rtol": solvers.SOLVE_RTOL,
+            "expand": solvers.EXPAND,
+            "max_newton": solvers.MAX_NEWTON,
+        }
+        return native.Kernel(lib, constants, self.method == "quasistationary")
 
     def _exact_in_one_step(self, loads: LoadInput) -> bool:
         """Quasistationary rolling under held, admissible loads (see ``advance``)."""

@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -161,6 +162,12 @@ class LayerContact:
     kb: float
     ks: float
     mu: float
+    # The closed forms' constants for the compiled stepper (contact_fmu/native), which
+    # covers this law without spin: its presence marks the law as covered.
+    native_constants: ClassVar[dict[str, float]] = {
+        "beta_full_slip": BETA_FULL_SLIP,
+        "beta_series": BETA_SERIES,
+    }
 
     def __post_init__(self) -> None:
         for name in ("P", "Rx", "Ry", "mu"):

@@ -77,6 +77,10 @@ def newton_increasing(
         else:
             lo = u
         new = u - f / df if df > 0.0 else np.nan
+        if abs(new - u) <= SOLVE_RTOL * (scale + abs(u)):
+            # converged: tested before the bracket, which a step below the rounding of
+            # u (new == u == lo) would "leave" and restart the search
+            return new
         if not lo < new < hi:  # outside the bracket (or no slope): bisect or search
             if np.isfinite(lo) and np.isfinite(hi):
                 new = 0.5 * (lo + hi)

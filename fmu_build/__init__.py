@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 
+from contact_fmu import native
 from contact_fmu.fmu.config import ModelConfig
 
 from . import model_description, script, sources, tables
@@ -90,6 +91,15 @@ def names(cfg: ModelConfig, key: str) -> tuple[str, str, str]:
     )
 
 
+def _compile_native(dest: Path) -> None:
+    """The compiled stepper, next to its vendored source (contact_fmu/native); without a
+    C compiler the FMU is built without it and steps in Python (same results)."""
+    try:
+        native.compile_to(dest / native.library_name())
+    except (OSError, subprocess.CalledProcessError) as e:
+        print(f"fmu_build: compiled stepper left out ({e}): steps in Python", file=sys.stderr)
+
+
 def build(
     cfg: ModelConfig,
     out_dir: str | Path = DEFAULT_OUT,
@@ -110,6 +120,8 @@ def build(
     try:
         stage = work / "stage"
         sources.vendor(modules, stage / package, cfg.data_files)
+        if "native" in modules:
+            _compile_native(stage / package / "native")
         for rel in cfg.generated_files:
             shutil.copyfile(tables.ensure(cfg, table_cache), stage / package / rel)
         script_file = stage / f"{module}.py"

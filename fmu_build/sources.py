@@ -91,13 +91,18 @@ def closure(roots: list[str]) -> list[str]:
     return sorted(seen)
 
 
+# Files other than Python a module reads next to itself, by module.
+COMPANIONS = {"native": ("native/stepper.c",)}
+
+
 def files(modules: list[str]) -> list[tuple[str, Path]]:
-    """(path inside the vendored package, source file) for each module."""
+    """(path inside the vendored package, source file) for each module and its companions."""
     out = []
     for m in modules:
         src = _module_file(m)
         rel = src.relative_to(PACKAGE_DIR).as_posix()
         out.append((rel, src))
+        out += data(COMPANIONS.get(m, ()))
     return out
 
 

@@ -1,0 +1,283 @@
+/* Compiled twin of one path of integrator.RollingBody.advance (Lobatto IIIC, scalar).
+ *
+ * The path: the thin-layer law (layer.LayerContact, Eqs. 40-43 corrected) without
+ * spin, with lateral slip held at a ratio to Vx or zero, the body of Eqs. (8)-(9) and (20) with vx the
+ * only stage unknown, loads held over the interval, methods "full" and
+ * "quasistationary". Every expression is that of the Python code, in the same order,
+ * and the build forbids contraction to fused multiply-adds, so a step gives the same
+ * doubles as the Python path (tests/test_native.py checks it bit for bit).
+ *
+ * Whatever this file does not cover returns CF_FALLBACK with the state untouched, and
+ * the Python path takes the whole interval: a stage whose safeguarded Newton iteration
+ * does not converge (Python then brackets and calls brentq), and a stage with no root
+ * (Python raises StageSolveError with its message).
+ */
+#include <math.h>
+
+#define CF_OK 0
+#define CF_FALLBACK 1
+
+typedef struct {
+    /* body: M (kg), Rx (m), A1, A2 (Eq. 23), m_slip = M A2 (kg) */
+    double M, Rx, A1, A2, m_slip;
+    /* law: mu, P (N), a1 (m), creep_full_slip, beta_per_creep (layer.py) */
+    double mu, P, a1, creep_full_slip, beta_per_creep;
+    /* held ratio vy/Vx (Lateral.vy_ratio); the spin ratio of this path is 0 */
+    double ry;
+    /* constants of integrator.py, solvers.py and layer.py, passed so they live once */
+    double v_standstill, v_scale_floor, z_algebraic, capacity_margin;
+    double solve_rtol, expand, beta_full_slip, beta_series;
+    int max_newton;
+    int quasistationary; /* method: 1 "quasistationary", 0 "full" */
+} cf_params;
+
+typedef struct {
+    double Vx, vx, t, dv; /* y[0], y[1], t, _dv of RollingBody */
+    double Tx, Ty, Mz;    /* out: ContactOutputs */
+    int out_sliding;      /* out.sliding */
+    int sliding;          /* RollingBody.sliding (quasistationary gross sliding) */
+} cf_state;
+
+/* Python's min(x, c) and max(x, c) for a constant c: the first argument unless c is
+ * strictly smaller (larger). */
+static double py_min(double x, double c) { return c < x ? c : x; }
+static double py_max(double x, double c) { return c > x ? c : x; }
+
+/* ---- layer.py ------------------------------------------------------------------- */
+static double H(double b) {
+    double m = sqrt(1.0 - 0.25 * b * b);
+    return (1.0 + b * b) * asin(0.5 * b) - 0.5 * M_PI * b * b + b * m * (13.0 / 6.0 + b * b / 12.0);
+}
+
+static double force_fraction(const cf_params *p, double beta) {
+    if (beta >= p->beta_full_slip) return 1.0;
+    return py_min((2.0 / M_PI) * H(beta), 1.0);
+}
+
+static double force_fraction_slope(const cf_params *p, double beta) {
+    if (beta >= p->beta_full_slip) return 0.0;
+    double m = sqrt(1.0 - 0.25 * beta * beta);
+    return py_max((2.0 / M_PI) * (m * (8.0 + beta * beta) / 3.0 - 2.0 * beta * asin(m)), 0.0);
+}
+
+static double fraction_per_beta(const cf_params *p, double beta) {
+    if (beta < p->beta_series)
+        return 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI);
+    return force_fraction(p, beta) / beta;
+}
+
+/* LayerContact._forces_scalar: (Tx, Ty, Mz) */
+static void forces(const cf_params *p, double vx, double vy, double Vx, double T[3]) {
+    double speed = hypot(vx, vy);
+    if (speed == 0.0) {
+        T[0] = T[1] = T[2] = 0.0;
+        return;
+    }
+    double beta = Vx == 0.0 ? INFINITY : speed * p->beta_per_creep / fabs(Vx);
+    double h = force_fraction(p, beta);
+    double muP = p->mu * p->P;
+    double b = py_min(beta, p->beta_full_slip);
+    double g = 0.5 * b * (h - 1.0);
+    T[2] = Vx != 0.0 ? copysign(1.0, Vx) * muP * p->a1 * g * vy / speed : 0.0;
+    T[0] = muP * h * vx / speed;
+    T[1] = muP * h * vy / speed;
+}
+
+/* LayerContact.tx_slope: Tx, dTx/dvx, dTx/dvy, dTx/dVx */
+static void tx_slope(const cf_params *p, double vx, double vy, double Vx, double r[4]) {
+    double muP = p->mu * p->P, c = p->beta_per_creep;
+    double aV = fabs(Vx);
+    double s = hypot(vx, vy);
+    if (s == 0.0) {
+        r[0] = 0.0;
+        r[1] = muP * force_fraction_slope(p, 0.0) * c / aV;
+        r[2] = 0.0;
+        r[3] = 0.0;
+        return;
+    }
+    double ex = vx / s, ey = vy / s;
+    double beta = s * c / aV;
+    double h = force_fraction(p, beta), dh = force_fraction_slope(p, beta);
+    double h_per_s = fraction_per_beta(p, beta) * c / aV;
+    r[0] = muP * h * ex;
+    r[1] = muP * (dh * c * ex * ex / aV + h_per_s * ey * ey);
+    r[2] = muP * ex * ey * (dh * c / aV - h_per_s);
+    r[3] = -muP * dh * beta * ex / Vx;
+}
+
+/* ---- integrator.py -------------------------------------------------------------- */
+/* RollingBody._law_x: Tx and dTx/dvx along a stage path (slope, k) */
+static void law_x(const cf_params *p, double vx, double Vx, double k, double out[2]) {
+    int floored = fabs(Vx) < p->v_standstill;
+    double V = floored ? copysign(p->v_standstill, Vx) : Vx;
+    double r[4];
+    tx_slope(p, vx, p->ry * Vx, V, r);
+    out[0] = r[0];
+    out[1] = r[1] + k * p->ry * r[2] + (floored ? 0.0 : k * r[3]);
+}
+
+/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx */
+static void law(const cf_params *p, double vx, double Vx, double T[3]) {
+    double V = fabs(Vx) >= p->v_standstill ? Vx : copysign(p->v_standstill, Vx);
+    forces(p, vx, p->ry * Vx, V, T);
+}
+
+/* the stage residuals: algebraic (T(v, V2b) - Fe2) or Lobatto's coupled pair (g) */
+typedef struct {
+    const cf_params *p;
+    double V1b, V2b, Fe1, Fe2, vn, h, m, k, scale;
+} stage;
+
+static void residual_algebraic(const stage *s, double v, double f[2]) {
+    double o[2];
+    law_x(s->p, v, s->V2b, 0.0, o);
+    f[0] = o[0] - s->Fe2;
+    f[1] = o[1];
+}
+
+static void residual_lobatto(const stage *s, double v2, double f[2]) {
+    double o2[2], o1[2];
+    law_x(s->p, v2, s->V2b + s->k * (v2 - s->vn), s->k, o2);
+    double v1 = v2 - s->h * (s->Fe2 - o2[0]) / s->m;
+    double dv1 = 1.0 + s->h * o2[1] / s->m;
+    law_x(s->p, v1, s->V1b + s->k * (v1 - s->vn), s->k, o1);
+    f[0] = o1[0] - s->Fe1 + s->m * (v1 + v2 - 2.0 * s->vn) / s->h;
+    f[1] = o1[1] * dv1 + s->m * (dv1 + 1.0) / s->h;
+}
+
+/* solvers.newton_increasing without its brentq fallback (CF_FALLBACK instead) */
+static int newton_increasing(const stage *s, void (*fdf)(const stage *, double, double[2]),
+                             double u0, double scale, double *root) {
+    double lo = -INFINITY, hi = INFINITY, u = u0, jump = scale, f[2];
+    for (int i = 0; i < s->p->max_newton; i++) {
+        fdf(s, u, f);
+        if (f[0] == 0.0) {
+            *root = u;
+            return CF_OK;
+        }
+        if (f[0] > 0.0) hi = u;
+        else lo = u;
+        double next = f[1] > 0.0 ? u - f[0] / f[1] : NAN;
+        if (fabs(next - u) <= s->p->solve_rtol * (scale + fabs(u))) {
+            *root = next;
+            return CF_OK;
+        }
+        if (!(lo < next && next < hi)) {
+            if (isfinite(lo) && isfinite(hi)) {
+                next = 0.5 * (lo + hi);
+            } else {
+                next = u + (f[0] < 0.0 ? jump : -jump);
+                jump *= s->p->expand;
+            }
+        }
+        if (fabs(next - u) <= s->p->solve_rtol * (scale + fabs(u))) {
+            *root = next;
+            return CF_OK;
+        }
+        u = next;
+    }
+    return CF_FALLBACK;
+}
+
+static double target_x(const cf_params *p, double Fx, double My) {
+    return p->A2 * Fx - p->A1 * My / p->Rx;
+}
+
+static double drive(const cf_params *p, double Fx, double My) {
+    return p->A1 * (Fx + My / p->Rx);
+}
+
+/* RollingBody._admissible (no lateral force on this path: Ty = 0) */
+static int admissible(const cf_params *p, double Fx, double My) {
+    double cap = p->mu * p->P * (1.0 - p->capacity_margin);
+    return hypot(target_x(p, Fx, My), 0.0) < cap;
+}
+
+/* is_full_slip at the state (vy = ry Vx, _apply_ratios) */
+static int saturated(const cf_params *p, double Vx, double vx) {
+    double speed = hypot(vx, p->ry * Vx);
+    return speed > 0.0 && speed >= p->creep_full_slip * fabs(Vx);
+}
+
+/* RollingBody._lobatto_scalar with held loads (L1 = L2) */
+static int lobatto_scalar(const cf_params *p, cf_state *y, double h, double Fx, double My,
+                          int algebraic, double T[3]) {
+    double Vn = y->Vx, vn = y->vx;
+    double G1 = drive(p, Fx, My), G2 = G1;
+    double Fe1 = target_x(p, Fx, My), Fe2 = Fe1;
+    stage s = {p, 0, 0, Fe1, Fe2, vn, h, 0, 0, 0};
+    s.V1b = Vn + 0.5 * h * (G1 - G2) / p->M;
+    s.V2b = Vn + 0.5 * h * (G1 + G2) / p->M;
+    s.scale = p->creep_full_slip * py_max(fabs(s.V2b), p->v_scale_floor);
+    s.m = algebraic ? 0.0 : p->m_slip;
+    double slope = p->mu * p->P / s.scale;
+    double v2;
+    if (s.m == 0.0 || h * slope / s.m > p->z_algebraic) {
+        if (newton_increasing(&s, residual_algebraic, vn + y->dv * h, s.scale, &v2))
+            return CF_FALLBACK;
+        law(p, v2, s.V2b, T);
+        T[0] = Fe2;
+        y->Vx = s.V2b;
+        y->vx = v2;
+        return CF_OK;
+    }
+    s.k = s.m / p->M;
+    if (newton_increasing(&s, residual_lobatto, vn + y->dv * h, s.scale, &v2))
+        return CF_FALLBACK;
+    double V2 = s.V2b + s.k * (v2 - vn);
+    law(p, v2, V2, T);
+    y->Vx = V2;
+    y->vx = v2;
+    return CF_OK;
+}
+
+/* RollingBody._step */
+static int step(const cf_params *p, cf_state *y, double h, double Fx, double My) {
+    int ok = admissible(p, Fx, My);
+    if (p->quasistationary && !ok) y->sliding = 1;
+    else if (p->m_slip == 0.0 && !ok) return CF_FALLBACK; /* Python raises */
+    int algebraic = p->quasistationary && !y->sliding;
+    double vn = y->vx, T[3];
+    if (lobatto_scalar(p, y, h, Fx, My, algebraic, T)) return CF_FALLBACK;
+    y->dv = (y->vx - vn) / h;
+    double cap = p->mu * p->P;
+    if (hypot(T[0], T[1]) > cap) {
+        double r = cap / hypot(T[0], T[1]);
+        T[0] *= r;
+        T[1] *= r;
+    }
+    y->Tx = T[0];
+    y->Ty = T[1];
+    y->Mz = T[2];
+    y->out_sliding = saturated(p, y->Vx, y->vx);
+    if (p->quasistationary) { /* _update_regime */
+        if (y->sliding) {
+            if (!saturated(p, y->Vx, y->vx) && ok) y->sliding = 0;
+        } else if (y->out_sliding) {
+            y->sliding = 1;
+        }
+    }
+    return CF_OK;
+}
+
+/* RollingBody.advance with held loads: h (s) in n equal steps; the quasistationary
+ * method takes one step for the interval unless it ends in gross sliding. On
+ * CF_FALLBACK *y is unchanged. */
+int cf_advance(const cf_params *p, cf_state *y, double h, double Fx, double My, int n) {
+    cf_state w = *y;
+    if (n > 1 && p->quasistationary && !w.sliding && admissible(p, Fx, My)) {
+        if (step(p, &w, h, Fx, My)) return CF_FALLBACK;
+        if (!w.sliding) {
+            w.t = y->t + h;
+            *y = w;
+            return CF_OK;
+        }
+        w = *y;
+    }
+    double dt = h / n;
+    for (int k = 0; k < n; k++)
+        if (step(p, &w, dt, Fx, My)) return CF_FALLBACK;
+    w.t = y->t + h;
+    *y = w;
+    return CF_OK;
+}

@@ -1,0 +1,141 @@
+"""The compiled stepper (contact_fmu/native) against the Python path it mirrors, and the
+stage solver's stopping rule.
+
+The kernel repeats the Python expressions in the same order without fused multiply-adds,
+so where every hypot it evaluates has a zero argument (no lateral slip: hypot(x, 0) = |x|
+exactly in both CPython and the C library) a step must give the same doubles. With a held
+lateral ratio the two hypot implementations may differ by one unit in the last place;
+the stage solves converge to SOLVE_RTOL = 1e-13 of their scale, so the paths agree to
+that order.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from contact_fmu import examples as ex
+from contact_fmu import native, solvers
+from contact_fmu.dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
+from contact_fmu.integrator import RollingBody
+
+pytestmark = pytest.mark.skipif(native.library() is None, reason="no C compiler")
+
+CONTACT = ex.contact()
+F = CONTACT.mu * CONTACT.P
+
+
+def _pair(method: str, eta: float, V0: float, lateral: Lateral = ROLLING_STRAIGHT):
+    body = Body.from_eta(1.0, 0.05, eta)
+    a, b = (
+        RollingBody(CONTACT, body, lateral, method=method, Vx0=V0, Omega_y0=V0 / 0.05 * 0.999)
+        for _ in range(2)
+    )
+    b._kernel = None  # the Python path
+    assert a._kernel is not None
+    return a, b
+
+
+def _histories(rng, lateral: Lateral = ROLLING_STRAIGHT):
+    """Random load histories over the covered path: loads to 1.5 mu P (gross sliding),
+    steps from 1e-8 to 10 s, 1-7 substeps, speeds from 5 m/s to rest and reversed,
+    load changes; yields (a, b, advance args) for each step."""
+    for method in ("full", "quasistationary"):
+        for eta in (1.0, 3.0, 1e3, math.inf):
+            for V0 in (5.0, 1e-3, 1e-8, 0.0, -2.0):
+                a, b = _pair(method, eta, V0, lateral)
+                for _ in range(60):
+                    fx = rng.uniform(-1.5, 1.5) * F
+                    L = Loads(fx, rng.uniform(-0.5, 0.5) * F * 0.05, 0.0, 0.0)
+                    if rng.uniform() < 0.05:
+                        P = CONTACT.P * rng.uniform(0.5, 1.5)
+                        a.set_load(P)
+                        b.set_load(P)
+                    yield a, b, (10 ** rng.uniform(-8, 1), L, int(rng.integers(1, 8)))
+
+
+def _advance(body, args):
+    try:
+        body.advance(*args)
+    except Exception as e:  # both paths must fail alike
+        return type(e).__name__, str(e)
+    return None
+
+
+def _counting(monkeypatch) -> dict[str, int]:
+    counts = {"kernel": 0, "python": 0}
+    original = native.Kernel.advance
+
+    def counted(self, *args):
+        result = original(self, *args)
+        counts["kernel" if result is not None else "python"] += 1
+        return result
+
+    monkeypatch.setattr(native.Kernel, "advance", counted)
+    return counts
+
+
+def test_kernel_gives_the_python_paths_doubles_without_lateral_slip(monkeypatch):
+    counts = _counting(monkeypatch)
+    rng = np.random.default_rng(7)
+    for a, b, args in _histories(rng):
+        assert _advance(a, args) == _advance(b, args)
+        assert np.array_equal(a.y, b.y) and a.t == b.t and a._dv == b._dv
+        assert a.out == b.out and a.sliding == b.sliding
+    # the kernel took the steps (a test of the fallback alone would pass vacuously)
+    assert counts["kernel"] > 0.9 * (counts["kernel"] + counts["python"])
+
+
+@pytest.mark.parametrize("vy_ratio", [0.002, -0.01, 0.3])
+def test_kernel_agrees_to_rounding_with_a_held_lateral_ratio(vy_ratio):
+    rng = np.random.default_rng(11)
+    scale = F
+    for a, b, args in _histories(rng, Lateral(vy_ratio=vy_ratio)):
+        assert _advance(a, args) == _advance(b, args)
+        v = CONTACT.creep_full_slip * max(abs(b.y[0]), 1e-9)  # the stage solves' scale
+        assert abs(a.y[0] - b.y[0]) <= 1e-12 * max(abs(b.y[0]), 1e-9)
+        assert abs(a.y[1] - b.y[1]) <= 1e-11 * v
+        assert abs(a.out.Tx - b.out.Tx) <= 1e-11 * scale
+        assert abs(a.out.Ty - b.out.Ty) <= 1e-11 * scale
+        assert a.sliding == b.sliding and a.t == b.t
+
+
+def test_paths_the_kernel_leaves_out_step_in_python():
+    body = Body.from_eta(1.0, 0.05, 3.0)
+    assert RollingBody(CONTACT, body, scheme="sdirk2")._kernel is None
+    assert RollingBody(CONTACT, body, Lateral(spin_ratio=1.0))._kernel is None
+    assert RollingBody(CONTACT, body, Lateral(vy_ratio=None))._kernel is None
+
+
+def test_without_the_library_the_stepper_is_unchanged(monkeypatch):
+    monkeypatch.setenv("CONTACT_FMU_NATIVE", "0")
+    monkeypatch.setattr(native, "_TRIED", False)
+    monkeypatch.setattr(native, "_LIB", None)
+    assert native.library() is None
+    rb = RollingBody(CONTACT, Body.from_eta(1.0, 0.05, 3.0), Vx0=5.0, Omega_y0=100.0)
+    assert rb._kernel is None
+    rb.advance(1e-4, Loads(0.5 * F, 0.0, 0.0, 0.0), 4)
+    assert math.isfinite(rb.out.Tx)
+
+
+def test_newton_stops_at_a_step_below_the_rounding_of_u():
+    """Converged Newton iterates of a smooth increasing function: the last step f/f' is
+    rounding noise, often below half an ulp of u (u - f/f' == u). That is convergence,
+    not a step outside the bracket (which restarted the search and ended in brentq
+    after 30 iterations in 19 % of these cases). Newton from 0 on u^3 + u = c, c <= 50,
+    needs at most 13 evaluations."""
+    rng = np.random.default_rng(0)
+    worst = 0
+    for c in rng.uniform(0.5, 50.0, 500):
+        calls = [0]
+
+        def fdf(u, c=c, calls=calls):
+            calls[0] += 1
+            return u**3 + u - c, 3.0 * u * u + 1.0
+
+        u = solvers.newton_increasing(fdf, 0.0, 1.0)
+        assert abs(u**3 + u - c) <= 1e-12 * c
+        worst = max(worst, calls[0])
+    assert worst <= 13
