@@ -83,13 +83,14 @@ class BodyState:
 
     def kinematics(self) -> dict[str, float]:
         """Velocities and rigid slips (SI), the first keys of a stepper's outputs()."""
+        Vx, vx, Vy, Omega_z = self.y.tolist()  # the properties' values, in one call
         return {
-            "Vx": self.Vx,
-            "Vy": self.Vy,
-            "Omega_y": self.Omega_y,
-            "Omega_z": self.Omega_z,
-            "vx": self.vx,
-            "vy": self.vy,
+            "Vx": Vx,
+            "Vy": Vy,
+            "Omega_y": (Vx - vx) / self.body.Rx,
+            "Omega_z": Omega_z,
+            "vx": vx,
+            "vy": Vy,
         }
 
     def _apply_ratios(self, y: FloatArray) -> FloatArray:

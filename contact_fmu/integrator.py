@@ -118,8 +118,8 @@ class RollingBody(BodyState):
     def outputs(self) -> dict[str, float]:
         """Everything a host reads after a step (SI): velocities, forces, contact state."""
         o = self.kinematics()
-        o.update(Tx=self.out.Tx, Ty=self.out.Ty, Mz=self.out.Mz)
-        o.update(contact_quantities(self.law, self.Vx, self.vx, self.vy, self.Omega_z))
+        o["Tx"], o["Ty"], o["Mz"] = self.out.Tx, self.out.Ty, self.out.Mz
+        o.update(contact_quantities(self.law, o["Vx"], o["vx"], o["vy"], o["Omega_z"]))
         return o
 
     def snapshot(self) -> tuple:

@@ -35,10 +35,11 @@ def contact_quantities(
     law: ContactLaw, Vx: float, vx: float, vy: float, Omega_z: float
 ) -> dict[str, float]:
     """Creepages, contact ellipse, adhesion fraction and regime at the given slip (SI)."""
+    V = max(abs(Vx), V_CREEP_FLOOR)  # creepage's denominator, once
     return {
-        "xi_x": creepage(vx, Vx),
-        "xi_y": creepage(vy, Vx),
-        "xi_sp": creepage(Omega_z, Vx),
+        "xi_x": vx / V,
+        "xi_y": vy / V,
+        "xi_sp": Omega_z / V,
         "a1": law.a1,
         "a2": law.a2,
         "p0": law.p0,

@@ -75,7 +75,7 @@ class BodyModel:
         if P != self.P:
             self.stepper.set_load(P)
             self.P = P
-        loads = Loads(*(inputs.get(k, 0.0) for k in Loads._fields))
+        loads = Loads(*[inputs.get(k, 0.0) for k in Loads._fields])
         n = self.internal_steps(h)
         self.stepper.advance(h, loads, n)
         if n == MAX_SUBSTEPS and h / self.h_max > MAX_SUBSTEPS:
