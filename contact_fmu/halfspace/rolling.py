@@ -653,18 +653,24 @@ def _newton_direction(
     bS = (-(ratio * tau_t) / r - (that[0] * Kn[0] + that[1] * Kn[1]))[Sl]
     b = np.concatenate([bH[0], bH[1], bS])
     shape = (2, *patch.grid.shape)
+    # flat indices of the unknowns' elements: gathers and scatters by index are several
+    # times cheaper than by boolean mask, and they run twice per GMRES iteration
+    n = H.size
+    iH, iS = np.flatnonzero(H), np.flatnonzero(Sl)
+    iHH = np.concatenate([iH, n + iH])  # both components of the adhesion elements
+    t_S, cS_S = that.reshape(2, n)[:, iS], cS.ravel()[iS]
 
     def to_field(x: FloatArray) -> FloatArray:
-        d = np.zeros(shape)
-        d[0][H] = x[:nH]
-        d[1][H] = x[nH : 2 * nH]
-        d[:, Sl] += x[2 * nH :] * that[:, Sl]
-        return d
+        d = np.zeros(2 * n)
+        d[iHH] = x[: 2 * nH]
+        d = d.reshape(2, n)
+        d[:, iS] += x[2 * nH :] * t_S
+        return d.reshape(shape)
 
     def matvec(x: FloatArray) -> FloatArray:
-        Kd = patch.apply_K(to_field(x))
-        out_S = cS[Sl] * x[2 * nH :] + (that[0] * Kd[0] + that[1] * Kd[1])[Sl]
-        return np.concatenate([Kd[0][H], Kd[1][H], out_S])
+        Kd = patch.apply_K(to_field(x)).reshape(2, n)
+        out_S = cS_S * x[2 * nH :] + (t_S[0] * Kd[0, iS] + t_S[1] * Kd[1, iS])
+        return np.concatenate([Kd.ravel()[iHH], out_S])
 
     Ktt = that[0] ** 2 * patch.diag[0] + that[1] ** 2 * patch.diag[1]
     dS = np.where(Sl, cS + Ktt, 1.0)
@@ -673,19 +679,22 @@ def _newton_direction(
     B = H | Sb
     clo = patch._closure(B)
 
+    in_block = Sb.ravel()[iS]  # of the slip unknowns, those in the block
+    iSb, vS_b = iS[in_block], np.flatnonzero(in_block)
+    t_Sb, dS_S = t_S[:, in_block], dS.ravel()[iS]
+
     def psolve(v: FloatArray) -> FloatArray:
         # block preconditioner: the adhesion block (with the slip elements Sb, tangential
         # component) inverted approximately (FFT deconvolution, closure, march), the
         # other slip rows by their diagonal
-        res = np.zeros(shape)
-        res[0][H] = v[:nH]
-        res[1][H] = v[nH : 2 * nH]
-        vs = np.zeros(patch.grid.shape)
-        vs[Sl] = v[2 * nH :]
-        res[:, Sb] = vs[Sb] * that[:, Sb]
-        d = patch._precondition_adhesion(res, B, clo)
-        xs = np.where(Sb, that[0] * d[0] + that[1] * d[1], vs / dS)
-        return np.concatenate([d[0][H], d[1][H], xs[Sl]])
+        vs = v[2 * nH :]
+        res = np.zeros(2 * n)
+        res[iHH] = v[: 2 * nH]
+        res = res.reshape(2, n)
+        res[:, iSb] = vs[vS_b] * t_Sb
+        d = patch._precondition_adhesion(res.reshape(shape), B, clo).reshape(2, n)
+        xs = np.where(in_block, t_S[0] * d[0, iS] + t_S[1] * d[1, iS], vs / dS_S)
+        return np.concatenate([d.ravel()[iHH], xs])
 
     N = 2 * nH + nS
     count = [0]
