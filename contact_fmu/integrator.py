@@ -175,8 +175,9 @@ class RollingBody(BodyState):
 
     def _native_kernel(self) -> native.Kernel | None:
         """The compiled twin of this stepper's path (contact_fmu/native), where it
-        covers it: Lobatto IIIC, the thin-layer law, vx the only unknown, no lateral
-        slip or spin. Same results as the Python path, bit for bit."""
+        covers it: Lobatto IIIC, the thin-layer law, vx the only unknown, vy held at a
+        ratio, no spin. The Python path's doubles without lateral slip, the same to
+        rounding with it."""
         law_constants = getattr(type(self.law), "native_constants", None)
         covered = (
             law_constants is not None

@@ -12,6 +12,7 @@ import pytest
 from fmpy.validation import validate_fmu
 
 import fmu_build
+from contact_fmu import native
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import discover, load
 
@@ -114,6 +115,26 @@ def test_fmu_carries_only_the_model_parts_it_imports(built):
     for files in (body, contact, rigid):
         assert "simulate.py" not in files and "examples.py" not in files
         assert "fmu/slave.py" in files
+
+
+@pytest.mark.skipif(native.library() is None, reason="no C compiler")
+def test_body_fmu_carries_the_compiled_stepper_and_loads_it(built, tmp_path):
+    """The build compiles contact_fmu/native into the body FMU next to its source; the
+    vendored loader finds that library (and would compile nothing on the target); FMUs
+    without the integrator carry neither."""
+    name = f"native/{native.library_name()}"
+    assert {"native/stepper.c", name} <= _vendored(built["fig13"])
+    assert not any(f.startswith("native/") for f in _vendored(built["sweep"]))
+    fmpy.extract(str(built["fig13"].path), str(tmp_path))
+    code = (
+        f"import sys; sys.path.insert(0, {str(tmp_path / 'resources')!r}); "
+        f"from {built['fig13'].package} import native; "
+        "print(native.VENDORED, native.library() is not None)"
+    )
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path / "home")}  # no user cache
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert out.stdout.split() == ["True", "True"], out.stderr
+    assert not (tmp_path / "home").exists()
 
 
 def test_every_fmu_has_its_own_module_class_and_package(built):

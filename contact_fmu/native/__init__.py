@@ -1,15 +1,16 @@
 """Compiled twin of the integrator's commonest path (stepper.c), loaded with ctypes.
 
 ``RollingBody`` hands a communication step to ``Kernel.advance`` when its path is
-covered (Lobatto IIIC, the thin-layer law, vx the only stage unknown, no lateral slip
-or spin, held loads); the kernel gives the same doubles as the Python code, which it
-mirrors expression by expression, and answers "not covered" (the Python path then
-takes the step) for what it leaves out. See stepper.c.
+covered (Lobatto IIIC, the thin-layer law, vx the only stage unknown, vy held at a
+ratio to Vx, no spin, held loads). The kernel mirrors the Python code expression by
+expression: without lateral slip it gives the same doubles, with a held ratio the same
+to rounding (hypot); it answers "not covered" (the Python path then takes the step)
+for what it leaves out. See stepper.c.
 
-The shared library is looked for next to this file (an FMU carries it there, built by
-fmu_build), then in the user's cache, and otherwise compiled there with the C compiler
-(``CC``, default ``cc``). Without a compiler, or with CONTACT_FMU_NATIVE=0, nothing
-changes but speed.
+The shared library is looked for next to this file, where an FMU carries it (built by
+fmu_build; a vendored copy uses only that one). The package itself looks next in the
+user's cache and otherwise compiles it there with the C compiler (``CC``, default
+``cc``). Without a library, or with CONTACT_FMU_NATIVE=0, nothing changes but speed.
 """
 
 from __future__ import annotations
@@ -77,6 +78,8 @@ def _cache_dir() -> Path:
 
 _LIB: Any = None
 _TRIED = False
+# A copy vendored into an FMU (package cfmu_<key>) writes nothing on the target machine.
+VENDORED = __name__.split(".")[0] != "contact_fmu"
 
 
 def library() -> Any:
@@ -88,11 +91,12 @@ def library() -> Any:
     if os.environ.get("CONTACT_FMU_NATIVE", "1") == "0" or not sys.platform.startswith("linux"):
         return None
     name = library_name()
-    for path in (Path(__file__).with_name(name), _cache_dir() / name):
+    places = (Path(__file__).with_name(name),) + (() if VENDORED else (_cache_dir() / name,))
+    for path in places:
         if path.is_file():
             break
     else:
-        if shutil.which(os.environ.get("CC", "cc")) is None:
+        if VENDORED or shutil.which(os.environ.get("CC", "cc")) is None:
             return None
         try:
             path = compile_to(_cache_dir() / name)
