@@ -15,6 +15,7 @@ contact-fmu report [--quick] [--stiff | --workprecision]
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -217,5 +218,24 @@ def main(argv: list[str] | None = None) -> int:
     return args.func(args)
 
 
+def entry() -> None:
+    """The console script: main, then the end of the process without the interpreter's
+    finalisation. pythonfmu's native wrapper can corrupt the heap when its libraries
+    are torn down at exit (NTNU-IHB/PythonFMU issue 228; tests/conftest.py does the
+    same for the test session): the results are written by then, and the status must
+    be main's, not a crash's."""
+    try:
+        status = main()
+    except SystemExit as e:  # argparse's --help and usage errors: as sys.exit would
+        if e.code is None or isinstance(e.code, int):
+            status = e.code or 0
+        else:
+            print(e.code, file=sys.stderr)
+            status = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

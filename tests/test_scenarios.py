@@ -257,3 +257,18 @@ def test_cli_reports_a_malformed_scene(tmp_path, capsys):
     bad.write_text("name = 'bad'\n[run]\nstop_time = 1.0\n")
     assert cli.main(["run", str(bad), "--out", str(tmp_path)]) == 1
     assert "bad.toml" in capsys.readouterr().err
+
+
+def test_console_entry_keeps_the_status_and_messages(tmp_path):
+    """The console script ends the process without finalisation (cli.entry, pythonfmu
+    teardown): a failure's status and message, and --help's 0, still come out."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text("name = 'bad'\n[run]\nstop_time = 1.0\n")
+    cmd = [sys.executable, "-m", "contact_fmu.cli"]
+    proc = subprocess.run([*cmd, "run", str(bad), "--out", str(tmp_path)],
+                          capture_output=True, text=True, cwd=ROOT)  # fmt: skip
+    assert proc.returncode == 1 and "bad.toml" in proc.stderr
+    proc = subprocess.run([*cmd, "--help"], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 0 and "usage" in proc.stdout
+    proc = subprocess.run([*cmd, "no-such-command"], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 2 and "invalid choice" in proc.stderr
