@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from contact_fmu import examples as ex
+from contact_fmu import native
 from contact_fmu.fmu.body_model import MAX_SUBSTEPS, substeps
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.fmu.slave import ContactSlave
@@ -294,3 +296,86 @@ def test_normal_load_input_moves_the_contact_ellipse_and_is_part_of_the_state():
     assert (b.get("a1"), b.get("a2"), b.get("p0")) == (doubled.a1, doubled.a2, doubled.p0)
     b.s._set_fmu_state(state)
     assert b.get("P") == ex.P and b.get("a1") == ex.contact().a1
+
+
+# ---- the compiled step (BodyModel.fast, contact_fmu/native) ---------------------------
+def _compiled_and_python(monkeypatch, cfg: ModelConfig = BODY, **params: float):
+    """Two instances of one FMU class: one with the compiled step, one without."""
+    from contact_fmu.fmu import body_model
+
+    fast = Slave(cfg, **params)
+    with monkeypatch.context() as m:
+        m.setattr(body_model.BodyModel, "fast", lambda self: None)
+        slow = Slave(cfg, **params)
+    slow.s._fast_enable = lambda: None  # stays Python after set state too
+    return fast, slow
+
+
+@pytest.mark.skipif(native.library() is None, reason="no C compiler")
+def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatch):
+    """A body FMU whose steps run in C (state in the struct, Python synced on demand)
+    gives the Python adapter's outputs bit for bit (no lateral slip: stepper.c's
+    contract) through all that hands the state between them: a load change (P: Python
+    takes that step), internal steps at the cap (Python's note), a bad input (discard)
+    and its correction, get state / step / set state / step, Integer outputs."""
+    fast, slow = _compiled_and_python(monkeypatch)
+    assert fast.s._fast is not None and slow.s._fast is None
+    compiled = [0]
+    step = native.FastBody.step
+
+    def counted(self, h):
+        ok = step(self, h)
+        compiled[0] += ok
+        return ok
+
+    monkeypatch.setattr(native.FastBody, "step", counted)
+    rng = np.random.default_rng(3)
+
+    def both(action):
+        a, b = action(fast), action(slow)
+        assert a == b
+        assert fast.outputs() == slow.outputs()
+        assert fast.messages == slow.messages
+
+    for k in range(120):
+        fx, my = rng.uniform(-1.2, 1.2) * F, rng.uniform(-0.3, 0.3) * F * ex.Rx
+        both(lambda s, fx=fx: s.set("Fx_ex", fx))
+        both(lambda s, my=my: s.set("My_ex", my))
+        if k % 17 == 5:
+            both(lambda s, k=k: s.set("P", 1000.0 * (1.0 + 0.01 * k)))
+        if k % 23 == 7:
+            both(lambda s: s.set("Fx_ex", math.nan))  # discarded until corrected
+            both(lambda s: s.step())
+            both(lambda s, fx=fx: s.set("Fx_ex", fx))
+        h = H * 10 ** rng.uniform(-3, 1)
+        if k % 31 == 11:
+            h = H / 4 * (MAX_SUBSTEPS + 3)  # beyond the cap: Python logs the note
+        both(lambda s, h=h: s.step(h))
+        if k % 13 == 3:  # state round trip through the struct
+            states = [s.s._get_fmu_state() for s in (fast, slow)]
+            both(lambda s: s.step())
+            for s, st in zip((fast, slow), states, strict=True):
+                s.s._set_fmu_state(st)
+                s.t = st["time"]
+            both(lambda s: s.step())
+    # the compiled step took most steps (a test of the fallback alone would pass vacuously)
+    assert fast.s._fast is not None and slow.s._fast is None
+    assert compiled[0] > 100
+
+
+@pytest.mark.skipif(native.library() is None, reason="no C compiler")
+def test_compiled_step_with_a_held_lateral_ratio_agrees_to_rounding(monkeypatch):
+    cfg = ModelConfig(
+        name="lat", mode="body", vy="ratio", inputs=("P", "Fx_ex"),
+        outputs=("Vx", "Vy", "vx", "Tx", "Ty", "xi_y", "adhesion"), starts={"h_max": H / 4},
+    )  # fmt: skip
+    fast, slow = _compiled_and_python(monkeypatch, cfg, vy_ratio=0.002)
+    assert fast.s._fast is not None
+    for k in range(200):
+        for s in (fast, slow):
+            s.set("Fx_ex", F * math.sin(0.1 * k) * 1.3)
+            assert s.step()
+        a, b = fast.outputs(), slow.outputs()
+        for n in a:
+            scale = {"Tx": F, "Ty": F, "adhesion": 1.0}.get(n, max(abs(b[n]), 1e-6))
+            assert abs(a[n] - b[n]) <= 1e-11 * scale, n

@@ -15,9 +15,11 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from .. import native
 from .._validate import InputError
 from ..dynamics import Body, Lateral, Loads
 from ..integrator import RollingBody
+from ..kinematics import V_CREEP_FLOOR
 from .config import ModelConfig
 from .laws import make_law
 
@@ -84,6 +86,19 @@ class BodyModel:
                 f"h_max = {self.h_max:g} s: taken in {MAX_SUBSTEPS} steps of {h / n:g} s"
             )
         return None
+
+    def fast(self) -> native.FastBody | None:
+        """The whole step in compiled code (contact_fmu/native) where the stepper's path
+        is covered, else None. Same results as ``step`` + ``outputs``."""
+        kernel = getattr(self.stepper, "_kernel", None)
+        if kernel is None:
+            return None
+        constants = {
+            "v_creep_floor": V_CREEP_FLOOR,
+            "substep_slack": SUBSTEP_SLACK,
+            "max_substeps": MAX_SUBSTEPS,
+        }
+        return native.FastBody(kernel, self.stepper, self.h_max, constants)
 
     def internal_steps(self, h: float) -> int:
         """Stepper steps for a communication step h (s): ceil(h / h_max), bounded."""

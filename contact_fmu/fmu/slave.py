@@ -88,6 +88,12 @@ class ContactSlave(Fmi2Slave):
         self._bad: dict[str, str] = {}  # inadmissible values held: name -> message
         self._model: Any = None
         self._model_params: dict[str, Any] | None = None
+        # the model's compiled step (model.fast(), e.g. native.FastBody) or None; while
+        # it steps, the state lives in its struct and the outputs in _fast_out
+        self._fast: Any = None
+        self._fast_out: Any = None
+        self._fast_index: dict[str, int] = {}
+        self._out_stale = False  # _out behind _fast_out (after compiled steps)
         self._time = 0.0
         self._dirty = True  # inputs changed since the outputs were computed
         for v in self._vars.values():
@@ -105,10 +111,19 @@ class ContactSlave(Fmi2Slave):
                 Fmi2Variability.continuous if v.type == "Real" else Fmi2Variability.discrete
             )
             initial = Fmi2Initial.calculated
-        if c == fv.OUTPUT and v.type == "Real":  # the per-step reads: no detour
-            getter = lambda n=v.name: self._get_real_output(n)  # noqa: E731
+        # the per-step calls (Real inputs and outputs) take no detour
+        if c == fv.OUTPUT and v.type == "Real":
+
+            def getter(n: str = v.name) -> float:
+                out = self._fast_out  # the compiled step's outputs, or None
+                return out[self._fast_index[n]] if out is not None else self._real_output(n)
+
         else:
             getter = lambda n=v.name: self._get(n)  # noqa: E731
+        if c == fv.INPUT and v.type == "Real" and v.name not in self.cfg.fixed:
+            setter = lambda value, n=v.name: self._set_input(n, value)  # noqa: E731
+        else:
+            setter = lambda value, n=v.name: self._set(n, value)  # noqa: E731
         return _TYPES[v.type](
             v.name,
             causality=_CAUSALITY[c],
@@ -116,11 +131,11 @@ class ContactSlave(Fmi2Slave):
             initial=initial,
             description=v.description,
             getter=getter,
-            setter=lambda value, n=v.name: self._set(n, value),
+            setter=setter,
         )
 
     # ---- get/set -------------------------------------------------------------------------
-    def _get_real_output(self, name: str) -> float:
+    def _real_output(self, name: str) -> float:
         if self._dirty and self._model is not None and self._model.feedthrough:
             self._refresh()
         return self._out[name]  # floats, checked finite by _collect
@@ -128,6 +143,7 @@ class ContactSlave(Fmi2Slave):
     def _get(self, name: str) -> Any:
         var = self._vars[name]
         if self._causality[name] == fv.OUTPUT:
+            self._sync_out()
             if self._dirty and self._model is not None and self._model.feedthrough:
                 self._refresh()
             value = self._out[name]
@@ -167,6 +183,18 @@ class ContactSlave(Fmi2Slave):
         if c == fv.INPUT:
             self._dirty = True
 
+    def _set_input(self, name: str, value: Any) -> None:
+        """_set for a Real input (the per-step call): the same rules, fewer lookups."""
+        if self._vars[name].check(value) is not None:
+            self._set(name, value)  # the message
+            return
+        v = self._values[name] = self._in[name] = float(value)
+        if self._bad:
+            self._bad.pop(name, None)
+        if self._fast is not None and name in self._fast.INPUTS:
+            setattr(self._fast.io, name, v)
+        self._dirty = True
+
     def _inputs(self) -> dict[str, float]:
         return dict(self._in)
 
@@ -205,7 +233,40 @@ class ContactSlave(Fmi2Slave):
             self._error(f"cannot initialise the model: {_describe(e)}")
             return False
         self._model, self._model_params, self._out, self._dirty = model, self._params(), out, False
+        self._fast_enable()
         return True
+
+    # ---- the compiled step --------------------------------------------------------------
+    def _fast_enable(self) -> None:
+        """Use the model's compiled step if it has one (and the FMU no feedthrough)."""
+        fast = getattr(self._model, "fast", None)
+        self._fast = fast() if fast is not None and not self._model.feedthrough else None
+        self._fast_out, self._out_stale = None, False
+        if self._fast is not None:
+            self._fast_out = self._fast.io.out
+            self._fast_index = {n: self._fast.index(n) for n in self._out}
+            self._fast_push()
+
+    def _fast_push(self) -> None:
+        """After Python changed the model: its state, the inputs and the outputs (those
+        of _out, as Python computed them) into the compiled step's struct."""
+        self._fast.push()
+        for n in self._fast.INPUTS:
+            if n in self._in:
+                setattr(self._fast.io, n, self._in[n])
+        for n, i in self._fast_index.items():
+            self._fast_out[i] = self._out[n]
+
+    def _fast_pull(self) -> None:
+        """Before Python reads or steps the model: the state and outputs back."""
+        if self._fast is not None:
+            self._fast.pull()
+            self._sync_out()
+
+    def _sync_out(self) -> None:
+        if self._out_stale:
+            self._out = {n: self._fast_out[i] for n, i in self._fast_index.items()}
+            self._out_stale = False
 
     def _collect(self, outputs: dict[str, float]) -> dict[str, float]:
         """The declared outputs, checked finite."""
@@ -244,6 +305,16 @@ class ContactSlave(Fmi2Slave):
         self._build()
 
     def do_step(self, current_time: float, step_size: float) -> bool:
+        fast = self._fast
+        if fast is not None and not self._bad:  # the compiled step: _do_step's checks
+            t, h = current_time, step_size
+            if (
+                0.0 < h < math.inf
+                and abs(t - self._time) <= TIME_RTOL * max(1.0, abs(t), h)
+                and fast.step(h)
+            ):
+                self._time, self._dirty, self._out_stale = t + h, False, True
+                return True
         try:
             return self._do_step(float(current_time), float(step_size))
         except Exception as e:  # never let an exception reach pythonfmu (fmi2Fatal)
@@ -265,6 +336,7 @@ class ContactSlave(Fmi2Slave):
             return self._discard(
                 f"doStep at t = {t!r} discarded, state unchanged: " + "; ".join(self._bad.values())
             )
+        self._fast_pull()
         snap = self._model.snapshot()
         try:
             note = self._model.step(h, self._inputs())
@@ -275,12 +347,15 @@ class ContactSlave(Fmi2Slave):
                 f"doStep at t = {t!r} with h = {h!r} discarded, state unchanged: {_describe(e)}"
             )
         self._out, self._time, self._dirty = out, t + h, False
+        if self._fast is not None:
+            self._fast_push()
         if note:
             self.log(note, Fmi2Status.warning)
         return True
 
     # ---- FMU state ---------------------------------------------------------------------------
     def _get_fmu_state(self) -> dict[str, Any]:
+        self._fast_pull()
         model = None
         if self._model is not None:
             model = (dict(self._model_params), self._model.snapshot())
@@ -311,6 +386,9 @@ class ContactSlave(Fmi2Slave):
                 self._model_params = params
             self._model.restore(snap)
         self._out, self._dirty = s["out"], s["dirty"]
+        self._fast = self._fast_out = None
+        if self._model is not None:
+            self._fast_enable()
 
 
 def _describe(e: Exception) -> str:

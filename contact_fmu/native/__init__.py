@@ -49,6 +49,20 @@ class State(ctypes.Structure):
     ]
 
 
+# RollingBody.outputs() keys in the order of stepper.c's cf_body.out
+OUTPUTS = (
+    "Vx", "Vy", "Omega_y", "Omega_z", "Tx", "Ty", "Mz", "vx", "vy",
+    "xi_x", "xi_y", "xi_sp", "a1", "a2", "p0", "adhesion", "regime",
+)  # fmt: skip
+
+
+class BodyIO(ctypes.Structure):
+    _fields_ = [
+        (n, ctypes.c_double)
+        for n in ("P", "Fx_ex", "My_ex", "h_max", "a2", "p0", "v_creep_floor", "substep_slack")
+    ] + [("max_substeps", ctypes.c_int), ("out", ctypes.c_double * len(OUTPUTS))]
+
+
 def library_name() -> str:
     """File name of the library built from this stepper.c with CFLAGS."""
     key = hashlib.sha256(SOURCE.read_bytes() + " ".join(CFLAGS).encode()).hexdigest()[:12]
@@ -108,6 +122,10 @@ def library() -> Any:
         ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_int,
     ]  # fmt: skip
     lib.cf_advance.restype = ctypes.c_int
+    lib.cf_body_step.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double]
+    lib.cf_body_step.restype = ctypes.c_int
+    lib.cf_body_outputs.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+    lib.cf_body_outputs.restype = None
     _LIB = lib
     return lib
 
@@ -116,6 +134,7 @@ class Kernel:
     """The compiled stepper for one RollingBody's covered path (see module docstring)."""
 
     def __init__(self, lib: Any, constants: dict[str, float], quasistationary: bool) -> None:
+        self._lib = lib
         self._advance = lib.cf_advance
         self._constants = constants
         self._qs = int(quasistationary)
@@ -141,11 +160,69 @@ class Kernel:
     def advance(self, rb: Any, h: float, Fx_ex: float, My_ex: float, n: int) -> tuple | None:
         """Advance rb's state by h in n steps; the new (Vx, vx, t, dv, Tx, Ty, Mz,
         out_sliding, sliding), or None where the Python path must take the step."""
+        self.write(rb)
+        s = self._state
+        if self._advance(ctypes.byref(self._params), ctypes.byref(s), h, Fx_ex, My_ex, n) != OK:
+            return None
+        return (s.Vx, s.vx, s.t, s.dv, s.Tx, s.Ty, s.Mz, bool(s.out_sliding), bool(s.sliding))
+
+    # ---- the state in the struct: for FastBody ------------------------------------------
+    def write(self, rb: Any) -> None:
+        """rb's state into the struct (and the parameters, if its law changed)."""
         s = self._state
         s.Vx, s.vx, s.t, s.dv = float(rb.y[0]), float(rb.y[1]), rb.t, rb._dv
         s.Tx, s.Ty, s.Mz = rb.out.Tx, rb.out.Ty, rb.out.Mz
         s.out_sliding, s.sliding = int(rb.out.sliding), int(rb.sliding)
-        params = self.params(rb, rb.body, rb.law)
-        if self._advance(ctypes.byref(params), ctypes.byref(s), h, Fx_ex, My_ex, n) != OK:
-            return None
-        return (s.Vx, s.vx, s.t, s.dv, s.Tx, s.Ty, s.Mz, bool(s.out_sliding), bool(s.sliding))
+        self.params(rb, rb.body, rb.law)
+
+    def read(self, rb: Any) -> None:
+        """The struct's state into rb."""
+        s = self._state
+        rb.y = rb._state(s.Vx, s.vx)
+        rb.t, rb._dv, rb.sliding = s.t, s.dv, bool(s.sliding)
+        rb.out = type(rb.out)(s.Tx, s.Ty, s.Mz, bool(s.out_sliding))
+
+
+class FastBody:
+    """A body-mode communication step in one C call (stepper.c, cf_body_step): inputs
+    held, the internal steps of fmu/body_model.py, the stepper, the outputs and their
+    finiteness, for the path the kernel covers. The state lives in the kernel's struct
+    between ``pull`` (struct -> RollingBody, before anything in Python reads or steps
+    it) and ``push`` (RollingBody -> struct, after Python changed it). ``io`` holds the
+    inputs P, Fx_ex, My_ex (set by the caller) and ``out``, the outputs in the order of
+    OUTPUTS."""
+
+    def __init__(self, kernel: Kernel, rb: Any, h_max: float, constants: dict[str, float]):
+        self._kernel, self._rb = kernel, rb
+        self._step = kernel._lib.cf_body_step
+        self._outputs = kernel._lib.cf_body_outputs
+        self.io = BodyIO(h_max=h_max, **constants)
+        self._pointers = None
+
+    def push(self) -> None:
+        """The RollingBody's state into the struct, and the outputs at it."""
+        rb, io = self._rb, self.io
+        self._kernel.write(rb)
+        io.a2, io.p0 = rb.law.a2, rb.law.p0
+        p = ctypes.addressof(self._kernel._params)
+        s, b = ctypes.addressof(self._kernel._state), ctypes.addressof(io)
+        self._pointers = (p, s, b)
+        self._outputs(p, s, b)
+
+    def pull(self) -> None:
+        """The struct's state into the RollingBody."""
+        self._kernel.read(self._rb)
+
+    # inputs the compiled step reads (Fy_ex, Mz_ex act only on lateral degrees of
+    # freedom, which this path does not have)
+    INPUTS = ("P", "Fx_ex", "My_ex")
+
+    @staticmethod
+    def index(name: str) -> int:
+        """Position of the output ``name`` in ``io.out``."""
+        return OUTPUTS.index(name)
+
+    def step(self, h: float) -> bool:
+        """One communication step of h (s) > 0; False (nothing changed) where Python
+        must take it."""
+        return self._step(*self._pointers, h) == OK

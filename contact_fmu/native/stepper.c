@@ -60,12 +60,6 @@ static double force_fraction_slope(const cf_params *p, double beta) {
     return py_max((2.0 / M_PI) * (m * (8.0 + beta * beta) / 3.0 - 2.0 * beta * asin(m)), 0.0);
 }
 
-static double fraction_per_beta(const cf_params *p, double beta) {
-    if (beta < p->beta_series)
-        return 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI);
-    return force_fraction(p, beta) / beta;
-}
-
 /* LayerContact._forces_scalar: (Tx, Ty, Mz) */
 static void forces(const cf_params *p, double vx, double vy, double Vx, double T[3]) {
     double speed = hypot(vx, vy);
@@ -97,8 +91,20 @@ static void tx_slope(const cf_params *p, double vx, double vy, double Vx, double
     }
     double ex = vx / s, ey = vy / s;
     double beta = s * c / aV;
-    double h = force_fraction(p, beta), dh = force_fraction_slope(p, beta);
-    double h_per_s = fraction_per_beta(p, beta) * c / aV;
+    /* force_fraction, force_fraction_slope and fraction_per_beta of one beta, their
+     * common terms (m = (1 - beta^2/4)^(1/2), h) taken once: the same operations */
+    double h = 1.0, dh = 0.0;
+    if (beta < p->beta_full_slip) {
+        double m = sqrt(1.0 - 0.25 * beta * beta);
+        double Hb = (1.0 + beta * beta) * asin(0.5 * beta) - 0.5 * M_PI * beta * beta
+                    + beta * m * (13.0 / 6.0 + beta * beta / 12.0);
+        h = py_min((2.0 / M_PI) * Hb, 1.0);
+        dh = py_max((2.0 / M_PI) * (m * (8.0 + beta * beta) / 3.0 - 2.0 * beta * asin(m)), 0.0);
+    }
+    double per_beta = beta < p->beta_series
+        ? 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI)
+        : h / beta;
+    double h_per_s = per_beta * c / aV;
     r[0] = muP * h * ex;
     r[1] = muP * (dh * c * ex * ex / aV + h_per_s * ey * ey);
     r[2] = muP * ex * ey * (dh * c / aV - h_per_s);
@@ -279,5 +285,76 @@ int cf_advance(const cf_params *p, cf_state *y, double h, double Fx, double My, 
         if (step(p, &w, dt, Fx, My)) return CF_FALLBACK;
     w.t = y->t + h;
     *y = w;
+    return CF_OK;
+}
+
+/* ---- fmu/body_model.py + RollingBody.outputs: a communication step of the body ----- */
+/* The outputs of RollingBody.outputs(), in the order of native.OUTPUTS. */
+enum {
+    O_VX, O_VY, O_OMEGA_Y, O_OMEGA_Z, O_TX, O_TY, O_MZ, O_VX_SLIP, O_VY_SLIP,
+    O_XI_X, O_XI_Y, O_XI_SP, O_A1, O_A2, O_P0, O_ADHESION, O_REGIME, N_OUT
+};
+
+typedef struct {
+    double P, Fx_ex, My_ex; /* inputs held over the step (Fy_ex, Mz_ex: no effect here) */
+    double h_max;           /* parameter: largest internal step (s) */
+    double a2, p0;          /* the law's, reported */
+    double v_creep_floor, substep_slack;
+    int max_substeps;
+    double out[N_OUT];
+} cf_body;
+
+/* LayerContact.adhesion_fraction, float path without spin */
+static double adhesion_fraction(const cf_params *p, double vx, double vy, double Vx) {
+    double s = hypot(vx, vy);
+    if (s == 0.0) return 1.0;
+    if (Vx == 0.0 || s * p->beta_per_creep >= p->beta_full_slip * fabs(Vx)) return 0.0;
+    double b = s * p->beta_per_creep / fabs(Vx);
+    double m = sqrt(1.0 - 0.25 * b * b);
+    return (2.0 * asin(m) - b * m) / M_PI;
+}
+
+/* RollingBody.outputs() (kinematics and kinematics.contact_quantities) into b->out */
+void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
+    double Vx = y->Vx, vx = y->vx;
+    double Vy = p->ry * Vx, Omega_z = 0.0 * Vx; /* _apply_ratios, spin ratio 0 */
+    double *o = b->out;
+    o[O_VX] = Vx;
+    o[O_VY] = Vy;
+    o[O_OMEGA_Y] = (Vx - vx) / p->Rx;
+    o[O_OMEGA_Z] = Omega_z;
+    o[O_TX] = y->Tx;
+    o[O_TY] = y->Ty;
+    o[O_MZ] = y->Mz;
+    o[O_VX_SLIP] = vx;
+    o[O_VY_SLIP] = Vy;
+    double V = py_max(fabs(Vx), b->v_creep_floor);
+    o[O_XI_X] = vx / V;
+    o[O_XI_Y] = Vy / V;
+    o[O_XI_SP] = Omega_z / V;
+    o[O_A1] = p->a1;
+    o[O_A2] = b->a2;
+    o[O_P0] = b->p0;
+    o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
+    o[O_REGIME] = saturated(p, Vx, vx) ? 1.0 : 0.0;
+}
+
+/* BodyModel.step (inputs held, h > 0 checked by the caller) and the outputs, all
+ * finite; CF_FALLBACK with *y and b->out unchanged for whatever Python must do: a new
+ * load P (the law's ellipse, Eq. 34), the cap on internal steps (a note to log), a path
+ * cf_advance leaves out, a non-finite output (the discard and its message). */
+int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
+    if (b->P != p->P) return CF_FALLBACK;
+    double q = ceil(h / b->h_max * (1.0 - b->substep_slack));
+    if (!(q < b->max_substeps)) return CF_FALLBACK; /* at the cap (or NaN): BodyModel */
+    int n = q < 1.0 ? 1 : (int)q;
+    cf_state w = *y;
+    if (cf_advance(p, &w, h, b->Fx_ex, b->My_ex, n)) return CF_FALLBACK;
+    cf_body next = *b;
+    cf_body_outputs(p, &w, &next);
+    for (int i = 0; i < N_OUT; i++)
+        if (!isfinite(next.out[i])) return CF_FALLBACK;
+    *y = w;
+    *b = next;
     return CF_OK;
 }
