@@ -379,3 +379,23 @@ def test_compiled_step_with_a_held_lateral_ratio_agrees_to_rounding(monkeypatch)
         for n in a:
             scale = {"Tx": F, "Ty": F, "adhesion": 1.0}.get(n, max(abs(b[n]), 1e-6))
             assert abs(a[n] - b[n]) <= 1e-11 * scale, n
+
+
+@pytest.mark.parametrize("cfg", [BODY, CONTACT, RIGID], ids=lambda c: c.mode)
+def test_input_fast_check_is_var_check(cfg):
+    """The Real input setter tests floats against the declared range itself (the
+    per-step call); what it accepts or refuses must be exactly Var.check's verdict."""
+    from contact_fmu.fmu import variables as fv
+
+    s = Slave(cfg)
+    values = [math.nan, math.inf, -math.inf, 0.0, -0.0, 1e-300, -1e-300, 1.0, -1.0, 1e300]
+    values += [5e-324, 3, True, "1.0"]  # not floats: the general path
+    for name in cfg.inputs:
+        var = fv.BY_NAME[name]
+        extra = [b + d for b in (var.min, var.max) if b is not None for d in (-1e-9, 0.0, 1e-9)]
+        for value in values + extra:
+            s.s._bad.clear()
+            s.s._set_input(name, value)
+            assert (name in s.s._bad) == (var.check(value) is not None), (name, value)
+            if name not in s.s._bad:
+                assert s.s._in[name] == float(value) and s.get(name) == float(value)

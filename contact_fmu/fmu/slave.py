@@ -29,6 +29,8 @@ from __future__ import annotations
 import copy
 import importlib
 import math
+from functools import partial
+from operator import getitem
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -82,6 +84,17 @@ class ContactSlave(Fmi2Slave):
             n: cfg.start(v) for n, v in self._vars.items() if self._causality[n] != fv.OUTPUT
         }
         self._in = {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+        # (min, max, open min) of the Real inputs: _set_input's test of Var.check's rules
+        # for a float, the per-step call (test_input_fast_check_is_var_check)
+        self._input_bounds = {
+            n: (
+                -math.inf if v.min is None else v.min,
+                math.inf if v.max is None else v.max,
+                v.open_min,
+            )
+            for n, v in self._vars.items()
+            if self._causality[n] == fv.INPUT and v.type == "Real"
+        }
         self._out: dict[str, float] = {
             n: float(v.start) for n, v in self._vars.items() if self._causality[n] == fv.OUTPUT
         }
@@ -94,6 +107,7 @@ class ContactSlave(Fmi2Slave):
         self._fast_out: Any = None
         self._fast_index: dict[str, int] = {}
         self._out_stale = False  # _out behind _fast_out (after compiled steps)
+        self._getters: dict[str, Any] = {}  # the Python getters of the Real outputs
         self._time = 0.0
         self._dirty = True  # inputs changed since the outputs were computed
         for v in self._vars.values():
@@ -113,11 +127,8 @@ class ContactSlave(Fmi2Slave):
             initial = Fmi2Initial.calculated
         # the per-step calls (Real inputs and outputs) take no detour
         if c == fv.OUTPUT and v.type == "Real":
-
-            def getter(n: str = v.name) -> float:
-                out = self._fast_out  # the compiled step's outputs, or None
-                return out[self._fast_index[n]] if out is not None else self._real_output(n)
-
+            # replaced by a read of the compiled step's outputs while it runs
+            getter = self._getters[v.name] = lambda n=v.name: self._real_output(n)  # noqa: E731
         else:
             getter = lambda n=v.name: self._get(n)  # noqa: E731
         if c == fv.INPUT and v.type == "Real" and v.name not in self.cfg.fixed:
@@ -185,10 +196,16 @@ class ContactSlave(Fmi2Slave):
 
     def _set_input(self, name: str, value: Any) -> None:
         """_set for a Real input (the per-step call): the same rules, fewer lookups."""
-        if self._vars[name].check(value) is not None:
-            self._set(name, value)  # the message
+        lo, hi, open_lo = self._input_bounds[name]
+        if not (
+            type(value) is float
+            and -math.inf < value < math.inf
+            and (lo < value if open_lo else lo <= value)
+            and value <= hi
+        ):
+            self._set(name, value)  # the general rules (Var.check) and their message
             return
-        v = self._values[name] = self._in[name] = float(value)
+        v = self._values[name] = self._in[name] = value
         if self._bad:
             self._bad.pop(name, None)
         if self._fast is not None and name in self._fast.INPUTS:
@@ -242,10 +259,16 @@ class ContactSlave(Fmi2Slave):
         fast = getattr(self._model, "fast", None)
         self._fast = fast() if fast is not None and not self._model.feedthrough else None
         self._fast_out, self._out_stale = None, False
-        if self._fast is not None:
-            self._fast_out = self._fast.io.out
-            self._fast_index = {n: self._fast.index(n) for n in self._out}
-            self._fast_push()
+        reals = [v for v in self.vars.values() if v.name in self._out and isinstance(v, Real)]
+        if self._fast is None:
+            for v in reals:
+                v.getter = self._getters[v.name]
+            return
+        self._fast_out = self._fast.io.out
+        self._fast_index = {n: self._fast.index(n) for n in self._out}
+        for v in reals:  # read straight from the struct: no Python frame per value
+            v.getter = partial(getitem, self._fast_out, self._fast_index[v.name])
+        self._fast_push()
 
     def _fast_push(self) -> None:
         """After Python changed the model: its state, the inputs and the outputs (those
@@ -374,6 +397,17 @@ class ContactSlave(Fmi2Slave):
         s = copy.deepcopy(state)
         self._time, self._values, self._bad = s["time"], s["values"], s["bad"]
         self._in = {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+        # (min, max, open min) of the Real inputs: _set_input's test of Var.check's rules
+        # for a float, the per-step call (test_input_fast_check_is_var_check)
+        self._input_bounds = {
+            n: (
+                -math.inf if v.min is None else v.min,
+                math.inf if v.max is None else v.max,
+                v.open_min,
+            )
+            for n, v in self._vars.items()
+            if self._causality[n] == fv.INPUT and v.type == "Real"
+        }
         if s["model"] is None:
             self._model = self._model_params = None
         else:
@@ -386,9 +420,7 @@ class ContactSlave(Fmi2Slave):
                 self._model_params = params
             self._model.restore(snap)
         self._out, self._dirty = s["out"], s["dirty"]
-        self._fast = self._fast_out = None
-        if self._model is not None:
-            self._fast_enable()
+        self._fast_enable()
 
 
 def _describe(e: Exception) -> str:
