@@ -52,6 +52,7 @@ from .config import ModelConfig
 # Relative tolerance between doStep's currentCommunicationPoint and the FMU's time
 # (masters convert integer nanoseconds or accumulate steps: rounding only).
 TIME_RTOL = 1e-9
+_INF = math.inf
 
 _CAUSALITY = {
     fv.PARAMETER: Fmi2Causality.parameter,
@@ -105,6 +106,7 @@ class ContactSlave(Fmi2Slave):
         # it steps, the state lives in its struct and the outputs in _fast_out
         self._fast: Any = None
         self._fast_out: Any = None
+        self._fast_step: Any = None  # its step as one C call f(h), 0 when done
         self._fast_index: dict[str, int] = {}
         self._out_stale = False  # _out behind _fast_out (after compiled steps)
         self._getters: dict[str, Any] = {}  # the Python getters of the Real outputs
@@ -258,7 +260,7 @@ class ContactSlave(Fmi2Slave):
         """Use the model's compiled step if it has one (and the FMU no feedthrough)."""
         fast = getattr(self._model, "fast", None)
         self._fast = fast() if fast is not None and not self._model.feedthrough else None
-        self._fast_out, self._out_stale = None, False
+        self._fast_out, self._fast_step, self._out_stale = None, None, False
         reals = [v for v in self.vars.values() if v.name in self._out and isinstance(v, Real)]
         if self._fast is None:
             for v in reals:
@@ -274,6 +276,7 @@ class ContactSlave(Fmi2Slave):
         """After Python changed the model: its state, the inputs and the outputs (those
         of _out, as Python computed them) into the compiled step's struct."""
         self._fast.push()
+        self._fast_step = self._fast.stepper()
         for n in self._fast.INPUTS:
             if n in self._in:
                 setattr(self._fast.io, n, self._in[n])
@@ -328,13 +331,13 @@ class ContactSlave(Fmi2Slave):
         self._build()
 
     def do_step(self, current_time: float, step_size: float) -> bool:
-        fast = self._fast
-        if fast is not None and not self._bad:  # the compiled step: _do_step's checks
+        step = self._fast_step
+        if step is not None and not self._bad:  # the compiled step: _do_step's checks
             t, h = current_time, step_size
             if (
-                0.0 < h < math.inf
+                0.0 < h < _INF
                 and abs(t - self._time) <= TIME_RTOL * max(1.0, abs(t), h)
-                and fast.step(h)
+                and step(h) == 0
             ):
                 self._time, self._dirty, self._out_stale = t + h, False, True
                 return True

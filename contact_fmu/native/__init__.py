@@ -22,6 +22,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -226,3 +227,8 @@ class FastBody:
         """One communication step of h (s) > 0; False (nothing changed) where Python
         must take it."""
         return self._step(*self._pointers, h) == OK
+
+    def stepper(self) -> Any:
+        """``step`` as one C call f(h) -> 0 (OK) or not, for the per-step caller; valid
+        until the next ``push``."""
+        return partial(self._step, *self._pointers)
