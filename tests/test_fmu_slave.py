@@ -405,3 +405,27 @@ def test_input_fast_check_is_var_check(cfg):
             assert (name in s.s._bad) == (var.check(value) is not None), (name, value)
             if name not in s.s._bad:
                 assert s.s._in[name] == float(value) and s.get(name) == float(value)
+
+
+@pytest.mark.skipif(native.library() is None, reason="no C compiler")
+def test_compiled_step_state_survives_a_python_step_that_fails_late(monkeypatch):
+    """A step Python takes (here: a new load P) whose stepper succeeds but whose outputs
+    then fail is discarded with the state unchanged, in the struct too: the next
+    compiled steps continue from the state before it, as the Python adapter does."""
+    from contact_fmu.integrator import RollingBody
+
+    fast, slow = _compiled_and_python(monkeypatch)
+    for s in (fast, slow):
+        s.set("Fx_ex", 0.5 * F)
+        assert s.step()
+    outputs = RollingBody.outputs
+    with monkeypatch.context() as m:
+        m.setattr(RollingBody, "outputs", lambda self: {**outputs(self), "Tx": math.nan})
+        for s in (fast, slow):
+            s.set("P", 1100.0)
+            assert s.step() is False
+    assert fast.outputs() == slow.outputs() and fast.messages == slow.messages
+    for _ in range(5):
+        for s in (fast, slow):
+            assert s.step()
+        assert fast.outputs() == slow.outputs()

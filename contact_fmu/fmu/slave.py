@@ -369,6 +369,8 @@ class ContactSlave(Fmi2Slave):
             out = self._collect(self._model.outputs())
         except Exception as e:
             self._model.restore(snap)
+            if self._fast is not None:  # the stepper may have stepped the struct too
+                self._fast_push()
             return self._discard(
                 f"doStep at t = {t!r} with h = {h!r} discarded, state unchanged: {_describe(e)}"
             )
