@@ -353,6 +353,8 @@ def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatc
             both(lambda s: s.set("Fx_ex", math.nan))  # discarded until corrected
             both(lambda s: s.step())
             both(lambda s, fx=fx: s.set("Fx_ex", fx))
+        if k % 29 == 13:  # not a float: the general setter
+            both(lambda s, k=k: s.s._set_input("Fx_ex", k - 20))
         h = H * 10 ** rng.uniform(-3, 1)
         if k % 31 == 11:
             h = H / 4 * (MAX_SUBSTEPS + 3)  # beyond the cap: Python logs the note

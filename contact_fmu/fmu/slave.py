@@ -186,6 +186,8 @@ class ContactSlave(Fmi2Slave):
         )
         if c == fv.INPUT:
             self._in[name] = self._values[name]
+            if problem is None and self._fast is not None and name in self._fast.INPUTS:
+                setattr(self._fast.io, name, self._in[name])
         if problem is None:
             if self._bad:
                 self._bad.pop(name, None)
