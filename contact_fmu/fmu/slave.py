@@ -22,6 +22,12 @@ fmi2OK or fmi2Fatal. So nothing here raises to pythonfmu:
 
 FMU state (get/set) holds everything: the model's snapshot, parameter and input values,
 outputs, time and flags; get state, step, set state, step again repeats bit for bit.
+
+Compiled step: where the model offers one (``model.fast()``; the body model on the
+compiled stepper's path, contact_fmu/native), doStep makes the checks above and one C
+call, and the state and outputs stay in its struct; whatever it declines (a new load,
+the cap on internal steps, a failing step) takes the Python path above, with the state
+handed over (``_fast_pull``/``_fast_push``) and the same results.
 """
 
 from __future__ import annotations
@@ -404,17 +410,6 @@ class ContactSlave(Fmi2Slave):
         s = copy.deepcopy(state)
         self._time, self._values, self._bad = s["time"], s["values"], s["bad"]
         self._in = {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
-        # (min, max, open min) of the Real inputs: _set_input's test of Var.check's rules
-        # for a float, the per-step call (test_input_fast_check_is_var_check)
-        self._input_bounds = {
-            n: (
-                -math.inf if v.min is None else v.min,
-                math.inf if v.max is None else v.max,
-                v.open_min,
-            )
-            for n, v in self._vars.items()
-            if self._causality[n] == fv.INPUT and v.type == "Real"
-        }
         if s["model"] is None:
             self._model = self._model_params = None
         else:
