@@ -169,6 +169,17 @@ class LayerContact:
         "beta_series": BETA_SERIES,
     }
 
+    def native_fields(self) -> dict[str, float]:
+        """This law at its load for the compiled stepper (stepper.c, LAW_LAYER)."""
+        return {
+            "law": 0,
+            "mu": self.mu,
+            "P": self.P,
+            "a1": self.a1,
+            "creep_full_slip": self.creep_full_slip,
+            "beta_per_creep": self._beta_per_creep,
+        }
+
     def __post_init__(self) -> None:
         for name in ("P", "Rx", "Ry", "mu"):
             positive(name, getattr(self, name))

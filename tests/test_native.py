@@ -139,3 +139,39 @@ def test_newton_stops_at_a_step_below_the_rounding_of_u():
         assert abs(u**3 + u - c) <= 1e-12 * c
         worst = max(worst, calls[0])
     assert worst <= 13
+
+
+def test_kernel_agrees_to_rounding_on_the_half_space_table(monkeypatch):
+    """The half-space creep-force table (CreepTable, LAW_TABLE in stepper.c): the same
+    Hermite patches, clamp and saturation, summed in another order than numpy's, so the
+    two paths agree to rounding: states and forces within 1e-12 of their scales over
+    random histories (loads beyond mu P, eta to inf, a held lateral ratio, reversal)."""
+    from contact_fmu.halfspace.railway import wheel_on_rail
+    from contact_fmu.halfspace.table import build_table
+
+    counts = _counting(monkeypatch)
+    table = build_table(wheel_on_rail(n=8), nodes=(9, 9, 5))
+    cap = table.mu * table.P
+    rng = np.random.default_rng(5)
+    for method in ("full", "quasistationary"):
+        for eta in (1.0, math.inf):
+            for ry, V0 in ((0.0, 20.0), (0.002, 1e-3), (0.0, -5.0)):
+                body, lateral = Body.from_eta(500.0, 0.46, eta), Lateral(vy_ratio=ry)
+                a, b = (
+                    RollingBody(table, body, lateral, method=method, Vx0=V0, Omega_y0=V0 / 0.46)
+                    for _ in range(2)
+                )
+                b._kernel = None
+                for _ in range(40):
+                    L = Loads(
+                        rng.uniform(-1.3, 1.3) * cap, rng.uniform(-0.3, 0.3) * cap * 0.46, 0, 0
+                    )
+                    args = (10 ** rng.uniform(-6, -1), L, int(rng.integers(1, 6)))
+                    assert _advance(a, args) == _advance(b, args)
+                    v = table.creep_full_slip * max(abs(b.y[0]), 1e-9)
+                    assert abs(a.y[0] - b.y[0]) <= 1e-12 * max(abs(b.y[0]), 1e-9)
+                    assert abs(a.y[1] - b.y[1]) <= 1e-12 * v
+                    assert abs(a.out.Tx - b.out.Tx) <= 1e-12 * cap
+                    assert abs(a.out.Ty - b.out.Ty) <= 1e-12 * cap
+                    assert a.sliding == b.sliding
+    assert counts["kernel"] > 0.9 * (counts["kernel"] + counts["python"])

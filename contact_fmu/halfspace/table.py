@@ -48,6 +48,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -234,6 +235,31 @@ class CreepTable:
     data: TableData
     P: float
     _coef: FloatArray = field(repr=False, compare=False, default=None)
+    # the compiled stepper (contact_fmu/native) covers this law without spin (LAW_TABLE)
+    native_constants: ClassVar[dict[str, float]] = {"saturation_width": SATURATION_WIDTH}
+
+    def native_fields(self) -> dict[str, float]:
+        """This table at its load for the compiled stepper: addresses of its patch
+        coefficients and axes (kept alive by this object), sizes, box and units."""
+        coef, axes = self._coef_flat, self._native_axes
+        return {
+            "law": 1,
+            "mu": self.mu,
+            "P": self.P,
+            "a1": self.a1,
+            "creep_full_slip": self.creep_full_slip,
+            "coef": coef.ctypes.data,
+            **{f"ax{i + 1}": a.ctypes.data for i, a in enumerate(axes)},
+            **{f"n{i + 1}": len(a) for i, a in enumerate(axes)},
+            **{f"ext{i + 1}": x for i, x in enumerate(self._extent)},
+            "xi_ref": self.xi_ref,
+            "phi_ref": self.phi_ref,
+            "c": self.c,
+        }
+
+    @cached_property
+    def _native_axes(self) -> tuple[FloatArray, ...]:
+        return tuple(np.ascontiguousarray(a, dtype=float) for a in self.data.axes)
 
     def __post_init__(self) -> None:
         positive("P", self.P)

@@ -40,7 +40,12 @@ class Params(ctypes.Structure):
             "beta_per_creep", "ry", "v_standstill", "v_scale_floor", "z_algebraic",
             "capacity_margin", "solve_rtol", "expand", "beta_full_slip", "beta_series",
         )
-    ] + [("max_newton", ctypes.c_int), ("quasistationary", ctypes.c_int)]  # fmt: skip
+    ] + [("max_newton", ctypes.c_int), ("quasistationary", ctypes.c_int), ("law", ctypes.c_int)] + [
+        (n, ctypes.c_void_p) for n in ("coef", "ax1", "ax2", "ax3")
+    ] + [(n, ctypes.c_int) for n in ("n1", "n2", "n3")] + [
+        (n, ctypes.c_double)
+        for n in ("ext1", "ext2", "ext3", "xi_ref", "phi_ref", "c", "saturation_width")
+    ]  # fmt: skip
 
 
 class State(ctypes.Structure):
@@ -150,9 +155,8 @@ class Kernel:
             for k, v in self._constants.items():
                 setattr(p, k, v)
             p.M, p.Rx, p.A1, p.A2, p.m_slip = body.M, body.Rx, body.A1, body.A2, body.m_slip
-            p.mu, p.P, p.a1 = law.mu, law.P, law.a1
-            p.creep_full_slip = law.creep_full_slip
-            p.beta_per_creep = law._beta_per_creep
+            for k, v in law.native_fields().items():  # the law's (arrays kept by the law)
+                setattr(p, k, v)
             p.ry = rb.lateral.vy_ratio
             p.quasistationary = self._qs
             self._law = law

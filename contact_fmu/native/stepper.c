@@ -13,6 +13,7 @@
  * (Python raises StageSolveError with its message).
  */
 #include <math.h>
+#include <stddef.h>
 
 #define CF_OK 0
 #define CF_FALLBACK 1
@@ -29,7 +30,15 @@ typedef struct {
     double solve_rtol, expand, beta_full_slip, beta_series;
     int max_newton;
     int quasistationary; /* method: 1 "quasistationary", 0 "full" */
+    /* the law: LAW_LAYER (above) or LAW_TABLE (halfspace/table.py CreepTable at P: its
+     * Hermite patches coef (n1-1, n2-1, n3-1, 64, 4), axes, box, units) */
+    int law;
+    const double *coef, *ax1, *ax2, *ax3;
+    int n1, n2, n3;
+    double ext1, ext2, ext3, xi_ref, phi_ref, c, saturation_width;
 } cf_params;
+
+enum { LAW_LAYER = 0, LAW_TABLE = 1 };
 
 typedef struct {
     double Vx, vx, t, dv; /* y[0], y[1], t, _dv of RollingBody */
@@ -111,13 +120,155 @@ static void tx_slope(const cf_params *p, double vx, double vy, double Vx, double
     r[3] = -muP * dh * beta * ex / Vx;
 }
 
+/* ---- halfspace/table.py: CreepTable, scalar paths without spin --------------------- */
+/* The patch sums run in a fixed order here and through numpy there: this law agrees with
+ * the Python one to rounding, not bit for bit. */
+static int cell(const double *ax, int n, double x) { /* min(max(bisect_right - 1, 0), n - 2) */
+    int lo = 0, hi = n; /* first index with ax[i] > x */
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (x < ax[mid]) hi = mid;
+        else lo = mid + 1;
+    }
+    int i = lo - 1;
+    return i < 0 ? 0 : (i > n - 2 ? n - 2 : i);
+}
+
+static const double *patch(const cf_params *p, int i1, int i2, int i3) {
+    return p->coef + ((size_t)((i1 * (p->n2 - 1) + i2) * (p->n3 - 1) + i3)) * 256;
+}
+
+/* sum over the 64 Hermite terms of w[a b c] = T1[a] T2[b] T3[c] times output o */
+static double patch_sum(const double *C, const double T1[4], const double T2[4],
+                        const double T3[4], int o) {
+    double f = 0.0;
+    for (int a = 0; a < 4; a++)
+        for (int b = 0; b < 4; b++)
+            for (int c = 0; c < 4; c++)
+                f += T1[a] * T2[b] * T3[c] * C[(a * 16 + b * 4 + c) * 4 + o];
+    return f;
+}
+
+static double saturate(double m, double w) {
+    if (m <= 1.0 - w) return m;
+    if (m >= 1.0) return 1.0;
+    double t = (m - (1.0 - w)) / w;
+    t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    return 1.0 - w + w * (t + t * t - pow(t, 3.0));
+}
+
+/* CreepTable._scalar: (Tx, Ty, Mz, adhesion) */
+static void table_scalar(const cf_params *p, double vx, double vy, double phi, double Vx,
+                         double out[4]) {
+    double sV = Vx < 0.0 ? -1.0 : 1.0, aV = fabs(Vx);
+    double d[3] = {sV * vx / p->xi_ref, vy / p->xi_ref, sV * phi / p->phi_ref};
+    double X[3] = {p->ext1, p->ext2, p->ext3};
+    double lam = INFINITY;
+    for (int i = 0; i < 3; i++)
+        if (d[i] != 0.0) lam = py_min(lam, X[i] / fabs(d[i]));
+    if (aV > 0.0) lam = py_min(lam * aV, 1.0) / aV;
+    else if (lam == INFINITY) lam = 0.0;
+    double x1 = d[0] * lam, x2 = d[1] * lam, x3 = d[2] * lam, sg = 1.0;
+    if (x1 < 0.0 || (x1 == 0.0 && (x2 < 0.0 || (x2 == 0.0 && x3 < 0.0)))) {
+        sg = -1.0;
+        x1 = -x1;
+        x2 = -x2;
+        x3 = -x3;
+    }
+    int i1 = cell(p->ax1, p->n1, x1), i2 = cell(p->ax2, p->n2, x2), i3 = cell(p->ax3, p->n3, x3);
+    double t1 = (x1 - p->ax1[i1]) / (p->ax1[i1 + 1] - p->ax1[i1]);
+    double t2 = (x2 - p->ax2[i2]) / (p->ax2[i2 + 1] - p->ax2[i2]);
+    double t3 = (x3 - p->ax3[i3]) / (p->ax3[i3 + 1] - p->ax3[i3]);
+    double T1[4] = {1.0, t1, t1 * t1, t1 * t1 * t1}, T2[4] = {1.0, t2, t2 * t2, t2 * t2 * t2};
+    double T3[4] = {1.0, t3, t3 * t3, t3 * t3 * t3};
+    const double *C = patch(p, i1, i2, i3);
+    double fx = sg * patch_sum(C, T1, T2, T3, 0), fy = sg * patch_sum(C, T1, T2, T3, 1);
+    double mz = sg * patch_sum(C, T1, T2, T3, 2), adh = patch_sum(C, T1, T2, T3, 3);
+    double m = hypot(fx, fy);
+    if (m > 1.0 - p->saturation_width) {
+        double sat = saturate(m, p->saturation_width);
+        fx = fx * sat / m;
+        fy = fy * sat / m;
+    }
+    double muP = p->mu * p->P;
+    out[0] = sV * muP * fx;
+    out[1] = muP * fy;
+    out[2] = sV * muP * p->c * mz;
+    out[3] = py_min(py_max(adh, 0.0), 1.0);
+}
+
+/* CreepTable.tx_slope: Tx, dTx/dvx, dTx/dvy, dTx/dVx (Vx != 0) */
+static void table_tx_slope(const cf_params *p, double vx, double vy, double Vx, double r[4]) {
+    double sV = Vx < 0.0 ? -1.0 : 1.0, aV = fabs(Vx), xr = p->xi_ref;
+    double d[2] = {sV * vx / xr, vy / xr}, ext[2] = {p->ext1, p->ext2};
+    double lam = INFINITY;
+    int j = -1;
+    for (int i = 0; i < 2; i++)
+        if (d[i] != 0.0 && ext[i] / fabs(d[i]) < lam) {
+            lam = ext[i] / fabs(d[i]);
+            j = i;
+        }
+    double dd[2] = {sV / xr, 1.0 / xr}, x[2], J[2][3];
+    if (j < 0 || lam * aV >= 1.0) { /* inside the box: x = d/|Vx| */
+        x[0] = d[0] / aV;
+        x[1] = d[1] / aV;
+        J[0][0] = dd[0] / aV, J[0][1] = 0.0, J[0][2] = -x[0] * sV / aV;
+        J[1][0] = 0.0, J[1][1] = dd[1] / aV, J[1][2] = -x[1] * sV / aV;
+    } else { /* on the face of axis j: x = d X_j/|d_j|, independent of Vx */
+        x[0] = d[0] * lam;
+        x[1] = d[1] * lam;
+        for (int i = 0; i < 2; i++) {
+            for (int k = 0; k < 2; k++)
+                J[i][k] = lam * ((double)(i == k) - (k == j ? d[i] / d[j] : 0.0)) * dd[k];
+            J[i][2] = 0.0;
+        }
+    }
+    double x1 = x[0], x2 = x[1], sg = 1.0;
+    if (x1 < 0.0 || (x1 == 0.0 && x2 < 0.0)) {
+        sg = -1.0;
+        x1 = -x1;
+        x2 = -x2;
+    }
+    int i1 = cell(p->ax1, p->n1, x1), i2 = cell(p->ax2, p->n2, x2), i3 = cell(p->ax3, p->n3, 0.0);
+    double h1 = p->ax1[i1 + 1] - p->ax1[i1], h2 = p->ax2[i2 + 1] - p->ax2[i2];
+    double t1 = (x1 - p->ax1[i1]) / h1, t2 = (x2 - p->ax2[i2]) / h2;
+    double t3 = (0.0 - p->ax3[i3]) / (p->ax3[i3 + 1] - p->ax3[i3]);
+    double T1[4] = {1.0, t1, t1 * t1, pow(t1, 3.0)}, dT1[4] = {0.0, 1.0, 2.0 * t1, 3.0 * t1 * t1};
+    double T2[4] = {1.0, t2, t2 * t2, pow(t2, 3.0)}, dT2[4] = {0.0, 1.0, 2.0 * t2, 3.0 * t2 * t2};
+    double T3[4] = {1.0, t3, t3 * t3, pow(t3, 3.0)};
+    const double *C = patch(p, i1, i2, i3);
+    double fx = sg * patch_sum(C, T1, T2, T3, 0), fy = sg * patch_sum(C, T1, T2, T3, 1);
+    double dfx[2] = {patch_sum(C, dT1, T2, T3, 0) / h1, patch_sum(C, T1, dT2, T3, 0) / h2};
+    double dfy[2] = {patch_sum(C, dT1, T2, T3, 1) / h1, patch_sum(C, T1, dT2, T3, 1) / h2};
+    double m = hypot(fx, fy), w = p->saturation_width, dox[2], outx;
+    if (m > 1.0 - w) {
+        double tt = py_min((m - (1.0 - w)) / w, 1.0);
+        double sat = m < 1.0 ? 1.0 - w + w * (tt + tt * tt - pow(tt, 3.0)) : 1.0;
+        double ds = m < 1.0 ? 1.0 + 2.0 * tt - 3.0 * tt * tt : 0.0;
+        double S = sat / m, dS = (ds * m - sat) / (m * m);
+        dox[0] = S + fx * dS * fx / m;
+        dox[1] = fx * dS * fy / m;
+        outx = fx * S;
+    } else {
+        dox[0] = 1.0;
+        dox[1] = 0.0;
+        outx = fx;
+    }
+    double dx_out[2];
+    for (int a = 0; a < 2; a++) dx_out[a] = dox[0] * dfx[a] + dox[1] * dfy[a];
+    double muP = p->mu * p->P;
+    r[0] = sV * muP * outx;
+    for (int k = 0; k < 3; k++) r[k + 1] = sV * muP * (dx_out[0] * J[0][k] + dx_out[1] * J[1][k]);
+}
+
 /* ---- integrator.py -------------------------------------------------------------- */
 /* RollingBody._law_x: Tx and dTx/dvx along a stage path (slope, k) */
 static void law_x(const cf_params *p, double vx, double Vx, double k, double out[2]) {
     int floored = fabs(Vx) < p->v_standstill;
     double V = floored ? copysign(p->v_standstill, Vx) : Vx;
     double r[4];
-    tx_slope(p, vx, p->ry * Vx, V, r);
+    if (p->law == LAW_TABLE) table_tx_slope(p, vx, p->ry * Vx, V, r);
+    else tx_slope(p, vx, p->ry * Vx, V, r);
     out[0] = r[0];
     out[1] = r[1] + k * p->ry * r[2] + (floored ? 0.0 : k * r[3]);
 }
@@ -125,7 +276,13 @@ static void law_x(const cf_params *p, double vx, double Vx, double k, double out
 /* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx */
 static void law(const cf_params *p, double vx, double Vx, double T[3]) {
     double V = fabs(Vx) >= p->v_standstill ? Vx : copysign(p->v_standstill, Vx);
-    forces(p, vx, p->ry * Vx, V, T);
+    if (p->law == LAW_TABLE) {
+        double o[4];
+        table_scalar(p, vx, p->ry * Vx, 0.0 * Vx, V, o);
+        T[0] = o[0], T[1] = o[1], T[2] = o[2];
+    } else {
+        forces(p, vx, p->ry * Vx, V, T);
+    }
 }
 
 /* the stage residuals: algebraic (T(v, V2b) - Fe2) or Lobatto's coupled pair (g) */
@@ -335,7 +492,13 @@ void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
     o[O_A1] = p->a1;
     o[O_A2] = b->a2;
     o[O_P0] = b->p0;
-    o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
+    if (p->law == LAW_TABLE) {
+        double t[4];
+        table_scalar(p, vx, Vy, Omega_z, Vx, t);
+        o[O_ADHESION] = t[3];
+    } else {
+        o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
+    }
     o[O_REGIME] = saturated(p, Vx, vx) ? 1.0 : 0.0;
 }
 
