@@ -175,9 +175,9 @@ class RollingBody(BodyState):
 
     def _native_kernel(self) -> native.Kernel | None:
         """The compiled twin of this stepper's path (contact_fmu/native), where it
-        covers it: Lobatto IIIC, the thin-layer law, vx the only unknown, vy held at a
-        ratio, no spin. The Python path's doubles without lateral slip, the same to
-        rounding with it."""
+        covers it: Lobatto IIIC, a law with ``native_constants`` (thin layer, half-space
+        table), vx the only unknown, vy held at a ratio, no spin. The Python path's
+        doubles for the thin layer without lateral slip, the same to rounding else."""
         law_constants = getattr(type(self.law), "native_constants", None)
         covered = (
             law_constants is not None

@@ -1,11 +1,12 @@
 """Compiled twin of the integrator's commonest path (stepper.c), loaded with ctypes.
 
 ``RollingBody`` hands a communication step to ``Kernel.advance`` when its path is
-covered (Lobatto IIIC, the thin-layer law, vx the only stage unknown, vy held at a
-ratio to Vx, no spin, held loads). The kernel mirrors the Python code expression by
-expression: without lateral slip it gives the same doubles, with a held ratio the same
-to rounding (hypot); it answers "not covered" (the Python path then takes the step)
-for what it leaves out. See stepper.c.
+covered (Lobatto IIIC, the thin-layer law or the half-space creep-force table, vx the
+only stage unknown, vy held at a ratio to Vx, no spin, held loads). The kernel mirrors
+the Python code expression by expression: for the thin-layer law without lateral slip
+it gives the same doubles, otherwise the same to rounding (hypot, the table's patch
+sums); it answers "not covered" (the Python path then takes the step) for what it
+leaves out. See stepper.c.
 
 The shared library is looked for next to this file, where an FMU carries it (built by
 fmu_build; a vendored copy uses only that one). The package itself looks next in the

@@ -1,11 +1,14 @@
 /* Compiled twin of one path of integrator.RollingBody.advance (Lobatto IIIC, scalar).
  *
- * The path: the thin-layer law (layer.LayerContact, Eqs. 40-43 corrected) without
- * spin, with lateral slip held at a ratio to Vx or zero, the body of Eqs. (8)-(9) and (20) with vx the
+ * The path: the thin-layer law (layer.LayerContact, Eqs. 40-43 corrected) or the
+ * half-space creep-force table (halfspace/table.py) without spin, with lateral slip
+ * held at a ratio to Vx or zero, the body of Eqs. (8)-(9) and (20) with vx the
  * only stage unknown, loads held over the interval, methods "full" and
  * "quasistationary". Every expression is that of the Python code, in the same order,
- * and the build forbids contraction to fused multiply-adds, so a step gives the same
- * doubles as the Python path (tests/test_native.py checks it bit for bit).
+ * and the build forbids contraction to fused multiply-adds, so a step of the thin-layer
+ * law without lateral slip gives the same doubles as the Python path; with lateral slip
+ * (CPython's hypot is not the C library's) and for the table (its patch sums run in
+ * another order than numpy's) the two agree to rounding (tests/test_native.py).
  *
  * Whatever this file does not cover returns CF_FALLBACK with the state untouched, and
  * the Python path takes the whole interval: a stage whose safeguarded Newton iteration
