@@ -150,12 +150,8 @@ class RollingBody(BodyState):
             raise InputError("substeps", substeps, ">= 1")
         if self._kernel is not None and not callable(loads):
             L = _checked(loads)
-            new = self._kernel.advance(self, h, L.Fx_ex, L.My_ex, substeps)
-            if new is not None:  # else a case the kernel leaves to this code
-                Vx, vx, self.t, self._dv, Tx, Ty, Mz, out_sliding, self.sliding = new
-                self.y = self._state(Vx, vx)
-                self.out = ContactOutputs(Tx, Ty, Mz, out_sliding)
-                return
+            if self._kernel.advance(self, h, L.Fx_ex, L.My_ex, substeps):
+                return  # else a case the kernel leaves to this code
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
         saved = (self.y.copy(), self.t, self.sliding, self.out, self._dv)
         try:

@@ -70,7 +70,7 @@ def _counting(monkeypatch) -> dict[str, int]:
 
     def counted(self, *args):
         result = original(self, *args)
-        counts["kernel" if result is not None else "python"] += 1
+        counts["kernel" if result else "python"] += 1
         return result
 
     monkeypatch.setattr(native.Kernel, "advance", counted)

@@ -90,7 +90,7 @@ class ContactSlave(Fmi2Slave):
         self._values: dict[str, Any] = {
             n: cfg.start(v) for n, v in self._vars.items() if self._causality[n] != fv.OUTPUT
         }
-        self._in = {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+        self._in = self._input_values()
         # (min, max, open min) of the Real inputs: _set_input's test of Var.check's rules
         # for a float, the per-step call (test_input_fast_check_is_var_check)
         self._input_bounds = {
@@ -192,8 +192,8 @@ class ContactSlave(Fmi2Slave):
         )
         if c == fv.INPUT:
             self._in[name] = self._values[name]
-            if problem is None and self._fast is not None and name in self._fast.INPUTS:
-                setattr(self._fast.io, name, self._in[name])
+            if problem is None:
+                self._to_fast(name, self._in[name])
         if problem is None:
             if self._bad:
                 self._bad.pop(name, None)
@@ -218,12 +218,20 @@ class ContactSlave(Fmi2Slave):
         v = self._values[name] = self._in[name] = value
         if self._bad:
             self._bad.pop(name, None)
-        if self._fast is not None and name in self._fast.INPUTS:
-            setattr(self._fast.io, name, v)
+        self._to_fast(name, v)
         self._dirty = True
 
     def _inputs(self) -> dict[str, float]:
         return dict(self._in)
+
+    def _input_values(self) -> dict[str, Any]:
+        """The inputs among _values (what _in caches)."""
+        return {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+
+    def _to_fast(self, name: str, value: float) -> None:
+        """An input's admissible value into the compiled step's struct, if it reads it."""
+        if self._fast is not None and name in self._fast.INPUTS:
+            setattr(self._fast.io, name, value)
 
     def _params(self) -> dict[str, Any]:
         return {n: v for n, v in self._values.items() if self._causality[n] == fv.PARAMETER}
@@ -274,7 +282,7 @@ class ContactSlave(Fmi2Slave):
             for v in reals:
                 v.getter = self._getters[v.name]
             return
-        self._fast_out = self._fast.io.out
+        self._fast_out, self._fast_step = self._fast.io.out, self._fast.stepper()
         self._fast_index = {n: self._fast.index(n) for n in self._out}
         for v in reals:  # read straight from the struct: no Python frame per value
             v.getter = partial(getitem, self._fast_out, self._fast_index[v.name])
@@ -284,10 +292,8 @@ class ContactSlave(Fmi2Slave):
         """After Python changed the model: its state, the inputs and the outputs (those
         of _out, as Python computed them) into the compiled step's struct."""
         self._fast.push()
-        self._fast_step = self._fast.stepper()
-        for n in self._fast.INPUTS:
-            if n in self._in:
-                setattr(self._fast.io, n, self._in[n])
+        for n, v in self._in.items():
+            self._to_fast(n, v)
         for n, i in self._fast_index.items():
             self._fast_out[i] = self._out[n]
 
@@ -409,7 +415,7 @@ class ContactSlave(Fmi2Slave):
     def _set_fmu_state(self, state: dict[str, Any]) -> None:
         s = copy.deepcopy(state)
         self._time, self._values, self._bad = s["time"], s["values"], s["bad"]
-        self._in = {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+        self._in = self._input_values()
         if s["model"] is None:
             self._model = self._model_params = None
         else:

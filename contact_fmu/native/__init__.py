@@ -149,8 +149,9 @@ class Kernel:
         self._params = Params()
         self._state = State()
 
-    def params(self, rb: Any, body: Any, law: Any) -> Params:
-        """The parameter block for this body and law (rebuilt when the law changes)."""
+    def params(self, rb: Any) -> Params:
+        """The parameter block for rb's body and law (rebuilt when the law changes)."""
+        body, law = rb.body, rb.law
         if law is not self._law:
             p = self._params
             for k, v in self._constants.items():
@@ -163,14 +164,15 @@ class Kernel:
             self._law = law
         return self._params
 
-    def advance(self, rb: Any, h: float, Fx_ex: float, My_ex: float, n: int) -> tuple | None:
-        """Advance rb's state by h in n steps; the new (Vx, vx, t, dv, Tx, Ty, Mz,
-        out_sliding, sliding), or None where the Python path must take the step."""
+    def advance(self, rb: Any, h: float, Fx_ex: float, My_ex: float, n: int) -> bool:
+        """Advance rb's state by h in n steps; False (rb unchanged) where the Python path
+        must take the step."""
         self.write(rb)
-        s = self._state
-        if self._advance(ctypes.byref(self._params), ctypes.byref(s), h, Fx_ex, My_ex, n) != OK:
-            return None
-        return (s.Vx, s.vx, s.t, s.dv, s.Tx, s.Ty, s.Mz, bool(s.out_sliding), bool(s.sliding))
+        s = ctypes.byref(self._state)
+        if self._advance(ctypes.byref(self._params), s, h, Fx_ex, My_ex, n) != OK:
+            return False
+        self.read(rb)
+        return True
 
     # ---- the state in the struct: for FastBody ------------------------------------------
     def write(self, rb: Any) -> None:
@@ -179,7 +181,7 @@ class Kernel:
         s.Vx, s.vx, s.t, s.dv = float(rb.y[0]), float(rb.y[1]), rb.t, rb._dv
         s.Tx, s.Ty, s.Mz = rb.out.Tx, rb.out.Ty, rb.out.Mz
         s.out_sliding, s.sliding = int(rb.out.sliding), int(rb.sliding)
-        self.params(rb, rb.body, rb.law)
+        self.params(rb)
 
     def read(self, rb: Any) -> None:
         """The struct's state into rb."""
@@ -203,17 +205,17 @@ class FastBody:
         self._step = kernel._lib.cf_body_step
         self._outputs = kernel._lib.cf_body_outputs
         self.io = BodyIO(h_max=h_max, **constants)
-        self._pointers = None
+        # the three structs live as long as this object: their addresses once
+        self._pointers = tuple(
+            ctypes.addressof(x) for x in (kernel._params, kernel._state, self.io)
+        )
 
     def push(self) -> None:
         """The RollingBody's state into the struct, and the outputs at it."""
         rb, io = self._rb, self.io
         self._kernel.write(rb)
         io.a2, io.p0 = rb.law.a2, rb.law.p0
-        p = ctypes.addressof(self._kernel._params)
-        s, b = ctypes.addressof(self._kernel._state), ctypes.addressof(io)
-        self._pointers = (p, s, b)
-        self._outputs(p, s, b)
+        self._outputs(*self._pointers)
 
     def pull(self) -> None:
         """The struct's state into the RollingBody."""
@@ -234,6 +236,5 @@ class FastBody:
         return self._step(*self._pointers, h) == OK
 
     def stepper(self) -> Any:
-        """``step`` as one C call f(h) -> 0 (OK) or not, for the per-step caller; valid
-        until the next ``push``."""
+        """``step`` as one C call f(h) -> 0 (OK) or not, for the per-step caller."""
         return partial(self._step, *self._pointers)

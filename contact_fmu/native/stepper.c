@@ -56,20 +56,26 @@ static double py_min(double x, double c) { return c < x ? c : x; }
 static double py_max(double x, double c) { return c > x ? c : x; }
 
 /* ---- layer.py ------------------------------------------------------------------- */
-static double H(double b) {
-    double m = sqrt(1.0 - 0.25 * b * b);
+/* m = (1 - b^2/4)^(1/2), common to H(b) of Eq. (42), corrected, and its slope */
+static double m_of(double b) { return sqrt(1.0 - 0.25 * b * b); }
+
+static double H_m(double b, double m) {
     return (1.0 + b * b) * asin(0.5 * b) - 0.5 * M_PI * b * b + b * m * (13.0 / 6.0 + b * b / 12.0);
+}
+
+/* dh/dbeta below full slip (layer._force_fraction_slope) */
+static double slope_m(double b, double m) {
+    return py_max((2.0 / M_PI) * (m * (8.0 + b * b) / 3.0 - 2.0 * b * asin(m)), 0.0);
 }
 
 static double force_fraction(const cf_params *p, double beta) {
     if (beta >= p->beta_full_slip) return 1.0;
-    return py_min((2.0 / M_PI) * H(beta), 1.0);
+    return py_min((2.0 / M_PI) * H_m(beta, m_of(beta)), 1.0);
 }
 
 static double force_fraction_slope(const cf_params *p, double beta) {
     if (beta >= p->beta_full_slip) return 0.0;
-    double m = sqrt(1.0 - 0.25 * beta * beta);
-    return py_max((2.0 / M_PI) * (m * (8.0 + beta * beta) / 3.0 - 2.0 * beta * asin(m)), 0.0);
+    return slope_m(beta, m_of(beta));
 }
 
 /* LayerContact._forces_scalar: (Tx, Ty, Mz) */
@@ -104,14 +110,12 @@ static void tx_slope(const cf_params *p, double vx, double vy, double Vx, double
     double ex = vx / s, ey = vy / s;
     double beta = s * c / aV;
     /* force_fraction, force_fraction_slope and fraction_per_beta of one beta, their
-     * common terms (m = (1 - beta^2/4)^(1/2), h) taken once: the same operations */
+     * common terms (m, h) taken once: the same operations */
     double h = 1.0, dh = 0.0;
     if (beta < p->beta_full_slip) {
-        double m = sqrt(1.0 - 0.25 * beta * beta);
-        double Hb = (1.0 + beta * beta) * asin(0.5 * beta) - 0.5 * M_PI * beta * beta
-                    + beta * m * (13.0 / 6.0 + beta * beta / 12.0);
-        h = py_min((2.0 / M_PI) * Hb, 1.0);
-        dh = py_max((2.0 / M_PI) * (m * (8.0 + beta * beta) / 3.0 - 2.0 * beta * asin(m)), 0.0);
+        double m = m_of(beta);
+        h = py_min((2.0 / M_PI) * H_m(beta, m), 1.0);
+        dh = slope_m(beta, m);
     }
     double per_beta = beta < p->beta_series
         ? 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI)
