@@ -92,12 +92,17 @@ def names(cfg: ModelConfig, key: str) -> tuple[str, str, str]:
 
 
 def _compile_native(dest: Path) -> None:
-    """The compiled stepper, next to its vendored source (contact_fmu/native); without a
-    C compiler the FMU is built without it and steps in Python (same results)."""
-    try:
-        native.compile_to(dest / native.library_name())
-    except (OSError, subprocess.CalledProcessError) as e:
-        print(f"fmu_build: compiled stepper left out ({e}): steps in Python", file=sys.stderr)
+    """The compiled stepper and the FMI calls' extension (for this interpreter), next to
+    their vendored sources (contact_fmu/native); what cannot be compiled (no C compiler,
+    no Python headers) is left out and that part runs in Python (same results)."""
+    for what, name, compile_fn in (
+        ("compiled stepper", native.library_name(), native.compile_to),
+        ("FMI calls' extension", native.fmi_name(), native.compile_fmi_to),
+    ):
+        try:
+            compile_fn(dest / name)
+        except (OSError, subprocess.CalledProcessError) as e:
+            print(f"fmu_build: {what} left out ({e}): runs in Python", file=sys.stderr)
 
 
 def build(

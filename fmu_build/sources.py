@@ -92,7 +92,7 @@ def closure(roots: list[str]) -> list[str]:
 
 
 # Files other than Python a module reads next to itself, by module.
-COMPANIONS = {"native": ("native/stepper.c",)}
+COMPANIONS = {"native": ("native/stepper.c", "native/fmi.c")}
 
 
 def files(modules: list[str]) -> list[tuple[str, Path]]:

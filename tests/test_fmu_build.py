@@ -119,21 +119,22 @@ def test_fmu_carries_only_the_model_parts_it_imports(built):
 
 @pytest.mark.skipif(native.library() is None, reason="no C compiler")
 def test_body_fmu_carries_the_compiled_stepper_and_loads_it(built, tmp_path):
-    """The build compiles contact_fmu/native into the body FMU next to its source; the
-    vendored loader finds that library (and would compile nothing on the target); FMUs
-    without the integrator carry neither."""
-    name = f"native/{native.library_name()}"
-    assert {"native/stepper.c", name} <= _vendored(built["fig13"])
+    """The build compiles contact_fmu/native into the body FMU next to its sources (the
+    stepper, and the FMI calls' extension for this interpreter); the vendored loader
+    finds both (and would compile nothing on the target); FMUs without the integrator
+    carry none."""
+    names = {f"native/{native.library_name()}", f"native/{native.fmi_name()}"}
+    assert {"native/stepper.c", "native/fmi.c", *names} <= _vendored(built["fig13"])
     assert not any(f.startswith("native/") for f in _vendored(built["sweep"]))
     fmpy.extract(str(built["fig13"].path), str(tmp_path))
     code = (
         f"import sys; sys.path.insert(0, {str(tmp_path / 'resources')!r}); "
         f"from {built['fig13'].package} import native; "
-        "print(native.VENDORED, native.library() is not None)"
+        "print(native.VENDORED, native.library() is not None, native.fmi_module() is not None)"
     )
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path / "home")}  # no user cache
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
-    assert out.stdout.split() == ["True", "True"], out.stderr
+    assert out.stdout.split() == ["True", "True", "True"], out.stderr
     assert not (tmp_path / "home").exists()
 
 

@@ -312,15 +312,24 @@ def _compiled_and_python(monkeypatch, cfg: ModelConfig = BODY, **params: float):
 
 
 @pytest.mark.skipif(native.library() is None, reason="no C compiler")
-def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatch):
+@pytest.mark.parametrize("calls", ["fmi.c", "ctypes"])
+def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatch, calls):
     """A body FMU whose steps run in C (state in the struct, Python synced on demand)
     gives the Python adapter's outputs bit for bit (no lateral slip: stepper.c's
     contract) through all that hands the state between them: a load change (P: Python
     takes that step), internal steps at the cap (Python's note), a bad input (discard)
-    and its correction, get state / step / set state / step, Integer outputs."""
+    and its correction, get state / step / set state / step, Integer outputs. Both
+    ways of calling the step: the FMI calls themselves in C (native/fmi.c) and the
+    adapter's Python calling the step through ctypes."""
+    if calls == "fmi.c" and native.fmi_module() is None:
+        pytest.skip("no Python headers for native/fmi.c")
+    if calls == "ctypes":
+        monkeypatch.setattr(native, "fmi_module", lambda: None)
     fast, slow = _compiled_and_python(monkeypatch)
     assert fast.s._fast is not None and slow.s._fast is None
+    assert (fast.s._fast_fmi is not None) == (calls == "fmi.c")
     compiled = [0]
+    bindings = set()  # the C bindings (a new one after each set state): their step counts
     stepper = native.FastBody.stepper
 
     def counted(self):
@@ -338,6 +347,7 @@ def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatc
     rng = np.random.default_rng(3)
 
     def both(action):
+        bindings.add(fast.s._fast_fmi)
         a, b = action(fast), action(slow)
         assert a == b
         assert fast.outputs() == slow.outputs()
@@ -354,7 +364,7 @@ def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatc
             both(lambda s: s.step())
             both(lambda s, fx=fx: s.set("Fx_ex", fx))
         if k % 29 == 13:  # not a float: the general setter
-            both(lambda s, k=k: s.s._set_input("Fx_ex", k - 20))
+            both(lambda s, k=k: s.set("Fx_ex", k - 20))
         h = H * 10 ** rng.uniform(-3, 1)
         if k % 31 == 11:
             h = H / 4 * (MAX_SUBSTEPS + 3)  # beyond the cap: Python logs the note
@@ -368,6 +378,7 @@ def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatc
             both(lambda s: s.step())
     # the compiled step took most steps (a test of the fallback alone would pass vacuously)
     assert fast.s._fast is not None and slow.s._fast is None
+    compiled[0] += sum(b.steps for b in bindings if b is not None)
     assert compiled[0] > 100
 
 
@@ -391,7 +402,7 @@ def test_compiled_step_with_a_held_lateral_ratio_agrees_to_rounding(monkeypatch)
 
 @pytest.mark.parametrize("cfg", [BODY, CONTACT, RIGID], ids=lambda c: c.mode)
 def test_input_fast_check_is_var_check(cfg):
-    """The Real input setter tests floats against the declared range itself (the
+    """set_real tests a Real input's float against the declared range itself (the
     per-step call); what it accepts or refuses must be exactly Var.check's verdict."""
     from contact_fmu.fmu import variables as fv
 
@@ -403,7 +414,7 @@ def test_input_fast_check_is_var_check(cfg):
         extra = [b + d for b in (var.min, var.max) if b is not None for d in (-1e-9, 0.0, 1e-9)]
         for value in values + extra:
             s.s._bad.clear()
-            s.s._set_input(name, value)
+            s.set(name, value)
             assert (name in s.s._bad) == (var.check(value) is not None), (name, value)
             if name not in s.s._bad:
                 assert s.s._in[name] == float(value) and s.get(name) == float(value)

@@ -111,9 +111,8 @@ def test_paths_the_kernel_leaves_out_step_in_python():
 
 def test_without_the_library_the_stepper_is_unchanged(monkeypatch):
     monkeypatch.setenv("CONTACT_FMU_NATIVE", "0")
-    monkeypatch.setattr(native, "_TRIED", False)
-    monkeypatch.setattr(native, "_LIB", None)
-    assert native.library() is None
+    monkeypatch.setattr(native, "_LOADED", {})
+    assert native.library() is None and native.fmi_module() is None
     rb = RollingBody(CONTACT, Body.from_eta(1.0, 0.05, 3.0), Vx0=5.0, Omega_y0=100.0)
     assert rb._kernel is None
     rb.advance(1e-4, Loads(0.5 * F, 0.0, 0.0, 0.0), 4)

@@ -36,7 +36,7 @@ import copy
 import importlib
 import math
 from functools import partial
-from operator import getitem
+from operator import getitem, itemgetter
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -60,6 +60,8 @@ from .config import ModelConfig
 TIME_RTOL = 1e-9
 _INF = math.inf
 
+# the FMI calls a compiled binding takes over (native/fmi.c)
+_FMI_CALLS = ("do_step", "set_real", "get_real")
 _CAUSALITY = {
     fv.PARAMETER: Fmi2Causality.parameter,
     fv.INPUT: Fmi2Causality.input,
@@ -91,17 +93,6 @@ class ContactSlave(Fmi2Slave):
             n: cfg.start(v) for n, v in self._vars.items() if self._causality[n] != fv.OUTPUT
         }
         self._in = self._input_values()
-        # (min, max, open min) of the Real inputs: _set_input's test of Var.check's rules
-        # for a float, the per-step call (test_input_fast_check_is_var_check)
-        self._input_bounds = {
-            n: (
-                -math.inf if v.min is None else v.min,
-                math.inf if v.max is None else v.max,
-                v.open_min,
-            )
-            for n, v in self._vars.items()
-            if self._causality[n] == fv.INPUT and v.type == "Real"
-        }
         self._out: dict[str, float] = {
             n: float(v.start) for n, v in self._vars.items() if self._causality[n] == fv.OUTPUT
         }
@@ -114,12 +105,32 @@ class ContactSlave(Fmi2Slave):
         self._fast_out: Any = None
         self._fast_step: Any = None  # its step as one C call f(h), 0 when done
         self._fast_index: dict[str, int] = {}
+        self._fast_io: Any = None  # the struct the compiled step reads its inputs from
+        self._fast_inputs: frozenset[str] = frozenset()  # the inputs it reads
+        self._fast_vr: dict[int, int] = {}  # value reference -> index in _fast_out
+        self._fast_fmi: Any = None  # the C binding of the FMI calls (native/fmi.c) or None
+        # get_real's readers of _fast_out, by the tuple of value references asked for
+        self._fast_reads: dict[tuple[int, ...], Any] = {}
         self._out_stale = False  # _out behind _fast_out (after compiled steps)
         self._getters: dict[str, Any] = {}  # the Python getters of the Real outputs
         self._time = 0.0
         self._dirty = True  # inputs changed since the outputs were computed
         for v in self._vars.values():
             self.register_variable(self._fmi_variable(v))
+        # value reference -> (name, min, max, open min) of the Real inputs that set_real
+        # tests itself, Var.check's rules for a float (test_input_fast_check_is_var_check)
+        self._input_slots = {
+            vr: (
+                var.name,
+                -math.inf if v.min is None else v.min,
+                math.inf if v.max is None else v.max,
+                v.open_min,
+            )
+            for vr, var in self.vars.items()
+            if (v := self._vars[var.name]).type == "Real"
+            and self._causality[v.name] == fv.INPUT
+            and v.name not in cfg.fixed
+        }
 
     # ---- registration ------------------------------------------------------------------
     def _fmi_variable(self, v: fv.Var) -> Any:
@@ -139,10 +150,7 @@ class ContactSlave(Fmi2Slave):
             getter = self._getters[v.name] = lambda n=v.name: self._real_output(n)  # noqa: E731
         else:
             getter = lambda n=v.name: self._get(n)  # noqa: E731
-        if c == fv.INPUT and v.type == "Real" and v.name not in self.cfg.fixed:
-            setter = lambda value, n=v.name: self._set_input(n, value)  # noqa: E731
-        else:
-            setter = lambda value, n=v.name: self._set(n, value)  # noqa: E731
+        setter = lambda value, n=v.name: self._set(n, value)  # noqa: E731
         return _TYPES[v.type](
             v.name,
             causality=_CAUSALITY[c],
@@ -204,22 +212,43 @@ class ContactSlave(Fmi2Slave):
         if c == fv.INPUT:
             self._dirty = True
 
-    def _set_input(self, name: str, value: Any) -> None:
-        """_set for a Real input (the per-step call): the same rules, fewer lookups."""
-        lo, hi, open_lo = self._input_bounds[name]
-        if not (
-            type(value) is float
-            and -math.inf < value < math.inf
-            and (lo < value if open_lo else lo <= value)
-            and value <= hi
-        ):
-            self._set(name, value)  # the general rules (Var.check) and their message
-            return
-        v = self._values[name] = self._in[name] = value
-        if self._bad:
-            self._bad.pop(name, None)
-        self._to_fast(name, v)
-        self._dirty = True
+    def set_real(self, vrs: list[int], values: list[float]) -> None:
+        """fmi2SetReal, the per-step call: a Real input's float is tested here against
+        its declared range (Var.check's rules) and stored; anything else (not a float,
+        out of range, a parameter, an output) goes through its setter (_set)."""
+        slots, io, fast_inputs = self._input_slots, self._fast_io, self._fast_inputs
+        for vr, value in zip(vrs, values, strict=True):
+            slot = slots.get(vr)
+            if slot is None:
+                super().set_real([vr], [value])
+                continue
+            name, lo, hi, open_lo = slot
+            if not (
+                type(value) is float
+                and -_INF < value < _INF
+                and (lo < value if open_lo else lo <= value)
+                and value <= hi
+            ):
+                self._set(name, value)  # the general rules (Var.check) and their message
+                continue
+            self._values[name] = self._in[name] = value
+            if self._bad:
+                self._bad.pop(name, None)
+            if io is not None and name in fast_inputs:
+                setattr(io, name, value)
+            self._dirty = True
+
+    def get_real(self, vrs: list[int]) -> list[float]:
+        """fmi2GetReal: while the compiled step runs, outputs straight from its struct
+        (one C-level pass); otherwise, or for other variables, by their getters."""
+        if self._fast_out is not None:
+            key = tuple(vrs)
+            read = self._fast_reads.get(key)
+            if read is None and all(vr in self._fast_vr for vr in key):
+                read = self._fast_reads[key] = itemgetter(*(self._fast_vr[vr] for vr in key))
+            if read is not None:
+                return list(read(self._fast_out)) if len(key) > 1 else [read(self._fast_out)]
+        return super().get_real(vrs)
 
     def _inputs(self) -> dict[str, float]:
         return dict(self._in)
@@ -230,8 +259,8 @@ class ContactSlave(Fmi2Slave):
 
     def _to_fast(self, name: str, value: float) -> None:
         """An input's admissible value into the compiled step's struct, if it reads it."""
-        if self._fast is not None and name in self._fast.INPUTS:
-            setattr(self._fast.io, name, value)
+        if self._fast_io is not None and name in self._fast_inputs:
+            setattr(self._fast_io, name, value)
 
     def _params(self) -> dict[str, Any]:
         return {n: v for n, v in self._values.items() if self._causality[n] == fv.PARAMETER}
@@ -277,16 +306,33 @@ class ContactSlave(Fmi2Slave):
         fast = getattr(self._model, "fast", None)
         self._fast = fast() if fast is not None and not self._model.feedthrough else None
         self._fast_out, self._fast_step, self._out_stale = None, None, False
-        reals = [v for v in self.vars.values() if v.name in self._out and isinstance(v, Real)]
+        self._fast_io, self._fast_inputs, self._fast_reads = None, frozenset(), {}
+        for name in _FMI_CALLS:  # the class's methods again
+            self.__dict__.pop(name, None)
+        self._fast_fmi = None
+        reals = {
+            vr: v for vr, v in self.vars.items() if v.name in self._out and isinstance(v, Real)
+        }
         if self._fast is None:
-            for v in reals:
+            for v in reals.values():
                 v.getter = self._getters[v.name]
             return
         self._fast_out, self._fast_step = self._fast.io.out, self._fast.stepper()
+        self._fast_io, self._fast_inputs = self._fast.io, frozenset(self._fast.INPUTS)
         self._fast_index = {n: self._fast.index(n) for n in self._out}
-        for v in reals:  # read straight from the struct: no Python frame per value
+        self._fast_vr = {vr: self._fast_index[v.name] for vr, v in reals.items()}
+        for v in reals.values():  # read straight from the struct: no Python frame per value
             v.getter = partial(getitem, self._fast_out, self._fast_index[v.name])
         self._fast_push()
+        # the per-step FMI calls in C where the extension is built (native/fmi.c): on the
+        # instance, in place of the class's methods, to which they hand all else
+        methods = tuple(getattr(type(self), n).__get__(self) for n in _FMI_CALLS)
+        slots = [(vr, *slot) for vr, slot in self._input_slots.items()]
+        outs = [(vr, v.name) for vr, v in reals.items()]
+        self._fast_fmi = self._fast.bind_fmi(self, methods, TIME_RTOL, slots, outs)
+        if self._fast_fmi is not None:
+            for name in _FMI_CALLS:
+                setattr(self, name, getattr(self._fast_fmi, name))
 
     def _fast_push(self) -> None:
         """After Python changed the model: its state, the inputs and the outputs (those
@@ -355,8 +401,11 @@ class ContactSlave(Fmi2Slave):
             ):
                 self._time, self._dirty, self._out_stale = t + h, False, True
                 return True
+        return self._python_step(current_time, step_size)
+
+    def _python_step(self, t: float, h: float) -> bool:
         try:
-            return self._do_step(float(current_time), float(step_size))
+            return self._do_step(float(t), float(h))
         except Exception as e:  # never let an exception reach pythonfmu (fmi2Fatal)
             return self._discard(f"doStep discarded: {_describe(e)}")
 

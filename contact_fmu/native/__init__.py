@@ -8,9 +8,14 @@ it gives the same doubles, otherwise the same to rounding (hypot, the table's pa
 sums); it answers "not covered" (the Python path then takes the step) for what it
 leaves out. See stepper.c.
 
-The shared library is looked for next to this file, where an FMU carries it (built by
-fmu_build; a vendored copy uses only that one). The package itself looks next in the
-user's cache and otherwise compiles it there with the C compiler (``CC``, default
+The body FMU's FMI calls themselves (doStep, setReal, getReal on the compiled step's
+path) have a CPython extension, fmi.c (``fmi_module``), that the adapter puts in place
+of its Python methods while the compiled step runs; it is built for the running
+interpreter (its file name carries the extension suffix, so another Python finds none).
+
+Both libraries are looked for next to this file, where an FMU carries them (built by
+fmu_build; a vendored copy uses only those). The package itself looks next in the
+user's cache and otherwise compiles them there with the C compiler (``CC``, default
 ``cc``). Without a library, or with CONTACT_FMU_NATIVE=0, nothing changes but speed.
 """
 
@@ -22,8 +27,11 @@ import os
 import shutil
 import subprocess
 import sys
+import sysconfig
 import tempfile
 from functools import partial
+from importlib.machinery import ExtensionFileLoader
+from importlib.util import module_from_spec, spec_from_file_location
 from pathlib import Path
 from typing import Any
 
@@ -70,20 +78,35 @@ class BodyIO(ctypes.Structure):
     ] + [("max_substeps", ctypes.c_int), ("out", ctypes.c_double * len(OUTPUTS))]
 
 
+SOURCE_FMI = Path(__file__).with_name("fmi.c")
+FMI_MODULE = "contact_fmu_fmi"  # its PyInit_ name
+
+
+def _fmi_flags() -> tuple[str, ...]:
+    return (*CFLAGS, f"-I{sysconfig.get_paths()['include']}")
+
+
 def library_name() -> str:
     """File name of the library built from this stepper.c with CFLAGS."""
     key = hashlib.sha256(SOURCE.read_bytes() + " ".join(CFLAGS).encode()).hexdigest()[:12]
     return f"_stepper_{key}.so"
 
 
-def compile_to(target: Path) -> Path:
-    """Compile stepper.c into ``target`` (atomically); CalledProcessError/OSError on failure."""
+def fmi_name() -> str:
+    """File name of the extension built from fmi.c for this interpreter."""
+    key = hashlib.sha256(SOURCE_FMI.read_bytes() + " ".join(CFLAGS).encode()).hexdigest()[:12]
+    return f"_fmi_{key}{sysconfig.get_config_var('EXT_SUFFIX')}"
+
+
+def compile_to(target: Path, source: Path = SOURCE, flags: tuple[str, ...] = CFLAGS) -> Path:
+    """Compile ``source`` into ``target`` (atomically); CalledProcessError/OSError on
+    failure."""
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".so", dir=target.parent)
     os.close(fd)
     try:
         cc = os.environ.get("CC", "cc")
-        cmd = [cc, *CFLAGS, "-o", tmp, str(SOURCE), "-lm"]
+        cmd = [cc, *flags, "-o", tmp, str(source), "-lm"]
         subprocess.run(cmd, check=True, capture_output=True)
         os.replace(tmp, target)
     finally:
@@ -92,38 +115,46 @@ def compile_to(target: Path) -> Path:
     return target
 
 
+def compile_fmi_to(target: Path) -> Path:
+    """Compile fmi.c for the running interpreter into ``target``."""
+    return compile_to(target, SOURCE_FMI, _fmi_flags())
+
+
 def _cache_dir() -> Path:
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "contact_fmu"
 
 
-_LIB: Any = None
-_TRIED = False
 # A copy vendored into an FMU (package cfmu_<key>) writes nothing on the target machine.
 VENDORED = __name__.split(".")[0] != "contact_fmu"
+_LOADED: dict[str, Any] = {}
+
+
+def _find(name: str, compile_fn: Any) -> Path | None:
+    """The file ``name`` next to this one or in the cache, else compiled into the cache;
+    None when disabled, not on Linux, or not to be had."""
+    if os.environ.get("CONTACT_FMU_NATIVE", "1") == "0" or not sys.platform.startswith("linux"):
+        return None
+    places = (Path(__file__).with_name(name),) + (() if VENDORED else (_cache_dir() / name,))
+    for path in places:
+        if path.is_file():
+            return path
+    if VENDORED or shutil.which(os.environ.get("CC", "cc")) is None:
+        return None
+    try:
+        return compile_fn(_cache_dir() / name)
+    except (OSError, subprocess.CalledProcessError):
+        return None
 
 
 def library() -> Any:
     """The loaded kernel, or None (disabled, not on Linux, or no compiler)."""
-    global _LIB, _TRIED
-    if _TRIED:
-        return _LIB
-    _TRIED = True
-    if os.environ.get("CONTACT_FMU_NATIVE", "1") == "0" or not sys.platform.startswith("linux"):
+    if "stepper" in _LOADED:
+        return _LOADED["stepper"]
+    path = _find(library_name(), compile_to)
+    lib = _LOADED["stepper"] = None if path is None else ctypes.CDLL(str(path))
+    if lib is None:
         return None
-    name = library_name()
-    places = (Path(__file__).with_name(name),) + (() if VENDORED else (_cache_dir() / name,))
-    for path in places:
-        if path.is_file():
-            break
-    else:
-        if VENDORED or shutil.which(os.environ.get("CC", "cc")) is None:
-            return None
-        try:
-            path = compile_to(_cache_dir() / name)
-        except (OSError, subprocess.CalledProcessError):
-            return None
-    lib = ctypes.CDLL(str(path))
     lib.cf_advance.argtypes = [
         ctypes.POINTER(Params), ctypes.POINTER(State),
         ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_int,
@@ -133,8 +164,25 @@ def library() -> Any:
     lib.cf_body_step.restype = ctypes.c_int
     lib.cf_body_outputs.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
     lib.cf_body_outputs.restype = None
-    _LIB = lib
     return lib
+
+
+def fmi_module() -> Any:
+    """The loaded fmi.c extension, or None (as ``library``, or no Python headers)."""
+    if "fmi" not in _LOADED:
+        path = _find(fmi_name(), compile_fmi_to)
+        module = None
+        if path is not None:
+            try:
+                spec = spec_from_file_location(
+                    FMI_MODULE, path, loader=ExtensionFileLoader(FMI_MODULE, str(path))
+                )
+                module = module_from_spec(spec)
+                spec.loader.exec_module(module)
+            except (ImportError, OSError):
+                module = None
+        _LOADED["fmi"] = module
+    return _LOADED["fmi"]
 
 
 class Kernel:
@@ -238,3 +286,23 @@ class FastBody:
     def stepper(self) -> Any:
         """``step`` as one C call f(h) -> 0 (OK) or not, for the per-step caller."""
         return partial(self._step, *self._pointers)
+
+    def bind_fmi(
+        self, slave: Any, methods: tuple[Any, Any, Any], rtol: float, slots: list, outs: list
+    ) -> Any:
+        """The FMI calls of ``slave`` on this step in C (fmi.c: its do_step, set_real and
+        get_real, falling back on ``methods``, the adapter's own), or None without the
+        extension. slots: (vr, name, min, max, open min) of the Real inputs the adapter
+        checks itself; outs: (vr, name) of the Real outputs read from ``io.out``."""
+        fmi = fmi_module()
+        if fmi is None:
+            return None
+        io = ctypes.addressof(self.io)
+        rows = [
+            (vr, n, lo, hi, o, io + getattr(BodyIO, n).offset if n in self.INPUTS else 0)
+            for vr, n, lo, hi, o in slots
+        ]
+        step = ctypes.cast(self._step, ctypes.c_void_p).value
+        out = io + BodyIO.out.offset
+        idx = [(vr, self.index(n)) for vr, n in outs]
+        return fmi.bind(slave, self, *methods, step, *self._pointers, out, rtol, rows, idx)

@@ -1,0 +1,347 @@
+/* The body FMU's per-step FMI calls without a Python frame (a CPython extension).
+ *
+ * pythonfmu calls the slave's methods do_step, set_real and get_real by name, once per
+ * FMI call. While the compiled step runs (native.FastBody), the adapter
+ * (contact_fmu/fmu/slave.py, ContactSlave._fast_enable) puts the methods of a Binding
+ * on the instance in their place. Each does what the adapter's Python does on the
+ * common path and hands everything else to the adapter's own method, unchanged:
+ *
+ *   do_step(t, h)        no input held bad, 0 < h < inf, t the FMU's time (relative
+ *                        tolerance rtol), cf_body_step OK: the FMU's time advanced,
+ *                        outputs marked stale, True. Otherwise the Python step.
+ *   set_real(vrs, vals)  a float, finite and in the declared range of a Real input:
+ *                        stored in the adapter's _values and _in, cleared from _bad,
+ *                        written to the struct if the step reads it, _dirty set.
+ *                        Otherwise that value goes through the adapter's set_real.
+ *   get_real(vrs)        outputs of the struct only: a list of its doubles.
+ *                        Otherwise the adapter's get_real.
+ *
+ * Python state is read and written through the adapter's attributes on every call (no
+ * copy kept here), so whatever the adapter reassigns stays the truth. The same checks
+ * as slave.py; test_fmu_slave compares the two paths bit for bit. */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+
+typedef int (*step_fn)(void *, void *, void *, double);
+
+typedef struct {
+    PyObject *name;   /* the input's name (a str, key of _values, _in, _bad) */
+    double lo, hi;    /* declared range */
+    int open_lo;      /* lo excluded */
+    double *dst;      /* its place in the struct, or NULL */
+} slot;
+
+typedef struct {
+    PyObject_HEAD
+    PyObject *slave;             /* the ContactSlave */
+    PyObject *owner;             /* the FastBody: keeps the structs alive */
+    PyObject *py_step, *py_set, *py_get; /* the adapter's own methods */
+    step_fn step;
+    void *params, *state, *io;
+    const double *out;
+    double rtol;
+    Py_ssize_t n_vr;
+    int *slot_of_vr, *out_of_vr; /* by value reference: index or -1 */
+    slot *slots;
+    Py_ssize_t n_slots;
+    unsigned long long steps;   /* steps taken here */
+} Binding;
+
+static PyObject *s_time, *s_bad, *s_values, *s_in, *s_dirty, *s_stale;
+
+static int traverse(Binding *b, visitproc visit, void *arg) {
+    Py_VISIT(b->slave);
+    Py_VISIT(b->owner);
+    Py_VISIT(b->py_step);
+    Py_VISIT(b->py_set);
+    Py_VISIT(b->py_get);
+    return 0;
+}
+
+static int clear(Binding *b) {
+    Py_CLEAR(b->slave);
+    Py_CLEAR(b->owner);
+    Py_CLEAR(b->py_step);
+    Py_CLEAR(b->py_set);
+    Py_CLEAR(b->py_get);
+    return 0;
+}
+
+static void dealloc(Binding *b) {
+    PyObject_GC_UnTrack(b);
+    clear(b);
+    for (Py_ssize_t i = 0; i < b->n_slots; i++) Py_XDECREF(b->slots[i].name);
+    PyMem_Free(b->slots);
+    PyMem_Free(b->slot_of_vr);
+    PyMem_Free(b->out_of_vr);
+    Py_TYPE(b)->tp_free((PyObject *)b);
+}
+
+/* the length of a dict attribute of the adapter, -1 on error */
+static Py_ssize_t dict_len(PyObject *slave, PyObject *attr) {
+    PyObject *d = PyObject_GetAttr(slave, attr);
+    if (d == NULL) return -1;
+    Py_ssize_t n = PyDict_Check(d) ? PyDict_GET_SIZE(d) : PyObject_Length(d);
+    Py_DECREF(d);
+    return n;
+}
+
+static PyObject *do_step(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
+    if (nargs != 2) return PyObject_Vectorcall(b->py_step, args, nargs, NULL);
+    double t = PyFloat_AsDouble(args[0]), h = PyFloat_AsDouble(args[1]);
+    if (PyErr_Occurred()) {
+        PyErr_Clear();
+        return PyObject_Vectorcall(b->py_step, args, nargs, NULL);
+    }
+    Py_ssize_t bad = dict_len(b->slave, s_bad);
+    if (bad < 0) return NULL;
+    PyObject *now = PyObject_GetAttr(b->slave, s_time);
+    if (now == NULL) return NULL;
+    double time = PyFloat_AsDouble(now);
+    Py_DECREF(now);
+    if (time == -1.0 && PyErr_Occurred()) return NULL;
+    double scale = fmax(1.0, fmax(fabs(t), h));
+    if (bad == 0 && 0.0 < h && h < INFINITY && fabs(t - time) <= b->rtol * scale &&
+        b->step(b->params, b->state, b->io, h) == 0) {
+        PyObject *next = PyFloat_FromDouble(t + h);
+        if (next == NULL) return NULL;
+        int err = PyObject_SetAttr(b->slave, s_time, next);
+        Py_DECREF(next);
+        if (err || PyObject_SetAttr(b->slave, s_dirty, Py_False) ||
+            PyObject_SetAttr(b->slave, s_stale, Py_True))
+            return NULL;
+        b->steps++;
+        Py_RETURN_TRUE;
+    }
+    return PyObject_Vectorcall(b->py_step, args, nargs, NULL);
+}
+
+/* the adapter's set_real for one value */
+static int set_one(Binding *b, PyObject *vr, PyObject *value) {
+    PyObject *vrs = PyList_New(1), *vals = PyList_New(1);
+    if (vrs == NULL || vals == NULL) {
+        Py_XDECREF(vrs);
+        Py_XDECREF(vals);
+        return -1;
+    }
+    Py_INCREF(vr);
+    Py_INCREF(value);
+    PyList_SET_ITEM(vrs, 0, vr);
+    PyList_SET_ITEM(vals, 0, value);
+    PyObject *r = PyObject_CallFunctionObjArgs(b->py_set, vrs, vals, NULL);
+    Py_DECREF(vrs);
+    Py_DECREF(vals);
+    if (r == NULL) return -1;
+    Py_DECREF(r);
+    return 0;
+}
+
+/* a slot's admissible float into the adapter's dicts and the struct */
+static int store(Binding *b, const slot *s, PyObject *value, double v) {
+    PyObject *values = PyObject_GetAttr(b->slave, s_values);
+    PyObject *in = PyObject_GetAttr(b->slave, s_in);
+    PyObject *bad = PyObject_GetAttr(b->slave, s_bad);
+    int err = values == NULL || in == NULL || bad == NULL ||
+              PyObject_SetItem(values, s->name, value) || PyObject_SetItem(in, s->name, value);
+    if (!err && PyObject_IsTrue(bad) == 1 && PyDict_Check(bad) &&
+        PyDict_Contains(bad, s->name) == 1)
+        err = PyDict_DelItem(bad, s->name);
+    Py_XDECREF(values);
+    Py_XDECREF(in);
+    Py_XDECREF(bad);
+    if (err) return -1;
+    if (s->dst != NULL) *s->dst = v;
+    return 0;
+}
+
+static PyObject *set_real(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
+    if (nargs != 2 || !PyList_Check(args[0]) || !PyList_Check(args[1]) ||
+        PyList_GET_SIZE(args[0]) != PyList_GET_SIZE(args[1]))
+        return PyObject_Vectorcall(b->py_set, args, nargs, NULL);
+    PyObject *vrs = args[0], *vals = args[1];
+    int stored = 0;
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(vrs); i++) {
+        PyObject *vr = PyList_GET_ITEM(vrs, i), *value = PyList_GET_ITEM(vals, i);
+        long k = PyLong_Check(vr) ? PyLong_AsLong(vr) : -1;
+        if (k == -1 && PyErr_Occurred()) PyErr_Clear();
+        int j = 0 <= k && k < b->n_vr ? b->slot_of_vr[k] : -1;
+        if (j >= 0 && PyFloat_CheckExact(value)) {
+            const slot *s = &b->slots[j];
+            double v = PyFloat_AS_DOUBLE(value);
+            if (isfinite(v) && (s->open_lo ? s->lo < v : s->lo <= v) && v <= s->hi) {
+                if (store(b, s, value, v)) return NULL;
+                stored = 1;
+                continue;
+            }
+        }
+        if (stored && PyObject_SetAttr(b->slave, s_dirty, Py_True)) return NULL;
+        stored = 0;
+        if (set_one(b, vr, value)) return NULL;
+    }
+    if (stored && PyObject_SetAttr(b->slave, s_dirty, Py_True)) return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *get_real(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
+    if (nargs != 1 || !PyList_Check(args[0]))
+        return PyObject_Vectorcall(b->py_get, args, nargs, NULL);
+    PyObject *vrs = args[0];
+    Py_ssize_t n = PyList_GET_SIZE(vrs);
+    PyObject *res = PyList_New(n);
+    if (res == NULL) return NULL;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *vr = PyList_GET_ITEM(vrs, i);
+        long k = PyLong_Check(vr) ? PyLong_AsLong(vr) : -1;
+        if (k == -1 && PyErr_Occurred()) PyErr_Clear();
+        int j = 0 <= k && k < b->n_vr ? b->out_of_vr[k] : -1;
+        PyObject *x = j >= 0 ? PyFloat_FromDouble(b->out[j]) : NULL;
+        if (x == NULL) {
+            Py_DECREF(res);
+            if (j >= 0) return NULL;
+            return PyObject_Vectorcall(b->py_get, args, nargs, NULL);
+        }
+        PyList_SET_ITEM(res, i, x);
+    }
+    return res;
+}
+
+static PyMethodDef binding_methods[] = {
+    {"do_step", (PyCFunction)(void (*)(void))do_step, METH_FASTCALL, "doStep"},
+    {"set_real", (PyCFunction)(void (*)(void))set_real, METH_FASTCALL, "setReal"},
+    {"get_real", (PyCFunction)(void (*)(void))get_real, METH_FASTCALL, "getReal"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyObject *get_steps(Binding *b, void *closure) {
+    (void)closure;
+    return PyLong_FromUnsignedLongLong(b->steps);
+}
+
+static PyGetSetDef binding_getset[] = {
+    {"steps", (getter)get_steps, NULL, "doSteps taken here (not handed to Python)", NULL},
+    {NULL, NULL, NULL, NULL, NULL},
+};
+
+static PyTypeObject BindingType = {
+    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "contact_fmu_fmi.Binding",
+    .tp_basicsize = sizeof(Binding),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC,
+    .tp_doc = "do_step, set_real, get_real of a body FMU on its compiled step",
+    .tp_traverse = (traverseproc)traverse,
+    .tp_clear = (inquiry)clear,
+    .tp_dealloc = (destructor)dealloc,
+    .tp_methods = binding_methods,
+    .tp_getset = binding_getset,
+};
+
+static void *address(PyObject *x) { return PyLong_AsVoidPtr(x); }
+
+/* bind(slave, owner, py_step, py_set, py_get, step, params, state, io, out, rtol,
+ *      slots, outs): slots a list of (vr, name, lo, hi, open_lo, dst address or 0),
+ *      outs a list of (vr, index into out). Addresses as ints. */
+static PyObject *bind(PyObject *mod, PyObject *args) {
+    (void)mod;
+    PyObject *slave, *owner, *py_step, *py_set, *py_get, *a_step, *a_params, *a_state, *a_io,
+        *a_out, *slots, *outs;
+    double rtol;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOdO!O!", &slave, &owner, &py_step, &py_set, &py_get,
+                          &a_step, &a_params, &a_state, &a_io, &a_out, &rtol, &PyList_Type,
+                          &slots, &PyList_Type, &outs))
+        return NULL;
+    Binding *b = PyObject_GC_New(Binding, &BindingType);
+    if (b == NULL) return NULL;
+    b->slave = Py_NewRef(slave);
+    b->owner = Py_NewRef(owner);
+    b->py_step = Py_NewRef(py_step);
+    b->py_set = Py_NewRef(py_set);
+    b->py_get = Py_NewRef(py_get);
+    b->slots = NULL;
+    b->slot_of_vr = b->out_of_vr = NULL;
+    b->n_slots = b->n_vr = 0;
+    b->steps = 0;
+    b->rtol = rtol;
+    PyObject_GC_Track(b);
+    b->step = (step_fn)address(a_step);
+    b->params = address(a_params);
+    b->state = address(a_state);
+    b->io = address(a_io);
+    b->out = (const double *)address(a_out);
+    if (PyErr_Occurred()) goto fail;
+    /* the table by value reference: as long as the largest one + 1 */
+    long top = -1;
+    for (int pass = 0; pass < 2; pass++) {
+        PyObject *list = pass ? outs : slots;
+        for (Py_ssize_t i = 0; i < PyList_GET_SIZE(list); i++) {
+            PyObject *row = PyList_GET_ITEM(list, i);
+            if (!PyTuple_Check(row) || PyTuple_GET_SIZE(row) < 2) {
+                PyErr_SetString(PyExc_TypeError, "bind: rows are tuples (vr, ...)");
+                goto fail;
+            }
+            long k = PyLong_AsLong(PyTuple_GET_ITEM(row, 0));
+            if (k < 0) {
+                if (!PyErr_Occurred()) PyErr_SetString(PyExc_ValueError, "bind: vr < 0");
+                goto fail;
+            }
+            top = k > top ? k : top;
+        }
+    }
+    b->n_vr = top + 1;
+    b->slot_of_vr = PyMem_Malloc(sizeof(int) * (size_t)(b->n_vr + 1));
+    b->out_of_vr = PyMem_Malloc(sizeof(int) * (size_t)(b->n_vr + 1));
+    b->slots = PyMem_Calloc((size_t)PyList_GET_SIZE(slots) + 1, sizeof(slot));
+    if (b->slot_of_vr == NULL || b->out_of_vr == NULL || b->slots == NULL) {
+        PyErr_NoMemory();
+        goto fail;
+    }
+    for (Py_ssize_t k = 0; k < b->n_vr; k++) b->slot_of_vr[k] = b->out_of_vr[k] = -1;
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(slots); i++) {
+        slot *s = &b->slots[i];
+        long k, dst;
+        PyObject *name;
+        if (!PyArg_ParseTuple(PyList_GET_ITEM(slots, i), "lUddpl", &k, &name, &s->lo, &s->hi,
+                              &s->open_lo, &dst))
+            goto fail;
+        s->name = Py_NewRef(name);
+        s->dst = (double *)dst;
+        b->n_slots = i + 1;
+        b->slot_of_vr[k] = (int)i;
+    }
+    for (Py_ssize_t i = 0; i < PyList_GET_SIZE(outs); i++) {
+        long k, j;
+        if (!PyArg_ParseTuple(PyList_GET_ITEM(outs, i), "ll", &k, &j)) goto fail;
+        b->out_of_vr[k] = (int)j;
+    }
+    return (PyObject *)b;
+fail:
+    Py_DECREF(b);
+    return NULL;
+}
+
+static PyMethodDef module_methods[] = {
+    {"bind", bind, METH_VARARGS, "A Binding of an adapter to its compiled step"},
+    {NULL, NULL, 0, NULL},
+};
+
+static int exec_module(PyObject *m) {
+    if (PyType_Ready(&BindingType) < 0) return -1;
+    if (PyModule_AddObjectRef(m, "Binding", (PyObject *)&BindingType) < 0) return -1;
+#define INTERN(v, s) \
+    if ((v) == NULL && ((v) = PyUnicode_InternFromString(s)) == NULL) return -1
+    INTERN(s_time, "_time");
+    INTERN(s_bad, "_bad");
+    INTERN(s_values, "_values");
+    INTERN(s_in, "_in");
+    INTERN(s_dirty, "_dirty");
+    INTERN(s_stale, "_out_stale");
+    return 0;
+}
+
+static PyModuleDef_Slot module_slots[] = {{Py_mod_exec, exec_module}, {0, NULL}};
+
+static struct PyModuleDef module_def = {
+    PyModuleDef_HEAD_INIT, "contact_fmu_fmi", "FMI calls of a body FMU on its compiled step",
+    0, module_methods, module_slots, NULL, NULL, NULL,
+};
+
+PyMODINIT_FUNC PyInit_contact_fmu_fmi(void) { return PyModuleDef_Init(&module_def); }
