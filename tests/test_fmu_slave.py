@@ -442,3 +442,23 @@ def test_compiled_step_state_survives_a_python_step_that_fails_late(monkeypatch)
         for s in (fast, slow):
             assert s.step()
         assert fast.outputs() == slow.outputs()
+
+
+@pytest.mark.skipif(native.fmi_module() is None, reason="no C compiler or Python headers")
+def test_c_binding_of_the_fmi_calls_leaves_the_instance_collectable():
+    """native/fmi.c's binding refers to the instance that holds it (a cycle through the
+    instance's __dict__): the garbage collector must still free both (fmi2FreeInstance,
+    fmi2Reset re-create the object), and set state must not pile bindings up."""
+    import gc
+    import weakref
+
+    b = loaded_body()
+    assert type(b.s.do_step).__name__ == "builtin_function_or_method"
+    state = b.s._get_fmu_state()
+    first = weakref.ref(b.s._fast_fmi)
+    b.s._set_fmu_state(state)  # a new binding replaces the first
+    assert b.step() and b.s._fast_fmi.steps == 1
+    ref = weakref.ref(b.s)
+    del b
+    gc.collect()
+    assert ref() is None and first() is None

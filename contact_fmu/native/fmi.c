@@ -22,6 +22,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
+#include <stddef.h>
 
 typedef int (*step_fn)(void *, void *, void *, double);
 
@@ -46,6 +47,7 @@ typedef struct {
     slot *slots;
     Py_ssize_t n_slots;
     unsigned long long steps;   /* steps taken here */
+    PyObject *weakrefs;
 } Binding;
 
 static PyObject *s_time, *s_bad, *s_values, *s_in, *s_dirty, *s_stale;
@@ -70,6 +72,7 @@ static int clear(Binding *b) {
 
 static void dealloc(Binding *b) {
     PyObject_GC_UnTrack(b);
+    if (b->weakrefs != NULL) PyObject_ClearWeakRefs((PyObject *)b);
     clear(b);
     for (Py_ssize_t i = 0; i < b->n_slots; i++) Py_XDECREF(b->slots[i].name);
     PyMem_Free(b->slots);
@@ -233,6 +236,7 @@ static PyTypeObject BindingType = {
     .tp_dealloc = (destructor)dealloc,
     .tp_methods = binding_methods,
     .tp_getset = binding_getset,
+    .tp_weaklistoffset = offsetof(Binding, weakrefs),
 };
 
 static void *address(PyObject *x) { return PyLong_AsVoidPtr(x); }
@@ -260,6 +264,7 @@ static PyObject *bind(PyObject *mod, PyObject *args) {
     b->slot_of_vr = b->out_of_vr = NULL;
     b->n_slots = b->n_vr = 0;
     b->steps = 0;
+    b->weakrefs = NULL;
     b->rtol = rtol;
     PyObject_GC_Track(b);
     b->step = (step_fn)address(a_step);
