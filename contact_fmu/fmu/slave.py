@@ -325,8 +325,10 @@ class ContactSlave(Fmi2Slave):
             v.getter = partial(getitem, self._fast_out, self._fast_index[v.name])
         self._fast_push()
         # the per-step FMI calls in C where the extension is built (native/fmi.c): on the
-        # instance, in place of the class's methods, to which they hand all else
-        methods = tuple(getattr(type(self), n).__get__(self) for n in _FMI_CALLS)
+        # instance, in place of the class's methods, to which they hand all else (a step
+        # to the Python path: the binding has just tried the compiled one)
+        cls = type(self)
+        methods = (self._python_step, cls.set_real.__get__(self), cls.get_real.__get__(self))
         slots = [(vr, *slot) for vr, slot in self._input_slots.items()]
         outs = [(vr, v.name) for vr, v in reals.items()]
         self._fast_fmi = self._fast.bind_fmi(self, methods, TIME_RTOL, slots, outs)
