@@ -10,7 +10,9 @@ All in one process and one run, so that ratios are fair on a shared, noisy machi
    are stepped call by call through fmpy's FMU2Slave as a master does: setReal of the
    inputs, doStep, getReal of the outputs. Each step is timed in R fresh runs,
    interleaved with the trivial FMU's; the cost is the mean over the steps of each
-   step's fastest run. *model*: the same model object stepped in Python without FMI.
+   step's fastest run. *slave*: the FMU's class (ContactSlave) in this process, called
+   as pythonfmu calls it (set_real, do_step, get_real) without FMI. *model*: the same
+   model object stepped without FMI (its compiled step through ctypes, or Python).
 2. Creep-law evaluations per second, vectorised: the thin-layer law (LayerContact.forces
    on arrays; without spin, the closed form; with spin, the strip march) and, if the
    half-space package is present, its creep-force table (CreepTable.forces); the float
@@ -176,6 +178,52 @@ class ModelStepper:
         return time.perf_counter() - t0
 
 
+class SlaveStepper:
+    """The scene FMU's adapter class in this process, called as pythonfmu calls it: what
+    the project's code costs per step, without pythonfmu's and fmpy's transport."""
+
+    def __init__(self, scene, case, outputs) -> None:
+        from contact_fmu.fmu.slave import ContactSlave
+
+        cls = type("Bench", (ContactSlave,), {"CONFIG": scene.config.to_dict()})
+        self.s = s = cls(instance_name="bench")
+        vr = {v.name: k for k, v in s.vars.items()}
+        s.setup_experiment(0.0)
+        s.enter_initialization_mode()
+        setters = {"Real": s.set_real, "Integer": s.set_integer, "String": s.set_string}
+        for name, value in runner.start_values(scene, case).items():
+            kind = type(s.vars[vr[name]]).__name__
+            setters[kind]([vr[name]], [int(value) if kind == "Integer" else value])
+        s.exit_initialization_mode()
+        if s._model is None:
+            raise RuntimeError([m.msg for m in s.log_queue][-1:])
+        table = runner.input_table(scene, case)
+        self.vin = [vr[n] for n in scene.inputs]
+        self.vout = [vr[n] for n in outputs]
+        self.rows = [[float(table[n][k]) for n in scene.inputs] for k in range(len(table))]
+        self.h, self.t = scene.step, 0.0
+
+    def step(self, k: int) -> float:
+        s = self.s
+        t0 = time.perf_counter()
+        s.set_real(self.vin, self.rows[k])
+        ok = s.do_step(self.t, self.h)
+        s.get_real(self.vout)
+        dt = time.perf_counter() - t0
+        if not ok:
+            raise RuntimeError("do_step failed")
+        self.t += self.h
+        return dt
+
+
+def _slave(scene, case, outputs) -> SlaveStepper | None:
+    try:
+        return SlaveStepper(scene, case, outputs)
+    except Exception as e:  # e.g. a law whose data only the built FMU carries
+        print(f"{scene.name}: adapter not timed outside the FMU: {e}", file=sys.stderr)
+        return None
+
+
 def _model(scene, case) -> ModelStepper | None:
     try:
         return ModelStepper(scene, case)
@@ -205,7 +253,7 @@ def step_costs(trivial: Path, steps: int, repeats: int, only=None) -> list[dict]
             n = min(steps, scene.n_steps)
             table = runner.input_table(sc, case)
             starts = runner.start_values(sc, case)
-            kinds = ("scene", "trivial", "model", "floor")
+            kinds = ("scene", "trivial", "model", "floor", "slave")
             times = {k: np.full((repeats, n), np.inf) for k in kinds}
             outputs = [o for o in scene.outputs if o != "regime"]
             null, null_in, null_out = null_fmu(out, len(scene.inputs), len(outputs))
@@ -215,23 +263,27 @@ def step_costs(trivial: Path, steps: int, repeats: int, only=None) -> list[dict]
                 b = Stepper(trivial, f"t{r}", {}, ("u",), ("x",), {"u": np.ones(n)}, scene.step)
                 c = Stepper(null, f"n{r}", {}, null_in, null_out, null_table, scene.step)
                 m = _model(sc, case)
+                d = _slave(sc, case, outputs)
                 for k in range(n):
                     times["trivial"][r, k] = b.step(k)
                     times["scene"][r, k] = a.step(k)
                     times["floor"][r, k] = c.step(k)
                     if m is not None:
                         times["model"][r, k] = m.step(k)
+                    if d is not None:
+                        times["slave"][r, k] = d.step(k)
                 for stepper in (a, b, c):
                     stepper.close()
             cost = {k: float(np.mean(np.min(v, axis=0))) for k, v in times.items()}
-            if not np.isfinite(cost["model"]):
-                cost["model"] = float("nan")
+            for k in ("model", "slave"):
+                if not np.isfinite(cost[k]):
+                    cost[k] = float("nan")
             rows.append({
                 "scene": scene.name, "mode": scene.config.mode,
                 "method": method or ("transient" if scene.config.phase != "steady" else "-"),
                 "layer": scene.config.contact_law == "layer" and steady_body,
                 "h": scene.step, "step": cost["scene"], "trivial": cost["trivial"],
-                "model": cost["model"], "floor": cost["floor"],
+                "model": cost["model"], "floor": cost["floor"], "slave": cost["slave"],
                 "io": f"{len(scene.inputs)} in, {len(outputs)} out",
             })  # fmt: skip
             print(f"{scene.name} {method}: {cost['scene'] * 1e6:.0f} us vs trivial "
@@ -385,27 +437,27 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
         f"{repeats} runs, interleaved with the trivial FMU's). Trivial FMU: pythonfmu, one "
         "state and one input (dx/dt = u, explicit Euler), built by the benchmark. "
         "*floor*: the same physics-free FMU with the scene's numbers of inputs and outputs "
-        "(what pythonfmu and fmpy cost to exchange that many values). *model*: the scene's "
-        "model stepped without FMI as the FMU steps it: its compiled step (inputs into the "
-        "struct, one C call; BodyModel.fast) where it has one, else the Python model "
-        "(step and outputs). *adapter*: step - floor - model, the project's own FMI layer "
-        "(contact_fmu/fmu/slave.py: input checks, getters, the step's checks). Noisy "
-        "machine: the columns come from different runs of the same steps, so a small "
-        "column can come out negative. Target of issue 6: the thin-layer body FMU at most "
-        f"{TARGET_RATIO} x the trivial FMU.",
+        "(what pythonfmu and fmpy cost to exchange that many values). *slave*: the FMU's "
+        "class (contact_fmu/fmu/slave.py) in this process, called as pythonfmu calls it "
+        "(set_real, do_step, get_real) without FMI: the project's code per step, adapter "
+        "and model (with native/fmi.c in place of the adapter's methods where the "
+        "compiled step runs). *model*: the scene's model stepped without FMI: its "
+        "compiled step through ctypes (inputs into the struct, one call; BodyModel.fast; "
+        "ctypes' own call cost included, which the FMU calling it from fmi.c does not "
+        "pay) where it has one, else the Python model (step and outputs). Target of "
+        f"issue 6: the thin-layer body FMU at most {TARGET_RATIO} x the trivial FMU.",
         "",
         "| scene | mode | stepper | h (s) | values | step us | trivial us | ratio "
-        "| floor us | floor / trivial | adapter us | model us |",
+        "| floor us | floor / trivial | slave us | model us |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in steps_rows:
-        adapter = r["step"] - r["floor"] - r["model"]
         out.append(
             f"| {r['scene']} | {r['mode']} | {r['method']} | {r['h']:g} | {r['io']} "
             f"| {r['step'] * 1e6:.0f} | {r['trivial'] * 1e6:.1f} "
             f"| {r['step'] / r['trivial']:.2f} | {r['floor'] * 1e6:.1f} "
-            f"| {r['floor'] / r['trivial']:.2f} | {adapter * 1e6:.0f} "
-            f"| {r['model'] * 1e6:.0f} |"
+            f"| {r['floor'] / r['trivial']:.2f} | {r['slave'] * 1e6:.1f} "
+            f"| {r['model'] * 1e6:.1f} |"
         )
     body = [r for r in steps_rows if r["mode"] == "body" and r["layer"]]
     if body:
@@ -421,15 +473,15 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
             f"The {TARGET_RATIO}x target is {met} for the thin-layer body FMUs (steady "
             f"phase, both steppers): a step costs {min(ratios):.2f} to {max(ratios):.2f} "
             "times the trivial FMU's. In trivial steps: exchanging their values with no "
-            f"adapter and no physics costs {span(lambda r: r['floor'])}, the project's "
-            f"adapter {span(lambda r: r['step'] - r['floor'] - r['model'])} and the "
-            f"model {span(lambda r: r['model'])}. The whole doStep of these FMUs runs "
-            "compiled (contact_fmu/native: internal steps, stage solves, outputs and their "
-            "check, in one ctypes call), the state staying in the kernel's struct; Python "
-            "takes a step only for what the kernel leaves out (a new load P, a bad input, "
-            "the cap on internal steps). What is left above the floor is the adapter's "
-            "Python per value (every input checked against its declared range, every "
-            "output read from the struct) and per call.",
+            f"adapter and no physics costs {span(lambda r: r['floor'])}; the project's "
+            f"code, adapter and model called in process, {span(lambda r: r['slave'])}. "
+            "The whole doStep of these FMUs runs compiled (contact_fmu/native/stepper.c: "
+            "internal steps, stage solves, outputs and their check in one call), the "
+            "state staying in the kernel's struct, and pythonfmu's setReal, doStep and "
+            "getReal reach it without a Python frame (native/fmi.c: the adapter's input "
+            "range checks, step checks and output reads in C). Python takes a step only "
+            "for what the kernel leaves out (a new load P, a bad input, the cap on "
+            "internal steps, FMU state).",
         ]
     out += [
         "",
