@@ -36,9 +36,7 @@ from numpy.typing import NDArray
 
 import fmu_build
 
-from ..dynamics import Body, Loads
 from ..fmu.config import METHODS, SCHEMES, ModelConfig
-from ..integrator import RollingBody
 from ..layer import LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
@@ -115,10 +113,7 @@ def _rss() -> int:
 
 
 def simulate(fmu_dir: Path, case: StiffCase, h: float, steps: int, memory: bool = False) -> Run:
-    """``steps`` communication steps of h through the FMU extracted at ``fmu_dir`` (or
-    of its stepper called directly, for a case ``via = "core"``)."""
-    if case.via == "core":
-        return simulate_core(case, h, steps, memory)
+    """``steps`` communication steps of h through the FMU extracted at ``fmu_dir``."""
     t = np.arange(steps + 1) * h
     u = {n: parse(n, case.inputs[n])(t) for n in INPUTS}
     vals = {n: np.full(steps, np.nan) for n in OUTPUTS}
@@ -148,42 +143,6 @@ def simulate(fmu_dir: Path, case: StiffCase, h: float, steps: int, memory: bool 
             gc.collect()
             run.blocks = (b1, sys.getallocatedblocks())
             run.rss = (r1, _rss())
-    run.wall = time.perf_counter() - t0
-    return run
-
-
-def simulate_core(case: StiffCase, h: float, steps: int, memory: bool = False) -> Run:
-    """As ``simulate``, with the FMU's stepper (integrator.RollingBody) called directly:
-    the inputs sampled at each step's start and held over it, as the FMU holds them."""
-    p = case.params
-    t = np.arange(steps + 1) * h
-    u = {n: parse(n, case.inputs[n])(t) for n in INPUTS}
-    if np.ptp(u["P"]) != 0.0:
-        raise ValueError(f"{case.name}: via = 'core' needs a constant P")
-    law = LayerContact(float(u["P"][0]), p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"],
-                       p["mu"])  # fmt: skip
-    rb = RollingBody(law, Body(p["M"], p["Rx"], p["Iy"]), method=case.method,
-                     Vx0=p["Vx0"], Omega_y0=p["Omega_y0"], scheme=case.scheme)  # fmt: skip
-    vals = {n: np.full(steps, np.nan) for n in OUTPUTS}
-    run = Run(t[1:], vals)
-    Fx, My = u["Fx_ex"].tolist(), u["My_ex"].tolist()
-    half = steps // 2
-    t0 = time.perf_counter()
-    for k in range(steps):
-        if memory and k == half:
-            gc.collect()
-            b1, r1 = sys.getallocatedblocks(), _rss()
-        try:
-            rb.advance(h, Loads(Fx[k], 0.0, My[k], 0.0), case.substeps)
-        except Exception as e:  # what the FMU would answer with fmi2Discard
-            run.status = f"step {k + 1} at t = {t[k]:.6g} s: {type(e).__name__}: {e}"
-            break
-        vals["Tx"][k], vals["vx"][k], vals["Vx"][k] = rb.out.Tx, rb.vx, rb.Vx
-        vals["regime"][k] = float(rb.out.sliding)
-    if memory and run.status is None:
-        gc.collect()
-        run.blocks = (b1, sys.getallocatedblocks())
-        run.rss = (r1, _rss())
     run.wall = time.perf_counter() - t0
     return run
 
@@ -336,7 +295,7 @@ def row_text(r: Result) -> str:
 CHECK_NAMES = ("finite", "bound", "dissipation", "oscillation", "convergence", "memory")
 NOTE = (
     "Each case runs the body-mode FMU through fmpy call by call at its communication "
-    "step h (the long run: the FMU's stepper called directly), and again at h/2 and h/4 "
+    "step h, and again at h/2 and h/4 "
     "(same internal steps per communication step). "
     "Checks: every doStep fmi2OK and every output finite; max |Tx|/(mu P) <= 1 + 16 eps; "
     "min Tx vx/(mu P v_s) >= -1e-11 (friction power never negative; v_s = creepage at "

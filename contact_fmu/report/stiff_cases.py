@@ -38,9 +38,8 @@ class StiffCase:
     Fx_ex, My_ex; ``h``: communication step (s); ``steps``: communication steps of the
     run; ``substeps``: internal steps per communication step (h_max = h/substeps);
     ``conv_steps``: communication steps compared in the convergence check (the first
-    ones; default all), run again at h/2 and h/4 with the same substeps. ``via``:
-    "fmu" (the body-mode FMU through fmpy) or "core" (its stepper, RollingBody, called
-    directly: for the long run, where the FMU's per-step cost would dominate).
+    ones; default all), run again at h/2 and h/4 with the same substeps. Every case
+    runs the body-mode FMU through fmpy, the long run too.
     """
 
     name: str
@@ -55,7 +54,6 @@ class StiffCase:
     scheme: str = "lobatto3c"
     conv_steps: int | None = None
     tags: tuple[str, ...] = field(default=())
-    via: str = "fmu"
 
     @property
     def mu_P(self) -> float:
@@ -208,9 +206,9 @@ def cases() -> list[StiffCase]:
         ))  # fmt: skip
     out.append(StiffCase(
         "long run", "long",
-        "1e6 steps of 1e-4 s of the FMU's stepper (RollingBody, quasistationary: one stage "
+        "1e6 steps of 1e-4 s of the FMU (quasistationary: one stage "
         "solve per held-load step), Tx = (0.6 - 0.3 A1 sin) mu P with a period of 0.2 s",
         params(), steady_sine(ex.mu, 0.2), 1e-4, 1_000_000, substeps=1,
-        method="quasistationary", conv_steps=200, tags=("long",), via="core",
+        method="quasistationary", conv_steps=200, tags=("long",),
     ))  # fmt: skip
     return out
