@@ -462,3 +462,15 @@ def test_c_binding_of_the_fmi_calls_leaves_the_instance_collectable():
     del b
     gc.collect()
     assert ref() is None and first() is None
+
+
+@pytest.mark.parametrize("calls", ["fmi.c", "ctypes"])
+def test_empty_value_reference_lists_are_answered(monkeypatch, calls):
+    """fmi2GetReal/fmi2SetReal with nvr = 0 are legal calls: an empty answer, no error,
+    on every path that answers them (the C binding, the adapter's own methods)."""
+    if calls == "ctypes":
+        monkeypatch.setattr(native, "fmi_module", lambda: None)
+    b = loaded_body()
+    assert b.s.get_real([]) == [] and b.s.set_real([], []) is None
+    assert b.step() and b.s.get_real([]) == []
+    assert not b.messages

@@ -241,7 +241,7 @@ class ContactSlave(Fmi2Slave):
     def get_real(self, vrs: list[int]) -> list[float]:
         """fmi2GetReal: while the compiled step runs, outputs straight from its struct
         (one C-level pass); otherwise, or for other variables, by their getters."""
-        if self._fast_out is not None:
+        if self._fast_out is not None and vrs:
             key = tuple(vrs)
             read = self._fast_reads.get(key)
             if read is None and all(vr in self._fast_vr for vr in key):
