@@ -147,8 +147,7 @@ static int store(Binding *b, const slot *s, PyObject *value, double v) {
     PyObject *bad = PyObject_GetAttr(b->slave, s_bad);
     int err = values == NULL || in == NULL || bad == NULL ||
               PyObject_SetItem(values, s->name, value) || PyObject_SetItem(in, s->name, value);
-    if (!err && PyObject_IsTrue(bad) == 1 && PyDict_Check(bad) &&
-        PyDict_Contains(bad, s->name) == 1)
+    if (!err && PyDict_Check(bad) && PyDict_Contains(bad, s->name) == 1)
         err = PyDict_DelItem(bad, s->name);
     Py_XDECREF(values);
     Py_XDECREF(in);
@@ -178,10 +177,9 @@ static PyObject *set_real(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
                 continue;
             }
         }
-        if (stored && PyObject_SetAttr(b->slave, s_dirty, Py_True)) return NULL;
-        stored = 0;
         if (set_one(b, vr, value)) return NULL;
     }
+    /* once for all values stored here (the adapter's setter marks its own) */
     if (stored && PyObject_SetAttr(b->slave, s_dirty, Py_True)) return NULL;
     Py_RETURN_NONE;
 }
