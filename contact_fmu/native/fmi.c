@@ -18,7 +18,10 @@
  *
  * Python state is read and written through the adapter's attributes on every call (no
  * copy kept here), so whatever the adapter reassigns stays the truth. The same checks
- * as slave.py; test_fmu_slave compares the two paths bit for bit. */
+ * as slave.py; test_fmu_slave compares the two paths bit for bit.
+ *
+ * The GIL stays held through the compiled step (about a microsecond): released, taking
+ * it back could wait for another thread's switch interval (5 ms), far longer. */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
