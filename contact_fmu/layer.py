@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
+from . import native
 from ._validate import InputError, finite, nonnegative, positive
 
 FloatArray = NDArray[np.float64]
@@ -480,17 +481,27 @@ class _Grid:
         # slip of Eq. (3) at the midpoints, times the distance marched
         inc = gain * self.dist * ((vx - phi * Y) + 1j * (vy - s * phi * self.mid))
         n, ny, nx = inc.shape[0], self.y.size, self.x.size
-        tau = np.zeros((n, ny, nx), complex)
-        slip = np.zeros((n, ny, nx), bool)
-        t = np.zeros((n, ny), complex)
-        for j in range(nx):
-            trial = t + inc[:, :, j]
-            mag = np.abs(trial)
-            cj = cap[:, j]
-            slip[:, :, j] = mag > cj
-            # projection on |tau| <= mu p; TINY keeps 0/0 (outside the contact) at 0
-            t = trial * np.minimum(1.0, cj / np.maximum(mag, TINY))
-            tau[:, :, j] = t
+        lib = native.library()
+        if lib is not None:  # the same loop compiled (stepper.c, cf_strip_march)
+            inc = np.ascontiguousarray(inc, complex)
+            cap = np.ascontiguousarray(cap, float)
+            tau = np.empty((n, ny, nx), complex)
+            slip = np.empty((n, ny, nx), bool)
+            lib.cf_strip_march(
+                n, ny, nx, inc.ctypes.data, cap.ctypes.data, TINY, tau.ctypes.data, slip.ctypes.data
+            )
+        else:
+            tau = np.zeros((n, ny, nx), complex)
+            slip = np.zeros((n, ny, nx), bool)
+            t = np.zeros((n, ny), complex)
+            for j in range(nx):
+                trial = t + inc[:, :, j]
+                mag = np.abs(trial)
+                cj = cap[:, j]
+                slip[:, :, j] = mag > cj
+                # projection on |tau| <= mu p; TINY keeps 0/0 (outside the contact) at 0
+                t = trial * np.minimum(1.0, cj / np.maximum(mag, TINY))
+                tau[:, :, j] = t
         if not np.all(rolling):  # no rolling: every point slides (Eq. 5)
             v = (vx - phi * Y) + 1j * (vy + phi * X)
             mag = np.abs(v)

@@ -72,7 +72,7 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
     h.update(FORMAT.encode())
     h.update(metadata.version("pythonfmu").encode())
     h.update(json.dumps(cfg.to_dict(), sort_keys=True).encode())
-    for rel, src in sources.files(modules) + sources.data(cfg.data_files):
+    for rel, src in sources.files(modules, compiles(cfg)) + sources.data(cfg.data_files):
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
     for rel in cfg.generated_files:  # the generated data's content key (no build needed)
         h.update(rel.encode() + b"\0" + tables.key(cfg).encode() + b"\0")
@@ -89,6 +89,14 @@ def names(cfg: ModelConfig, key: str) -> tuple[str, str, str]:
         f"{cfg.name[0].upper()}{cfg.name[1:]}_{short}",
         f"cfmu_{short}",
     )
+
+
+def compiles(cfg: ModelConfig) -> bool:
+    """Whether the FMU carries the compiled code of contact_fmu/native (and its C
+    sources): body FMUs, whose stepper and FMI calls run in it. The other modes import
+    native only through the thin-layer law's strip march, which runs with spin alone,
+    and spin is a body-mode input (ModelConfig), so they carry the loader's Python only."""
+    return cfg.mode == "body"
 
 
 def _compile_native(dest: Path) -> None:
@@ -124,8 +132,8 @@ def build(
     work = Path(tempfile.mkdtemp(prefix=f".build-{cfg.name}-", dir=out_dir))
     try:
         stage = work / "stage"
-        sources.vendor(modules, stage / package, cfg.data_files)
-        if "native" in modules:
+        sources.vendor(modules, stage / package, cfg.data_files, compiles(cfg))
+        if "native" in modules and compiles(cfg):
             _compile_native(stage / package / "native")
         for rel in cfg.generated_files:
             shutil.copyfile(tables.ensure(cfg, table_cache), stage / package / rel)

@@ -95,14 +95,16 @@ def closure(roots: list[str]) -> list[str]:
 COMPANIONS = {"native": ("native/stepper.c", "native/fmi.c")}
 
 
-def files(modules: list[str]) -> list[tuple[str, Path]]:
-    """(path inside the vendored package, source file) for each module and its companions."""
+def files(modules: list[str], companions: bool = True) -> list[tuple[str, Path]]:
+    """(path inside the vendored package, source file) for each module and, with
+    ``companions``, the files it reads (the C sources of what the build compiles)."""
     out = []
     for m in modules:
         src = _module_file(m)
         rel = src.relative_to(PACKAGE_DIR).as_posix()
         out.append((rel, src))
-        out += data(COMPANIONS.get(m, ()))
+        if companions:
+            out += data(COMPANIONS.get(m, ()))
     return out
 
 
@@ -120,11 +122,14 @@ def data(paths: tuple[str, ...]) -> list[tuple[str, Path]]:
     return out
 
 
-def vendor(modules: list[str], dest: Path, data_files: tuple[str, ...] = ()) -> None:
-    """Copy the modules (and data files) into the package folder ``dest``."""
+def vendor(
+    modules: list[str], dest: Path, data_files: tuple[str, ...] = (), companions: bool = True
+) -> None:
+    """Copy the modules (and data files; companions: see ``files``) into the package
+    folder ``dest``."""
     dest.mkdir(parents=True)
     (dest / "__init__.py").write_text(PACKAGE_INIT)
-    for rel, src in files(modules) + data(data_files):
+    for rel, src in files(modules, companions) + data(data_files):
         if rel == "__init__.py":
             continue
         target = dest / rel

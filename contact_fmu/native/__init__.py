@@ -6,7 +6,8 @@ only stage unknown, vy held at a ratio to Vx, no spin, held loads). The kernel m
 the Python code expression by expression: for the thin-layer law without lateral slip
 it gives the same doubles, otherwise the same to rounding (hypot, the table's patch
 sums); it answers "not covered" (the Python path then takes the step) for what it
-leaves out. See stepper.c.
+leaves out. See stepper.c. The same library holds the strip march of the thin-layer law
+with spin (``cf_strip_march``, called by layer._Grid.march when the library is there).
 
 The body FMU's FMI calls themselves (doStep, setReal, getReal on the compiled step's
 path) have a CPython extension, fmi.c (``fmi_module``), that the adapter puts in place
@@ -164,6 +165,10 @@ def library() -> Any:
     lib.cf_body_step.restype = ctypes.c_int
     lib.cf_body_outputs.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
     lib.cf_body_outputs.restype = None
+    lib.cf_strip_march.argtypes = [ctypes.c_int] * 3 + [ctypes.c_void_p] * 2 + [
+        ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p,
+    ]  # fmt: skip
+    lib.cf_strip_march.restype = None
     return lib
 
 

@@ -14,6 +14,9 @@
  * the Python path takes the whole interval: a stage whose safeguarded Newton iteration
  * does not converge (Python then brackets and calls brentq), and a stage with no root
  * (Python raises StageSolveError with its message).
+ *
+ * At the end, the strip march of the thin-layer law with spin (layer._Grid.march), which
+ * the Python steppers call: one loop of the same operations.
  */
 #include <math.h>
 #include <stddef.h>
@@ -527,4 +530,34 @@ int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
     *y = w;
     *b = next;
     return CF_OK;
+}
+
+/* ---- layer._Grid.march: the strip march of the spin law --------------------------- */
+/* inc: the n x ny x nx complex increments (numpy's complex128: re, im interleaved), cap:
+ * mu p (ny x nx); writes tau (complex, like inc) and slip (0/1 bytes). Along each strip
+ * from the leading edge, the operations of layer.py in its order: trial = t + inc,
+ * |trial|, slip = |trial| > cap, t = trial min(1, cap / max(|trial|, tiny)). numpy's
+ * complex abs is not the C library's hypot (they differ in the last bit), so the two
+ * agree to rounding, not bit for bit (tests/test_native.py). */
+void cf_strip_march(int n, int ny, int nx, const double *inc, const double *cap, double tiny,
+                    double *tau, unsigned char *slip) {
+    for (int k = 0; k < n; k++) {
+        for (int i = 0; i < ny; i++) {
+            const size_t row = ((size_t)k * ny + i) * nx;
+            const double *c = cap + (size_t)i * nx;
+            double tr = 0.0, ti = 0.0;
+            for (int j = 0; j < nx; j++) {
+                const size_t e = row + j;
+                const double a = tr + inc[2 * e], b = ti + inc[2 * e + 1];
+                const double mag = hypot(a, b);
+                const double q = c[j] / (tiny > mag ? tiny : mag);
+                const double f = q < 1.0 ? q : 1.0;
+                slip[e] = mag > c[j];
+                tr = a * f;
+                ti = b * f;
+                tau[2 * e] = tr;
+                tau[2 * e + 1] = ti;
+            }
+        }
+    }
 }
