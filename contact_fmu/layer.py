@@ -286,10 +286,10 @@ class LayerContact:
             v = (vx[spinning], vy[spinning], Vx[spinning])
             n = v[0].size
             grid = self._grid(*SPIN_GRID)
-            tau, _ = grid.march(
+            R = grid.march_resultants(
                 self, *(np.tile(a, 2) for a in v), np.r_[phi[spinning], np.zeros(n)]
             )
-            dT, dM = (r[:n] - r[n:] for r in grid.resultants(tau, np.tile(np.sign(v[2]), 2)))
+            dT, dM = (r[:n] - r[n:] for r in R)
             Tx[spinning] += dT.real
             Ty[spinning] += dT.imag
             Mz[spinning] += dM
@@ -469,7 +469,17 @@ class _Grid:
 
         tau <- proj_{|tau| <= mu p}(tau + v dx / (|Vx| (kb + ks))) along each strip from
         the leading edge (Eqs. 35, 4-5); Vx = 0 slides everywhere: tau = mu p v/|v|.
+        Rolling inputs run compiled where the library is (native, cf_strip_march).
         """
+        compiled = self._compiled(c, vx, vy, Vx, phi)
+        if compiled is not None:
+            lib, st, args = compiled
+            n, ny, nx = args[0].size, self.y.size, self.x.size
+            tau = np.empty((n, ny, nx), complex)
+            slip = np.empty((n, ny, nx), bool)
+            lib.cf_strip_march(st, n, *(a.ctypes.data for a in args), tau.ctypes.data,
+                               slip.ctypes.data, None, None)  # fmt: skip
+            return tau, slip & self.inside
         vx, vy, Vx, phi = (np.asarray(a, float)[:, None, None] for a in (vx, vy, Vx, phi))
         s = np.sign(Vx)
         X = -np.where(s == 0, -1.0, s) * self.x  # node positions in march order
@@ -481,27 +491,17 @@ class _Grid:
         # slip of Eq. (3) at the midpoints, times the distance marched
         inc = gain * self.dist * ((vx - phi * Y) + 1j * (vy - s * phi * self.mid))
         n, ny, nx = inc.shape[0], self.y.size, self.x.size
-        lib = native.library()
-        if lib is not None:  # the same loop compiled (stepper.c, cf_strip_march)
-            inc = np.ascontiguousarray(inc, complex)
-            cap = np.ascontiguousarray(cap, float)
-            tau = np.empty((n, ny, nx), complex)
-            slip = np.empty((n, ny, nx), bool)
-            lib.cf_strip_march(
-                n, ny, nx, inc.ctypes.data, cap.ctypes.data, TINY, tau.ctypes.data, slip.ctypes.data
-            )
-        else:
-            tau = np.zeros((n, ny, nx), complex)
-            slip = np.zeros((n, ny, nx), bool)
-            t = np.zeros((n, ny), complex)
-            for j in range(nx):
-                trial = t + inc[:, :, j]
-                mag = np.abs(trial)
-                cj = cap[:, j]
-                slip[:, :, j] = mag > cj
-                # projection on |tau| <= mu p; TINY keeps 0/0 (outside the contact) at 0
-                t = trial * np.minimum(1.0, cj / np.maximum(mag, TINY))
-                tau[:, :, j] = t
+        tau = np.zeros((n, ny, nx), complex)
+        slip = np.zeros((n, ny, nx), bool)
+        t = np.zeros((n, ny), complex)
+        for j in range(nx):
+            trial = t + inc[:, :, j]
+            mag = np.abs(trial)
+            cj = cap[:, j]
+            slip[:, :, j] = mag > cj
+            # projection on |tau| <= mu p; TINY keeps 0/0 (outside the contact) at 0
+            t = trial * np.minimum(1.0, cj / np.maximum(mag, TINY))
+            tau[:, :, j] = t
         if not np.all(rolling):  # no rolling: every point slides (Eq. 5)
             v = (vx - phi * Y) + 1j * (vy + phi * X)
             mag = np.abs(v)
@@ -518,6 +518,40 @@ class _Grid:
         T = np.sum(w * tau, axis=(1, 2))
         Mz = np.sum(w * (X * tau.imag - Y * tau.real), axis=(1, 2))
         return T, Mz
+
+    def march_resultants(self, c: LayerContact, vx, vy, Vx, phi) -> tuple[NDArray, FloatArray]:
+        """``resultants`` of ``march`` for n inputs (1-D arrays), without the field where
+        the march runs compiled."""
+        compiled = self._compiled(c, vx, vy, Vx, phi)
+        if compiled is None:
+            tau, _ = self.march(c, vx, vy, Vx, phi)
+            return self.resultants(tau, np.sign(np.asarray(Vx, float)))
+        lib, st, args = compiled
+        T = np.empty(args[0].size, complex)
+        Mz = np.empty(args[0].size)
+        lib.cf_strip_march(st, T.size, *(a.ctypes.data for a in args), None, None,
+                           T.ctypes.data, Mz.ctypes.data)  # fmt: skip
+        return T, Mz
+
+    def _compiled(self, c: LayerContact, *v) -> tuple | None:
+        """(library, its grid struct, the inputs as contiguous float arrays) where the march
+        of these inputs runs compiled: the library is there and every input rolls (Vx != 0;
+        standstill slides, in numpy). The struct points into arrays kept with it."""
+        lib = native.library()
+        args = [np.ascontiguousarray(a, float) for a in np.broadcast_arrays(*v)]
+        if lib is None or args[0].ndim != 1 or not np.all(args[2] != 0.0):
+            return None
+        cache = self.__dict__.get("_strips")  # frozen dataclass: cache by hand
+        if cache is None:
+            arrays = tuple(
+                np.ascontiguousarray(a, float)
+                for a in (self.x, self.y, self.dist, self.mid, c.mu * self.p, self.weights)
+            )
+            st = native.Strips(
+                self.y.size, self.x.size, *(a.ctypes.data for a in arrays), c.k, TINY
+            )
+            cache = self.__dict__["_strips"] = (st, arrays)
+        return lib, cache[0], args
 
 
 def _strip_weights(x: FloatArray, ell: FloatArray, inside: NDArray[np.bool_]) -> FloatArray:

@@ -72,6 +72,14 @@ OUTPUTS = (
 )  # fmt: skip
 
 
+class Strips(ctypes.Structure):
+    """stepper.c's cf_strips: the grid of layer._Grid for the compiled strip march."""
+
+    _fields_ = [("ny", ctypes.c_int), ("nx", ctypes.c_int)] + [
+        (n, ctypes.c_void_p) for n in ("x", "y", "dist", "mid", "cap", "w")
+    ] + [("k", ctypes.c_double), ("tiny", ctypes.c_double)]  # fmt: skip
+
+
 class BodyIO(ctypes.Structure):
     _fields_ = [
         (n, ctypes.c_double)
@@ -165,9 +173,7 @@ def library() -> Any:
     lib.cf_body_step.restype = ctypes.c_int
     lib.cf_body_outputs.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
     lib.cf_body_outputs.restype = None
-    lib.cf_strip_march.argtypes = [ctypes.c_int] * 3 + [ctypes.c_void_p] * 2 + [
-        ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p,
-    ]  # fmt: skip
+    lib.cf_strip_march.argtypes = [ctypes.POINTER(Strips), ctypes.c_int] + [ctypes.c_void_p] * 8
     lib.cf_strip_march.restype = None
     return lib
 

@@ -18,6 +18,7 @@
  * At the end, the strip march of the thin-layer law with spin (layer._Grid.march), which
  * the Python steppers call: one loop of the same operations.
  */
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -533,31 +534,61 @@ int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
 }
 
 /* ---- layer._Grid.march: the strip march of the spin law --------------------------- */
-/* inc: the n x ny x nx complex increments (numpy's complex128: re, im interleaved), cap:
- * mu p (ny x nx); writes tau (complex, like inc) and slip (0/1 bytes). Along each strip
- * from the leading edge, the operations of layer.py in its order: trial = t + inc,
- * |trial|, slip = |trial| > cap, t = trial min(1, cap / max(|trial|, tiny)). numpy's
- * complex abs is not the C library's hypot (they differ in the last bit), so the two
- * agree to rounding, not bit for bit (tests/test_native.py). */
-void cf_strip_march(int n, int ny, int nx, const double *inc, const double *cap, double tiny,
-                    double *tau, unsigned char *slip) {
+typedef struct {
+    int ny, nx;
+    const double *x, *y;           /* node coordinates (nx), (ny) */
+    const double *dist, *mid, *cap; /* (ny x nx): distance marched, midpoint, mu p */
+    const double *w;               /* (ny x nx): resultant weights */
+    double k, tiny;                /* kb + ks (m/Pa); layer.TINY */
+} cf_strips;
+
+/* For n rolling inputs (Vx != 0; layer.py keeps standstill in numpy), the march of
+ * layer._Grid.march along each strip from the leading edge, with its operations in its
+ * order: inc = (1/(|Vx| k)) dist ((vx - phi y) + i (vy - s phi mid)), trial = t + inc,
+ * slip = |trial| > cap, t = trial min(1, cap / max(|trial|, tiny)). Writes the field
+ * (tau: complex as re, im pairs; slip: 0/1 bytes; (n x ny x nx), march order) where
+ * tau is given, and the resultants of _Grid.resultants (T: re, im pairs; Mz) where T is
+ * given. |trial| is sqrt(a^2 + b^2), within two roundings of numpy's complex abs (hypot
+ * where the squares overflow), and the sums run in another order than numpy's: the two
+ * paths agree to rounding, not bit for bit (tests/test_native.py). */
+void cf_strip_march(const cf_strips *g, int n, const double *vx, const double *vy,
+                    const double *Vx, const double *phi, double *tau, unsigned char *slip,
+                    double *T, double *Mz) {
+    const int ny = g->ny, nx = g->nx;
     for (int k = 0; k < n; k++) {
+        const double s = Vx[k] > 0.0 ? 1.0 : -1.0;
+        const double gain = 1.0 / (fabs(Vx[k]) * g->k);
+        const double sphi = s * phi[k];
+        double Tr = 0.0, Ti = 0.0, M = 0.0;
         for (int i = 0; i < ny; i++) {
-            const size_t row = ((size_t)k * ny + i) * nx;
-            const double *c = cap + (size_t)i * nx;
+            const size_t row = (size_t)i * nx;
+            const double Y = g->y[i], re = vx[k] - phi[k] * Y;
             double tr = 0.0, ti = 0.0;
             for (int j = 0; j < nx; j++) {
                 const size_t e = row + j;
-                const double a = tr + inc[2 * e], b = ti + inc[2 * e + 1];
-                const double mag = hypot(a, b);
-                const double q = c[j] / (tiny > mag ? tiny : mag);
+                const double gd = gain * g->dist[e], c = g->cap[e];
+                const double a = tr + gd * re, b = ti + gd * (vy[k] - sphi * g->mid[e]);
+                double mag = sqrt(a * a + b * b); /* hypot's cost, 5x, only on overflow */
+                if (!(mag <= DBL_MAX)) mag = hypot(a, b);
+                const double q = c / (g->tiny > mag ? g->tiny : mag);
                 const double f = q < 1.0 ? q : 1.0;
-                slip[e] = mag > c[j];
                 tr = a * f;
                 ti = b * f;
-                tau[2 * e] = tr;
-                tau[2 * e + 1] = ti;
+                if (tau) {
+                    const size_t o = (size_t)k * ny * nx + e;
+                    tau[2 * o] = tr;
+                    tau[2 * o + 1] = ti;
+                    slip[o] = mag > c;
+                }
+                Tr += g->w[e] * tr;
+                Ti += g->w[e] * ti;
+                M += g->w[e] * (-s * g->x[j] * ti - Y * tr);
             }
+        }
+        if (T) {
+            T[2 * k] = Tr;
+            T[2 * k + 1] = Ti;
+            Mz[k] = M;
         }
     }
 }
