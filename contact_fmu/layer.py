@@ -536,13 +536,14 @@ class _Grid:
     def _compiled(self, c: LayerContact, *v) -> tuple | None:
         """(library, its grid struct, the inputs as contiguous float arrays) where the march
         of these inputs runs compiled: the library is there and every input rolls (Vx != 0;
-        standstill slides, in numpy). The struct points into arrays kept with it."""
+        standstill slides, in numpy). The struct points into arrays kept with it, built
+        for the contact's mu and k."""
         lib = native.library()
         args = [np.ascontiguousarray(a, float) for a in np.broadcast_arrays(*v)]
         if lib is None or args[0].ndim != 1 or not np.all(args[2] != 0.0):
             return None
         cache = self.__dict__.get("_strips")  # frozen dataclass: cache by hand
-        if cache is None:
+        if cache is None or cache[1][6:] != (c.mu, c.k):
             arrays = tuple(
                 np.ascontiguousarray(a, float)
                 for a in (self.x, self.y, self.dist, self.mid, c.mu * self.p, self.weights)
@@ -550,7 +551,7 @@ class _Grid:
             st = native.Strips(
                 self.y.size, self.x.size, *(a.ctypes.data for a in arrays), c.k, TINY
             )
-            cache = self.__dict__["_strips"] = (st, arrays)
+            cache = self.__dict__["_strips"] = (st, (*arrays, c.mu, c.k))
         return lib, cache[0], args
 
 
