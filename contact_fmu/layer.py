@@ -480,6 +480,10 @@ class _Grid:
             lib.cf_strip_march(st, n, *(a.ctypes.data for a in args), tau.ctypes.data,
                                slip.ctypes.data, None, None)  # fmt: skip
             return tau, slip & self.inside
+        return self._march_numpy(c, vx, vy, Vx, phi)
+
+    def _march_numpy(self, c: LayerContact, vx, vy, Vx, phi) -> tuple[NDArray, NDArray]:
+        """``march`` in numpy, for every input (standstill included)."""
         vx, vy, Vx, phi = (np.asarray(a, float)[:, None, None] for a in (vx, vy, Vx, phi))
         s = np.sign(Vx)
         X = -np.where(s == 0, -1.0, s) * self.x  # node positions in march order
@@ -524,7 +528,7 @@ class _Grid:
         the march runs compiled."""
         compiled = self._compiled(c, vx, vy, Vx, phi)
         if compiled is None:
-            tau, _ = self.march(c, vx, vy, Vx, phi)
+            tau, _ = self._march_numpy(c, vx, vy, Vx, phi)
             return self.resultants(tau, np.sign(np.asarray(Vx, float)))
         lib, st, args = compiled
         T = np.empty(args[0].size, complex)
