@@ -170,6 +170,14 @@ class LayerContact:
         "beta_series": BETA_SERIES,
     }
 
+    @cached_property
+    def _native_params(self) -> native.Params:
+        """This law for stepper.c's layer functions (cf_layer_forces)."""
+        p = native.Params()
+        for k, v in (self.native_constants | self.native_fields()).items():
+            setattr(p, k, v)
+        return p
+
     def native_fields(self) -> dict[str, float]:
         """This law at its load for the compiled stepper (stepper.c, LAW_LAYER)."""
         return {
@@ -270,6 +278,14 @@ class LayerContact:
         """
         if isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float) and phi == 0.0:
             return self._forces_scalar(vx, vy, Vx)
+        lib, args = _rolling_inputs((vx, vy, phi, Vx), Vx_at=3)
+        if lib is not None:  # the same in C (stepper.c, cf_layer_forces), to rounding
+            out = np.empty((args[0].size, 3))
+            grid = self._grid(*SPIN_GRID).strips(self)
+            ptrs = (a.ctypes.data for a in args)
+            lib.cf_layer_forces(self._native_params, grid, out.shape[0], *ptrs, out.ctypes.data)
+            Tx, Ty, Mz = out.T.copy()
+            return Tx, Ty, Mz
         vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
         speed = np.hypot(vx, vy)
         beta = self.beta(vx, vy, Vx)
@@ -542,10 +558,12 @@ class _Grid:
         of these inputs runs compiled: the library is there and every input rolls (Vx != 0;
         standstill slides, in numpy). The struct points into arrays kept with it, built
         for the contact's mu and k."""
-        lib = native.library()
-        args = [np.ascontiguousarray(a, float) for a in np.broadcast_arrays(*v)]
-        if lib is None or args[0].ndim != 1 or not np.all(args[2] != 0.0):
-            return None
+        lib, args = _rolling_inputs(v, Vx_at=2)
+        return None if lib is None else (lib, self.strips(c), args)
+
+    def strips(self, c: LayerContact) -> native.Strips:
+        """This grid as stepper.c's cf_strips for the contact c (cached; it points into
+        arrays kept with it, built for c's mu and k)."""
         cache = self.__dict__.get("_strips")  # frozen dataclass: cache by hand
         if cache is None or cache[1][6:] != (c.mu, c.k):
             arrays = tuple(
@@ -556,7 +574,20 @@ class _Grid:
                 self.y.size, self.x.size, *(a.ctypes.data for a in arrays), c.k, TINY
             )
             cache = self.__dict__["_strips"] = (st, (*arrays, c.mu, c.k))
-        return lib, cache[0], args
+        return cache[0]
+
+
+def _rolling_inputs(v: tuple, Vx_at: int) -> tuple:
+    """(library, the inputs v as contiguous 1-D float arrays) where they can run compiled:
+    the library is there and every speed v[Vx_at] is nonzero (standstill slides, in
+    numpy); (None, None) otherwise."""
+    lib = native.library()
+    if lib is None:
+        return None, None
+    b = np.broadcast_arrays(*(np.asarray(a, float) for a in v))
+    if b[0].ndim != 1 or not np.all(b[Vx_at] != 0.0):  # (ascontiguousarray makes 0-d 1-d)
+        return None, None
+    return lib, [np.ascontiguousarray(a) for a in b]
 
 
 def _strip_weights(x: FloatArray, ell: FloatArray, inside: NDArray[np.bool_]) -> FloatArray:

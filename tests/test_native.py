@@ -183,8 +183,9 @@ def test_kernel_agrees_to_rounding_on_the_half_space_table(monkeypatch):
 
 def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
     """The thin-layer law with spin (LayerContact.forces, Eqs. 35 and 3-5 marched strip by
-    strip): the compiled march (cf_strip_march) against the numpy loop on random rolling
-    inputs (both directions) in partial slip and gross sliding. |tau| in C is sqrt(a^2 +
+    strip): the compiled law and march (cf_layer_forces, cf_strip_march) against numpy on
+    random rolling inputs (both directions) in partial slip and gross sliding, an eighth
+    of them without spin (the closed form of Eqs. 40-43). |tau| in C is sqrt(a^2 +
     b^2), within two roundings of numpy's complex abs, and the projection on |tau| <=
     mu p does not expand a difference, so along a strip of 64 nodes the tractions differ
     by at most about 128 roundings: 2e-14 of mu p0. The resultants are summed node by
@@ -199,6 +200,7 @@ def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
     cs = CONTACT.creep_full_slip
     vx, vy = (rng.uniform(-0.6, 0.6, n) * cs * np.abs(Vx) for _ in range(2))
     phi = rng.uniform(-1.0, 1.0, n) * cs / CONTACT.a1 * np.abs(Vx)
+    phi[: n // 8] = 0.0
     assert grid._compiled(CONTACT, vx, vy, Vx, phi) is not None  # the C path is taken
     tau_c, slip_c = grid.march(CONTACT, vx, vy, Vx, phi)
     forces_c = CONTACT.forces(vx, vy, phi, Vx)

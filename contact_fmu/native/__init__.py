@@ -6,8 +6,9 @@ only stage unknown, vy held at a ratio to Vx, no spin, held loads). The kernel m
 the Python code expression by expression: for the thin-layer law without lateral slip
 it gives the same doubles, otherwise the same to rounding (hypot, the table's patch
 sums); it answers "not covered" (the Python path then takes the step) for what it
-leaves out. See stepper.c. The same library holds the strip march of the thin-layer law
-with spin (``cf_strip_march``, called by layer._Grid.march when the library is there).
+leaves out. See stepper.c. The same library holds the thin-layer law for arrays, spin
+included (``cf_layer_forces``, ``cf_strip_march``: LayerContact.forces and
+layer._Grid.march call them for rolling inputs when the library is there).
 
 The body FMU's FMI calls themselves (doStep, setReal, getReal on the compiled step's
 path) have a CPython extension, fmi.c (``fmi_module``), that the adapter puts in place
@@ -175,6 +176,9 @@ def library() -> Any:
     lib.cf_body_outputs.restype = None
     lib.cf_strip_march.argtypes = [ctypes.POINTER(Strips), ctypes.c_int] + [ctypes.c_void_p] * 8
     lib.cf_strip_march.restype = None
+    lib.cf_layer_forces.argtypes = [ctypes.POINTER(Params), ctypes.POINTER(Strips), ctypes.c_int]
+    lib.cf_layer_forces.argtypes += [ctypes.c_void_p] * 5
+    lib.cf_layer_forces.restype = None
     return lib
 
 

@@ -542,53 +542,82 @@ typedef struct {
     double k, tiny;                /* kb + ks (m/Pa); layer.TINY */
 } cf_strips;
 
-/* For n rolling inputs (Vx != 0; layer.py keeps standstill in numpy), the march of
+/* One rolling input (Vx != 0; layer.py keeps standstill in numpy): the march of
  * layer._Grid.march along each strip from the leading edge, with its operations in its
  * order: inc = (1/(|Vx| k)) dist ((vx - phi y) + i (vy - s phi mid)), trial = t + inc,
  * slip = |trial| > cap, t = trial min(1, cap / max(|trial|, tiny)). Writes the field
- * (tau: complex as re, im pairs; slip: 0/1 bytes; (n x ny x nx), march order) where
- * tau is given, and the resultants of _Grid.resultants (T: re, im pairs; Mz) where T is
- * given. |trial| is sqrt(a^2 + b^2), within two roundings of numpy's complex abs (hypot
- * where the squares overflow), and the sums run in another order than numpy's: the two
- * paths agree to rounding, not bit for bit (tests/test_native.py). */
+ * (tau: complex as re, im pairs; slip: 0/1 bytes; ny x nx, march order) where tau is
+ * given, and always the resultants of _Grid.resultants, R = (Tx, Ty, Mz). |trial| is
+ * sqrt(a^2 + b^2), within two roundings of numpy's complex abs (hypot where the squares
+ * overflow), and the sums run in another order than numpy's: the two paths agree to
+ * rounding, not bit for bit (tests/test_native.py). */
+static void march_one(const cf_strips *g, double vx, double vy, double Vx, double phi,
+                      double *tau, unsigned char *slip, double R[3]) {
+    const int ny = g->ny, nx = g->nx;
+    const double s = Vx > 0.0 ? 1.0 : -1.0;
+    const double gain = 1.0 / (fabs(Vx) * g->k);
+    const double sphi = s * phi;
+    double Tr = 0.0, Ti = 0.0, M = 0.0;
+    for (int i = 0; i < ny; i++) {
+        const size_t row = (size_t)i * nx;
+        const double Y = g->y[i], re = vx - phi * Y;
+        double tr = 0.0, ti = 0.0;
+        for (int j = 0; j < nx; j++) {
+            const size_t e = row + j;
+            const double gd = gain * g->dist[e], c = g->cap[e];
+            const double a = tr + gd * re, b = ti + gd * (vy - sphi * g->mid[e]);
+            double mag = sqrt(a * a + b * b); /* hypot's cost, 5x, only on overflow */
+            if (!(mag <= DBL_MAX)) mag = hypot(a, b);
+            const double q = c / (g->tiny > mag ? g->tiny : mag);
+            const double f = q < 1.0 ? q : 1.0;
+            tr = a * f;
+            ti = b * f;
+            if (tau) {
+                tau[2 * e] = tr;
+                tau[2 * e + 1] = ti;
+                slip[e] = mag > c;
+            }
+            Tr += g->w[e] * tr;
+            Ti += g->w[e] * ti;
+            M += g->w[e] * (-s * g->x[j] * ti - Y * tr);
+        }
+    }
+    R[0] = Tr;
+    R[1] = Ti;
+    R[2] = M;
+}
+
+/* march_one for n inputs: the fields (n x ny x nx) where tau is given, the resultants
+ * (T: re, im pairs; Mz) where T is given. */
 void cf_strip_march(const cf_strips *g, int n, const double *vx, const double *vy,
                     const double *Vx, const double *phi, double *tau, unsigned char *slip,
                     double *T, double *Mz) {
-    const int ny = g->ny, nx = g->nx;
+    const size_t field = (size_t)g->ny * g->nx;
     for (int k = 0; k < n; k++) {
-        const double s = Vx[k] > 0.0 ? 1.0 : -1.0;
-        const double gain = 1.0 / (fabs(Vx[k]) * g->k);
-        const double sphi = s * phi[k];
-        double Tr = 0.0, Ti = 0.0, M = 0.0;
-        for (int i = 0; i < ny; i++) {
-            const size_t row = (size_t)i * nx;
-            const double Y = g->y[i], re = vx[k] - phi[k] * Y;
-            double tr = 0.0, ti = 0.0;
-            for (int j = 0; j < nx; j++) {
-                const size_t e = row + j;
-                const double gd = gain * g->dist[e], c = g->cap[e];
-                const double a = tr + gd * re, b = ti + gd * (vy[k] - sphi * g->mid[e]);
-                double mag = sqrt(a * a + b * b); /* hypot's cost, 5x, only on overflow */
-                if (!(mag <= DBL_MAX)) mag = hypot(a, b);
-                const double q = c / (g->tiny > mag ? g->tiny : mag);
-                const double f = q < 1.0 ? q : 1.0;
-                tr = a * f;
-                ti = b * f;
-                if (tau) {
-                    const size_t o = (size_t)k * ny * nx + e;
-                    tau[2 * o] = tr;
-                    tau[2 * o + 1] = ti;
-                    slip[o] = mag > c;
-                }
-                Tr += g->w[e] * tr;
-                Ti += g->w[e] * ti;
-                M += g->w[e] * (-s * g->x[j] * ti - Y * tr);
-            }
-        }
+        double R[3];
+        march_one(g, vx[k], vy[k], Vx[k], phi[k], tau ? tau + 2 * k * field : NULL,
+                  slip ? slip + k * field : NULL, R);
         if (T) {
-            T[2 * k] = Tr;
-            T[2 * k + 1] = Ti;
-            Mz[k] = M;
+            T[2 * k] = R[0];
+            T[2 * k + 1] = R[1];
+            Mz[k] = R[2];
+        }
+    }
+}
+
+/* LayerContact.forces for n rolling inputs: the closed form without spin (forces above,
+ * LayerContact._forces_scalar) plus, where phi != 0, the strip march with the spin less
+ * the march without it. out: (Tx, Ty, Mz) per input. */
+void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double *vx,
+                     const double *vy, const double *phi, const double *Vx, double *out) {
+    for (int k = 0; k < n; k++) {
+        double *T = out + 3 * k;
+        forces(p, vx[k], vy[k], Vx[k], T);
+        if (phi[k] != 0.0) {
+            double with[3], without[3];
+            march_one(g, vx[k], vy[k], Vx[k], phi[k], NULL, NULL, with);
+            march_one(g, vx[k], vy[k], Vx[k], 0.0, NULL, NULL, without);
+            for (int c = 0; c < 3; c++) T[c] += with[c] - without[c];
         }
     }
 }
