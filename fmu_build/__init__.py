@@ -94,8 +94,9 @@ def names(cfg: ModelConfig, key: str) -> tuple[str, str, str]:
 def compiles(cfg: ModelConfig) -> bool:
     """Whether the FMU carries the compiled code of contact_fmu/native (and its C
     sources): body FMUs, whose stepper and FMI calls run in it. The other modes import
-    native only through the thin-layer law's strip march, which runs with spin alone,
-    and spin is a body-mode input (ModelConfig), so they carry the loader's Python only."""
+    native only through the thin-layer law, whose compiled parts serve arrays of inputs
+    and spin; a contact FMU evaluates it for one float input without spin (spin is a
+    body-mode input, ModelConfig), in math, so it carries the loader's Python only."""
     return cfg.mode == "body"
 
 
