@@ -14,7 +14,8 @@ All in one process and one run, so that ratios are fair on a shared, noisy machi
    as pythonfmu calls it (set_real, do_step, get_real) without FMI. *model*: the same
    model object stepped without FMI (its compiled step through ctypes, or Python).
 2. Creep-law evaluations per second, vectorised: the thin-layer law (LayerContact.forces
-   on arrays; without spin, the closed form; with spin, the strip march) and, if the
+   on arrays; without spin, the closed form; with spin, the strip march; compiled,
+   stepper.c's cf_layer_forces, where the library is, else numpy) and, if the
    half-space package is present, its creep-force table (CreepTable.forces); the float
    fast path per call as a baseline.
 3. fmpy throughput of the Fig. 12 and Fig. 13 scenes: fmpy.simulate_fmu of every case
@@ -27,6 +28,7 @@ All in one process and one run, so that ratios are fair on a shared, noisy machi
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import datetime
 import importlib
@@ -43,6 +45,7 @@ import numpy as np
 
 import fmu_build
 from contact_fmu import examples as ex
+from contact_fmu import native
 from contact_fmu.report.output import replace_section
 from contact_fmu.scenario import discover, load, runner
 from contact_fmu.scenario.instance import OK, Instance
@@ -301,31 +304,41 @@ def _rate(fn, n: int, repeats: int) -> float:
     return n / best
 
 
+@contextlib.contextmanager
+def _numpy_only(on: bool):
+    """With ``on``, the law runs as without the compiled library (its numpy path)."""
+    saved = dict(native._LOADED)
+    if on:
+        native._LOADED["stepper"] = None
+    try:
+        yield
+    finally:
+        native._LOADED.clear()
+        native._LOADED.update(saved)
+
+
 def law_rates(repeats: int) -> list[dict]:
     rng = np.random.default_rng(1)
     c = ex.contact()
     V = 5.0
     rows = []
+    compiled = native.library() is not None
     for n in (10_000, 1_000_000):
         vx = rng.uniform(-2, 2, n) * c.creep_full_slip * V
         vy = rng.uniform(-1, 1, n) * c.creep_full_slip * V
-        rows.append(
-            {
-                "law": "thin layer, vectorised (Eqs. 40-43)",
-                "n": n,
-                "rate": _rate(lambda vx=vx, vy=vy: c.forces(vx, vy, 0.0, V), n, repeats),
-            }
-        )
+        for numpy in (False, True) if compiled and n == 10_000 else (not compiled,):
+            with _numpy_only(numpy):
+                rate = _rate(lambda vx=vx, vy=vy: c.forces(vx, vy, 0.0, V), n, repeats)
+            law = "thin layer, vectorised (Eqs. 40-43)"
+            rows.append({"law": f"{law}, {'numpy' if numpy else 'C'}", "n": n, "rate": rate})
     n = 200
     vx = rng.uniform(-2, 2, n) * c.creep_full_slip * V
     phi = rng.uniform(0.1, 1.0, n)
-    rows.append(
-        {
-            "law": "thin layer with spin, vectorised (strip march 64 x 48)",
-            "n": n,
-            "rate": _rate(lambda: c.forces(vx, 0.0 * vx, phi, V), n, repeats),
-        }
-    )
+    for numpy in (False, True) if compiled else (True,):
+        with _numpy_only(numpy):
+            rate = _rate(lambda: c.forces(vx, 0.0 * vx, phi, V), n, repeats)
+        law = "thin layer with spin, vectorised (strip march 64 x 48)"
+        rows.append({"law": f"{law}, {'numpy' if numpy else 'C'}", "n": n, "rate": rate})
     pts = [(float(a), 0.0, V) for a in rng.uniform(-2, 2, 20_000) * c.creep_full_slip * V]
 
     def scalar() -> None:
@@ -489,7 +502,8 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
         "",
         f"Best of {repeats}; random creepages up to twice the onset of full slip. Target of "
         f"issue 6: at least {TARGET_RATE:.0e} vectorised evaluations per second for the "
-        "thin-layer law.",
+        "thin-layer law. C: the law compiled (stepper.c, cf_layer_forces; where the "
+        "library is); numpy: the same law without the library, in the same run.",
         "",
         "| law | evaluations per call | evaluations/s |",
         "|---|---|---|",
