@@ -178,6 +178,10 @@ class LayerContact:
             setattr(p, k, v)
         return p
 
+    def __getstate__(self) -> dict:
+        """Pickle and deepcopy without the ctypes caches (rebuilt on use)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_native_params"}
+
     def native_fields(self) -> dict[str, float]:
         """This law at its load for the compiled stepper (stepper.c, LAW_LAYER)."""
         return {
@@ -560,6 +564,10 @@ class _Grid:
         for the contact's mu and k."""
         lib, args = _rolling_inputs(v, Vx_at=2)
         return None if lib is None else (lib, self.strips(c), args)
+
+    def __getstate__(self) -> dict:
+        """Pickle and deepcopy without the ctypes struct (rebuilt on use)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_strips"}
 
     def strips(self, c: LayerContact) -> native.Strips:
         """This grid as stepper.c's cf_strips for the contact c (cached; it points into

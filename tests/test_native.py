@@ -220,6 +220,25 @@ def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
         assert np.abs(a - b).max() <= 7e-13 * scale
 
 
+def test_a_law_that_ran_compiled_pickles_and_copies():
+    """The compiled law keeps ctypes structs (parameters, the spin grid) on the law and
+    its grid; pickle and deepcopy (a host's parallel sweep, an FMU state) leave them out
+    and the copy rebuilds them: its forces equal the original's."""
+    import copy
+    import pickle
+
+    law = ex.contact()
+    args = (
+        np.array([1e-3, -2e-3]),
+        np.array([0.0, 1e-3]),
+        np.array([0.5, 0.0]),
+        np.array([5.0, -3.0]),
+    )
+    before = law.forces(*args)
+    for twin in (pickle.loads(pickle.dumps(law)), copy.deepcopy(law)):
+        assert np.array_equal(np.array(twin.forces(*args)), np.array(before))
+
+
 def test_both_libraries_build_where_a_compiler_and_python_headers_are():
     """Not a skip in disguise: with cc and Python.h on the machine (CI has both), the
     stepper and the FMI calls' extension must compile and load, or the tests that skip
