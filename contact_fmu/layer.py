@@ -306,10 +306,10 @@ class LayerContact:
             v = (vx[spinning], vy[spinning], Vx[spinning])
             n = v[0].size
             grid = self._grid(*SPIN_GRID)
-            R = grid.march_resultants(
+            tau, _ = grid.march(
                 self, *(np.tile(a, 2) for a in v), np.r_[phi[spinning], np.zeros(n)]
             )
-            dT, dM = (r[:n] - r[n:] for r in R)
+            dT, dM = (r[:n] - r[n:] for r in grid.resultants(tau, np.tile(np.sign(v[2]), 2)))
             Tx[spinning] += dT.real
             Ty[spinning] += dT.imag
             Mz[spinning] += dM
@@ -498,7 +498,7 @@ class _Grid:
             tau = np.empty((n, ny, nx), complex)
             slip = np.empty((n, ny, nx), bool)
             lib.cf_strip_march(st, n, *(a.ctypes.data for a in args), tau.ctypes.data,
-                               slip.ctypes.data, None, None)  # fmt: skip
+                               slip.ctypes.data)  # fmt: skip
             return tau, slip & self.inside
         return self._march_numpy(c, vx, vy, Vx, phi)
 
@@ -541,20 +541,6 @@ class _Grid:
         Y = self.y[:, None]
         T = np.sum(w * tau, axis=(1, 2))
         Mz = np.sum(w * (X * tau.imag - Y * tau.real), axis=(1, 2))
-        return T, Mz
-
-    def march_resultants(self, c: LayerContact, vx, vy, Vx, phi) -> tuple[NDArray, FloatArray]:
-        """``resultants`` of ``march`` for n inputs (1-D arrays), without the field where
-        the march runs compiled."""
-        compiled = self._compiled(c, vx, vy, Vx, phi)
-        if compiled is None:
-            tau, _ = self._march_numpy(c, vx, vy, Vx, phi)
-            return self.resultants(tau, np.sign(np.asarray(Vx, float)))
-        lib, st, args = compiled
-        T = np.empty(args[0].size, complex)
-        Mz = np.empty(args[0].size)
-        lib.cf_strip_march(st, T.size, *(a.ctypes.data for a in args), None, None,
-                           T.ctypes.data, Mz.ctypes.data)  # fmt: skip
         return T, Mz
 
     def _compiled(self, c: LayerContact, *v) -> tuple | None:

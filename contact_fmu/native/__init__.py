@@ -174,7 +174,7 @@ def library() -> Any:
     lib.cf_body_step.restype = ctypes.c_int
     lib.cf_body_outputs.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
     lib.cf_body_outputs.restype = None
-    lib.cf_strip_march.argtypes = [ctypes.POINTER(Strips), ctypes.c_int] + [ctypes.c_void_p] * 8
+    lib.cf_strip_march.argtypes = [ctypes.POINTER(Strips), ctypes.c_int] + [ctypes.c_void_p] * 6
     lib.cf_strip_march.restype = None
     lib.cf_layer_forces.argtypes = [ctypes.POINTER(Params), ctypes.POINTER(Strips), ctypes.c_int]
     lib.cf_layer_forces.argtypes += [ctypes.c_void_p] * 5

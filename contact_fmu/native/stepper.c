@@ -587,21 +587,13 @@ static void march_one(const cf_strips *g, double vx, double vy, double Vx, doubl
     R[2] = M;
 }
 
-/* march_one for n inputs: the fields (n x ny x nx) where tau is given, the resultants
- * (T: re, im pairs; Mz) where T is given. */
+/* march_one for n inputs: the fields tau and slip, (n x ny x nx). */
 void cf_strip_march(const cf_strips *g, int n, const double *vx, const double *vy,
-                    const double *Vx, const double *phi, double *tau, unsigned char *slip,
-                    double *T, double *Mz) {
+                    const double *Vx, const double *phi, double *tau, unsigned char *slip) {
     const size_t field = (size_t)g->ny * g->nx;
     for (int k = 0; k < n; k++) {
         double R[3];
-        march_one(g, vx[k], vy[k], Vx[k], phi[k], tau ? tau + 2 * k * field : NULL,
-                  slip ? slip + k * field : NULL, R);
-        if (T) {
-            T[2 * k] = R[0];
-            T[2 * k + 1] = R[1];
-            Mz[k] = R[2];
-        }
+        march_one(g, vx[k], vy[k], Vx[k], phi[k], tau + 2 * k * field, slip + k * field, R);
     }
 }
 
