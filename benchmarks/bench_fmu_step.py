@@ -79,9 +79,34 @@ def time_fmu(
     return float(t_fmu), float(t_model) if with_model else float("nan"), last
 
 
-def _model(scene, case, inputs: dict[str, float]):
-    """The scene's model object as the adapter builds it, outside any FMU."""
-    cfg = scene.config
+def time_full_model(scene, case, n: int, repeats: int) -> tuple[float, float]:
+    """Best mean seconds per step of the full body FMU's model object stepped directly
+    (no FMI), its stepper compiled (stepper.c's vector step, Eqs. 10-11 integrated) and
+    in Python (RollingBody._lobatto_vector), interleaved step by step; NaN, NaN in
+    contact mode (no stepper)."""
+    cfg = ModelConfig.full(scene.config.mode)
+    if cfg.mode != "body":
+        return float("nan"), float("nan")
+    table = runner.input_table(scene, case)
+    rows = [{i: float(table[i][k]) for i in scene.inputs} for k in range(n)]
+    times = np.full((2, WARMUP + repeats, n), np.inf)
+    for r in range(WARMUP + repeats):
+        models = [_model(scene, case, rows[0], cfg) for _ in range(2)]
+        models[1].stepper._kernel = None  # the Python stepper
+        for k in range(n):
+            for i, model in enumerate(models):
+                t0 = time.perf_counter()
+                model.step(scene.step, rows[k])
+                model.outputs()
+                times[i, r, k] = time.perf_counter() - t0
+    compiled, python = np.mean(np.min(times[:, WARMUP:], axis=1), axis=1)
+    return float(compiled), float(python)
+
+
+def _model(scene, case, inputs: dict[str, float], cfg: ModelConfig | None = None):
+    """The model object of the scene's FMU (or of ``cfg``'s) as the adapter builds it,
+    outside any FMU."""
+    cfg = cfg or scene.config
     module = importlib.import_module(f"contact_fmu.{cfg.model_module}")
     params = {v.name: cfg.start(v) for v in cfg.variables if v.causality[cfg.mode] == "parameter"}
     params.update(runner.start_values(scene, case))
@@ -103,6 +128,7 @@ def measure(steps: int, repeats: int) -> list[dict]:
         big = full[scene.config.mode]
         t_own, t_model, out_own = time_fmu(own.path, scene, case, n, repeats, with_model=True)
         t_full, _, out_full = time_fmu(big.path, scene, case, n, max(2, repeats // 2))
+        t_full_c, t_full_py = time_full_model(scene, case, n, max(2, repeats // 2))
         rows.append(
             {
                 "scene": scene.name,
@@ -116,6 +142,8 @@ def measure(steps: int, repeats: int) -> list[dict]:
                 "step": t_own,
                 "step_full": t_full,
                 "model": t_model,
+                "full_model": t_full_c,
+                "full_model_py": t_full_py,
                 "dTx": abs(out_own["Tx"] - out_full["Tx"]),
                 "n": n,
                 "lateral": scene.config.vy != "zero",
@@ -129,16 +157,20 @@ def table(rows: list[dict]) -> str:
     """The step-cost table with its footnote (Markdown)."""
     lines = [
         "| scene | mode | variables (full) | FMU size KiB (full) | modules (full) "
-        "| step ms | full FMU step ms | model ms | abs(Tx - Tx_full) N |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| step ms | full FMU step ms | model ms | full model ms: compiled / Python "
+        "| abs(Tx - Tx_full) N |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         note = " (*)" if r["lateral"] else ""
+        c, py = r["full_model"], r["full_model_py"]
+        full_model = "-" if np.isnan(c) else f"{c * 1e3:.3f} / {py * 1e3:.3f} ({py / c:.1f}x)"
         lines.append(
             f"| {r['scene']} | {r['mode']} | {r['vars']} ({r['vars_full']}) "
             f"| {r['size'] / 1024:.0f} ({r['size_full'] / 1024:.0f}) "
             f"| {r['files']} ({r['files_full']}) | {r['step'] * 1e3:.3f} "
-            f"| {r['step_full'] * 1e3:.3f} | {r['model'] * 1e3:.3f} | {r['dTx']:.1e}{note} |"
+            f"| {r['step_full'] * 1e3:.3f} | {r['model'] * 1e3:.3f} | {full_model} "
+            f"| {r['dTx']:.1e}{note} |"
         )
     lines += [
         "",
@@ -161,7 +193,10 @@ def markdown(rows: list[dict], steps: int, repeats: int) -> str:
         "through fmpy's FMU2Slave. The full FMU of a mode holds every variable and model "
         "part (Eqs. 10-11 integrated, both steppers); it runs the scene's inputs with its "
         "extra inputs at 0. *model*: the scene's model object stepped in Python without "
-        "FMI, timed step by step between the scene FMU's steps.\n\n" + table(rows) + "\n"
+        "FMI, timed step by step between the scene FMU's steps. *full model*: the full "
+        "FMU's model object stepped the same way, its stepper compiled (stepper.c's "
+        "vector step) and in Python, interleaved step by step (fastest of "
+        f"{max(2, repeats // 2)} runs each).\n\n" + table(rows) + "\n"
     )
 
 

@@ -150,7 +150,7 @@ class RollingBody(BodyState):
             raise InputError("substeps", substeps, ">= 1")
         if self._kernel is not None and not callable(loads):
             L = _checked(loads)
-            if self._kernel.advance(self, h, L.Fx_ex, L.My_ex, substeps):
+            if self._kernel.advance(self, h, L, substeps):
                 return  # else a case the kernel leaves to this code
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
         saved = (self.y.copy(), self.t, self.sliding, self.out, self._dv)
@@ -171,18 +171,21 @@ class RollingBody(BodyState):
 
     def _native_kernel(self) -> native.Kernel | None:
         """The compiled twin of this stepper's path (contact_fmu/native), where it
-        covers it: Lobatto IIIC, a law with ``native_constants`` (thin layer, half-space
-        table), vx the only unknown, vy held at a ratio, no spin. The Python path's
-        doubles for the thin layer without lateral slip, the same to rounding else."""
+        covers it: Lobatto IIIC and a law with ``native_constants`` (thin layer,
+        half-space table), and either vx the only unknown with vy held at a ratio and no
+        spin (``_lobatto_scalar``: the Python path's doubles for the thin layer without
+        lateral slip, the same to rounding else) or the full method with Vy and/or
+        Omega_z as unknowns (``_lobatto_vector``: the same to the stage tolerance)."""
         law_constants = getattr(type(self.law), "native_constants", None)
-        covered = (
-            law_constants is not None
-            and self.scheme == "lobatto3c"
-            and len(self._idx) == 1
+        if law_constants is None or self.scheme != "lobatto3c":
+            return None
+        scalar = (
+            len(self._idx) == 1
             and self.lateral.vy_ratio is not None
             and self.lateral.spin_ratio == 0.0
         )
-        lib = native.library() if covered else None
+        vector = len(self._idx) > 1 and self.method == "full"
+        lib = native.library() if scalar or vector else None
         if lib is None:
             return None
         constants = law_constants | {
@@ -193,7 +196,12 @@ class RollingBody(BodyState):
             "solve_rtol": solvers.SOLVE_RTOL,
             "expand": solvers.EXPAND,
             "max_newton": solvers.MAX_NEWTON,
+            "fd_step": solvers.FD_STEP,
+            "line_search_min": solvers.LINE_SEARCH_MIN,
+            "newton_iterations": solvers.NEWTON_ITERATIONS,
         }
+        if vector:
+            return native.VectorKernel(lib, constants)
         return native.Kernel(lib, constants, self.method == "quasistationary")
 
     def _exact_in_one_step(self, loads: LoadInput) -> bool:
@@ -361,16 +369,36 @@ class RollingBody(BodyState):
             T[self._act] = F2
             return Y2[0], T
 
+        last: dict[str, FloatArray] = {}  # the stage forces at the last single point
+
         def residuals(UU: FloatArray) -> FloatArray:
             U1, U2 = UU[:, :n], UU[:, n:]
             Y = np.concatenate([states(U1, 0), states(U2, 1)])
             T = self._forces(Y)[:, self._act]
             k = UU.shape[0]
+            if k == 1:
+                last["u"], last["T"] = UU[0].copy(), T
             R1 = m * (U1 + U2 - 2 * un) / h + T[:k] - F1
             R2 = m * (U2 - U1) / h + T[k:] - F2
             return np.concatenate([R1, R2], axis=1)
 
-        UU = newton(residuals, np.concatenate([un, un]), np.concatenate([scale, scale]))
+        def jacobian(u: FloatArray, du: FloatArray) -> FloatArray:
+            """dR/du: the mass terms exactly, T(u_i) by forward differences in stage
+            i's unknowns only (T(u1) does not move with u2: 2n law inputs, not 4n)."""
+            T = last["T"] if np.array_equal(last.get("u"), u) else None
+            U = u + np.diag(du)
+            Y = [states(U[:n, :n], 0), states(U[n:, n:], 1)]
+            if T is None:
+                Y += [states(u[None, :n], 0), states(u[None, n:], 1)]
+            Tp = self._forces(np.concatenate(Y))[:, self._act]
+            if T is None:
+                T = Tp[2 * n :]
+            d1 = (Tp[:n] - T[0]).T / du[:n]
+            d2 = (Tp[n : 2 * n] - T[1]).T / du[n:]
+            D = np.diag(m / h)
+            return np.block([[D + d1, D], [-D, D + d2]])
+
+        UU = newton(residuals, np.concatenate([un, un]), np.concatenate([scale, scale]), jacobian)
         Y2 = states(UU[None, n:], 1)
         return Y2[0], self._forces(Y2)[0]
 

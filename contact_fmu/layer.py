@@ -182,6 +182,10 @@ class LayerContact:
         """Pickle and deepcopy without the ctypes caches (rebuilt on use)."""
         return {k: v for k, v in self.__dict__.items() if k != "_native_params"}
 
+    def native_strips(self) -> native.Strips:
+        """The spin grid of ``forces`` as stepper.c's cf_strips (kept by this law)."""
+        return self._grid(*SPIN_GRID).strips(self)
+
     def native_fields(self) -> dict[str, float]:
         """This law at its load for the compiled stepper (stepper.c, LAW_LAYER)."""
         return {
@@ -285,7 +289,7 @@ class LayerContact:
         lib, args = _rolling_inputs((vx, vy, phi, Vx), Vx_at=3)
         if lib is not None:  # the same in C (stepper.c, cf_layer_forces), to rounding
             out = np.empty((args[0].size, 3))
-            grid = self._grid(*SPIN_GRID).strips(self)
+            grid = self.native_strips()
             ptrs = (a.ctypes.data for a in args)
             lib.cf_layer_forces(self._native_params, grid, out.shape[0], *ptrs, out.ctypes.data)
             Tx, Ty, Mz = out.T.copy()

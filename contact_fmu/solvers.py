@@ -14,6 +14,9 @@ FloatArray = NDArray[np.float64]
 SOLVE_RTOL = 1e-13
 # Relative forward-difference step of the Newton Jacobian (about sqrt of the rounding).
 FD_STEP = 1e-7
+# ``newton``: iteration cap before scipy's hybrid method, smallest backtracking fraction.
+NEWTON_ITERATIONS = 50
+LINE_SEARCH_MIN = 1e-4
 # Bracket search: the step grows by this factor, at most this many times.
 EXPAND = 4.0
 MAX_EXPANSIONS = 60
@@ -94,20 +97,28 @@ def newton_increasing(
 
 
 def newton(
-    residuals: Callable[[FloatArray], FloatArray], u0: FloatArray, scale: FloatArray
+    residuals: Callable[[FloatArray], FloatArray],
+    u0: FloatArray,
+    scale: FloatArray,
+    jacobian: Callable[[FloatArray, FloatArray], FloatArray] | None = None,
 ) -> FloatArray:
     """Solve residuals(u) = 0, u of shape (n,).
 
     ``residuals`` takes a batch U (k, n) and returns (k, n), so that the
-    forward-difference Jacobian costs one call. Newton with backtracking on |r|;
-    scipy's hybrid method if that stalls.
+    forward-difference Jacobian costs one call. ``jacobian(u, du)``, if given, returns
+    that Jacobian (n, n) for the steps du instead (a caller that knows which residuals
+    an unknown moves evaluates fewer). Newton with backtracking on |r|; scipy's hybrid
+    method if that stalls.
     """
     n = len(u0)
     u = np.array(u0, float)
     r = residuals(u[None, :])[0]
-    for _ in range(50):
+    for _ in range(NEWTON_ITERATIONS):
         du = FD_STEP * (np.abs(u) + scale)
-        J = (residuals(u + np.diag(du)) - r).T / du
+        if jacobian is None:
+            J = (residuals(u + np.diag(du)) - r).T / du
+        else:
+            J = jacobian(u, du)
         try:
             step = np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
@@ -116,7 +127,7 @@ def newton(
         while True:
             u_new = u + lam * step
             r_new = residuals(u_new[None, :])[0]
-            if np.linalg.norm(r_new) < norm0 or lam < 1e-4:
+            if np.linalg.norm(r_new) < norm0 or lam < LINE_SEARCH_MIN:
                 break
             lam *= 0.5
         u, r = u_new, r_new

@@ -69,16 +69,16 @@ def _advance(body, args):
     return None
 
 
-def _counting(monkeypatch) -> dict[str, int]:
+def _counting(monkeypatch, kernel: type = native.Kernel) -> dict[str, int]:
     counts = {"kernel": 0, "python": 0}
-    original = native.Kernel.advance
+    original = kernel.advance
 
     def counted(self, *args):
         result = original(self, *args)
         counts["kernel" if result else "python"] += 1
         return result
 
-    monkeypatch.setattr(native.Kernel, "advance", counted)
+    monkeypatch.setattr(kernel, "advance", counted)
     return counts
 
 
@@ -109,9 +109,96 @@ def test_kernel_agrees_to_rounding_with_a_held_lateral_ratio(vy_ratio):
 
 def test_paths_the_kernel_leaves_out_step_in_python():
     body = Body.from_eta(1.0, 0.05, 3.0)
+    dynamic_vy = Lateral(vy_ratio=None)
     assert RollingBody(CONTACT, body, scheme="sdirk2")._kernel is None
     assert RollingBody(CONTACT, body, Lateral(spin_ratio=1.0))._kernel is None
-    assert RollingBody(CONTACT, body, Lateral(vy_ratio=None))._kernel is None
+    assert RollingBody(CONTACT, body, dynamic_vy, scheme="sdirk2")._kernel is None
+    assert RollingBody(CONTACT, body, dynamic_vy, method="quasistationary")._kernel is None
+    assert type(RollingBody(CONTACT, body, dynamic_vy)._kernel) is native.VectorKernel
+
+
+# Eq. (10) and/or Eq. (11) integrated (the vector path), the other rate held at a ratio
+VECTOR_PATHS = (
+    Lateral(vy_ratio=None, spin_ratio=None),
+    Lateral(vy_ratio=None, spin_ratio=2.0),
+    Lateral(vy_ratio=0.01, spin_ratio=None),
+)
+
+
+def _vector_histories(law, rng, body_of, V0s, steps):
+    """Random histories of all four loads (to 1.2 mu P: gross sliding; Fy_ex and Mz_ex
+    drive Vy and Omega_z), steps of 1e-8 to 1 s in 1-4 substeps, load changes, for
+    each vector path, eta (inf: no slip mass) and initial speed (reversed included)."""
+    cap = law.mu * law.P
+    for lateral in VECTOR_PATHS:
+        for eta in (1.0, math.inf):
+            for V0 in V0s:
+                body = body_of(eta)
+                a, b = (
+                    RollingBody(
+                        law,
+                        body,
+                        lateral,
+                        Vx0=V0,
+                        Omega_y0=V0 / body.Rx * 0.999,
+                        Vy0=0.01 * V0,
+                        Omega_z0=0.3 * V0,
+                    )
+                    for _ in range(2)
+                )
+                b._kernel = None
+                for _ in range(steps):
+                    L = Loads(
+                        rng.uniform(-1.2, 1.2) * cap,
+                        rng.uniform(-0.8, 0.8) * cap,
+                        rng.uniform(-0.5, 0.5) * cap * body.Rx * 0.05,
+                        rng.uniform(-1.0, 1.0) * cap * law.a1 * 0.1,
+                    )
+                    if rng.uniform() < 0.1:
+                        P = law.P * rng.uniform(0.5, 1.5)
+                        a.set_load(P)
+                        b.set_load(P)
+                    yield a, b, (10 ** rng.uniform(-8, 0), L, int(rng.integers(1, 5)))
+
+
+def _assert_vector_paths_agree(law, histories):
+    """Both paths run solvers.newton's iteration to SOLVE_RTOL = 1e-13 of (|u| + scale)
+    on the same residuals; their Jacobians differ by rounding (another elimination
+    order than LAPACK's), so the converged stage unknowns differ by about that
+    tolerance, and the L-stable step does not amplify it from step to step: 1e-12 of
+    the scale (measured: 5e-14). The forces are Lipschitz in u with constant about
+    mu P / scale: 1e-12 of mu P (of mu P a1 for Mz)."""
+    cap = law.mu * law.P
+    for a, b, args in histories:
+        assert _advance(a, args) == _advance(b, args)
+        v = law.creep_full_slip * max(abs(b.y[0]), 1e-9)  # the stage solves' scale
+        assert abs(a.y[0] - b.y[0]) <= 1e-12 * max(abs(b.y[0]), 1e-9)
+        for k, unit in ((1, v), (2, v), (3, v / law.a1)):
+            assert abs(a.y[k] - b.y[k]) <= 1e-12 * (abs(b.y[k]) + unit)
+        assert abs(a.out.Tx - b.out.Tx) <= 1e-12 * cap
+        assert abs(a.out.Ty - b.out.Ty) <= 1e-12 * cap
+        assert abs(a.out.Mz - b.out.Mz) <= 1e-12 * cap * law.a1
+        assert a.out.sliding == b.out.sliding and a.t == b.t
+        # _dv = (vx - vx_n)/dt of the last substep dt: the vx bound over dt, twice
+        dt = args[0] / args[2]
+        assert abs(a._dv - b._dv) <= 2e-12 * (abs(b.y[1]) + v) / dt
+
+
+def test_vector_kernel_agrees_with_the_python_path_on_the_thin_layer(monkeypatch):
+    """Eqs. (8)-(11) with the thin-layer law and spin (the strip march in the stage
+    residuals): the compiled Lobatto IIIC vector step (cf_advance_vector) against
+    RollingBody._lobatto_vector."""
+    counts = _counting(monkeypatch, native.VectorKernel)
+    histories = _vector_histories(
+        CONTACT,
+        np.random.default_rng(3),
+        lambda eta: Body.from_eta(1.0, 0.05, eta, Iz=2e-3),
+        V0s=(5.0, 1e-3, -2.0),
+        steps=12,
+    )
+    _assert_vector_paths_agree(CONTACT, histories)
+    # eta = inf with loads beyond mu P: both raise (the kernel leaves them to Python)
+    assert counts["kernel"] > 0.9 * (counts["kernel"] + counts["python"])
 
 
 def test_without_the_library_the_stepper_is_unchanged(monkeypatch):
@@ -145,16 +232,36 @@ def test_newton_stops_at_a_step_below_the_rounding_of_u():
     assert worst <= 13
 
 
-def test_kernel_agrees_to_rounding_on_the_half_space_table(monkeypatch):
+@pytest.fixture(scope="module")
+def table():
+    """A small creep-force table of the railway wheel (8 x 8 solver grid)."""
+    from contact_fmu.halfspace.railway import wheel_on_rail
+    from contact_fmu.halfspace.table import build_table
+
+    return build_table(wheel_on_rail(n=8), nodes=(9, 9, 5))
+
+
+def test_vector_kernel_agrees_with_the_python_path_on_the_half_space_table(monkeypatch, table):
+    """The same on the creep-force table with spin (table_scalar with phi): the vector
+    step of a railway wheel against RollingBody._lobatto_vector."""
+    counts = _counting(monkeypatch, native.VectorKernel)
+    histories = _vector_histories(
+        table,
+        np.random.default_rng(4),
+        lambda eta: Body.from_eta(500.0, 0.46, eta, Iz=50.0),
+        V0s=(20.0, -5.0),
+        steps=10,
+    )
+    _assert_vector_paths_agree(table, histories)
+    assert counts["kernel"] > 0.9 * (counts["kernel"] + counts["python"])
+
+
+def test_kernel_agrees_to_rounding_on_the_half_space_table(monkeypatch, table):
     """The half-space creep-force table (CreepTable, LAW_TABLE in stepper.c): the same
     Hermite patches, clamp and saturation, summed in another order than numpy's, so the
     two paths agree to rounding: states and forces within 1e-12 of their scales over
     random histories (loads beyond mu P, eta to inf, a held lateral ratio, reversal)."""
-    from contact_fmu.halfspace.railway import wheel_on_rail
-    from contact_fmu.halfspace.table import build_table
-
     counts = _counting(monkeypatch)
-    table = build_table(wheel_on_rail(n=8), nodes=(9, 9, 5))
     cap = table.mu * table.P
     rng = np.random.default_rng(5)
     for method in ("full", "quasistationary"):

@@ -91,7 +91,7 @@ class BodyModel:
         """The whole step in compiled code (contact_fmu/native) where the stepper's path
         is covered, else None. Same results as ``step`` + ``outputs``."""
         kernel = getattr(self.stepper, "_kernel", None)
-        if kernel is None:
+        if kernel is None or isinstance(kernel, native.VectorKernel):  # cf_body_step: scalar
             return None
         constants = {
             "v_creep_floor": V_CREEP_FLOOR,

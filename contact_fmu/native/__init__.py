@@ -6,7 +6,9 @@ only stage unknown, vy held at a ratio to Vx, no spin, held loads). The kernel m
 the Python code expression by expression: for the thin-layer law without lateral slip
 it gives the same doubles, otherwise the same to rounding (hypot, the table's patch
 sums); it answers "not covered" (the Python path then takes the step) for what it
-leaves out. See stepper.c. The same library holds the thin-layer law for arrays, spin
+leaves out. ``VectorKernel`` does the same for the full method with Vy and/or Omega_z
+as stage unknowns (Eqs. 10-11; the law with spin), equal to the Python path to the
+stage tolerance. See stepper.c. The same library holds the thin-layer law for arrays, spin
 included (``cf_layer_forces``, ``cf_strip_march``: LayerContact.forces and
 layer._Grid.march call them for rolling inputs when the library is there).
 
@@ -37,6 +39,8 @@ from importlib.util import module_from_spec, spec_from_file_location
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 SOURCE = Path(__file__).with_name("stepper.c")
 # No contraction into fused multiply-adds, no fast math: the Python path's roundings.
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math")
@@ -55,7 +59,10 @@ class Params(ctypes.Structure):
         (n, ctypes.c_void_p) for n in ("coef", "ax1", "ax2", "ax3")
     ] + [(n, ctypes.c_int) for n in ("n1", "n2", "n3")] + [
         (n, ctypes.c_double)
-        for n in ("ext1", "ext2", "ext3", "xi_ref", "phi_ref", "c", "saturation_width")
+        for n in ("ext1", "ext2", "ext3", "xi_ref", "phi_ref", "c", "saturation_width", "Iz", "rz")
+    ] + [("dyn_vy", ctypes.c_int), ("dyn_spin", ctypes.c_int), ("strips", ctypes.c_void_p)] + [
+        ("fd_step", ctypes.c_double), ("line_search_min", ctypes.c_double),
+        ("newton_iterations", ctypes.c_int),
     ]  # fmt: skip
 
 
@@ -64,6 +71,14 @@ class State(ctypes.Structure):
         ("out_sliding", ctypes.c_int),
         ("sliding", ctypes.c_int),
     ]
+
+
+class VState(ctypes.Structure):
+    """stepper.c's cf_vstate: the state of the vector path (cf_advance_vector)."""
+
+    _fields_ = [
+        (n, ctypes.c_double) for n in ("Vx", "vx", "Vy", "Oz", "t", "dv", "Tx", "Ty", "Mz")
+    ] + [("out_sliding", ctypes.c_int)]
 
 
 # RollingBody.outputs() keys in the order of stepper.c's cf_body.out
@@ -179,6 +194,11 @@ def library() -> Any:
     lib.cf_layer_forces.argtypes = [ctypes.POINTER(Params), ctypes.POINTER(Strips), ctypes.c_int]
     lib.cf_layer_forces.argtypes += [ctypes.c_void_p] * 5
     lib.cf_layer_forces.restype = None
+    lib.cf_advance_vector.argtypes = [
+        ctypes.POINTER(Params), ctypes.POINTER(VState), ctypes.c_double,
+        ctypes.POINTER(ctypes.c_double * 4), ctypes.c_int,
+    ]  # fmt: skip
+    lib.cf_advance_vector.restype = ctypes.c_int
     return lib
 
 
@@ -222,17 +242,21 @@ class Kernel:
             p.M, p.Rx, p.A1, p.A2, p.m_slip = body.M, body.Rx, body.A1, body.A2, body.m_slip
             for k, v in law.native_fields().items():  # the law's (arrays kept by the law)
                 setattr(p, k, v)
-            p.ry = rb.lateral.vy_ratio
-            p.quasistationary = self._qs
+            self._path(p, rb)
             self._law = law
         return self._params
 
-    def advance(self, rb: Any, h: float, Fx_ex: float, My_ex: float, n: int) -> bool:
-        """Advance rb's state by h in n steps; False (rb unchanged) where the Python path
-        must take the step."""
+    def _path(self, p: Params, rb: Any) -> None:
+        """The fields of this kernel's path: the held lateral ratio, the method."""
+        p.ry = rb.lateral.vy_ratio
+        p.quasistationary = self._qs
+
+    def advance(self, rb: Any, h: float, loads: Any, n: int) -> bool:
+        """Advance rb's state by h in n steps under held ``loads`` (dynamics.Loads);
+        False (rb unchanged) where the Python path must take the step."""
         self.write(rb)
         s = ctypes.byref(self._state)
-        if self._advance(ctypes.byref(self._params), s, h, Fx_ex, My_ex, n) != OK:
+        if self._advance(ctypes.byref(self._params), s, h, loads.Fx_ex, loads.My_ex, n) != OK:
             return False
         self.read(rb)
         return True
@@ -251,6 +275,51 @@ class Kernel:
         s = self._state
         rb.y = rb._state(s.Vx, s.vx)
         rb.t, rb._dv, rb.sliding = s.t, s.dv, bool(s.sliding)
+        rb.out = type(rb.out)(s.Tx, s.Ty, s.Mz, bool(s.out_sliding))
+
+
+class VectorKernel(Kernel):
+    """The compiled Lobatto IIIC step of the full method with Vy and/or Omega_z as stage
+    unknowns (stepper.c, cf_advance_vector; integrator.RollingBody._lobatto_vector):
+    the same Newton iteration, equal to the Python path's to the stage tolerance."""
+
+    def __init__(self, lib: Any, constants: dict[str, float]) -> None:
+        super().__init__(lib, constants, quasistationary=False)
+        self._advance = lib.cf_advance_vector
+        self._state = VState()
+        self._loads = (ctypes.c_double * 4)()
+
+    def _path(self, p: Params, rb: Any) -> None:
+        """The held ratios (0 where a rate is a stage unknown), which are unknowns, Iz,
+        and the thin-layer law's spin grid (the law keeps it)."""
+        lateral = rb.lateral
+        p.ry = lateral.vy_ratio if lateral.vy_ratio is not None else 0.0
+        p.rz = lateral.spin_ratio if lateral.spin_ratio is not None else 0.0
+        p.dyn_vy, p.dyn_spin = int(lateral.dynamic_vy), int(lateral.dynamic_spin)
+        p.Iz = rb.body.Iz if rb.body.Iz is not None else 0.0
+        p.quasistationary = 0
+        strips = getattr(rb.law, "native_strips", None)
+        p.strips = None if strips is None else ctypes.addressof(strips())
+
+    def advance(self, rb: Any, h: float, loads: Any, n: int) -> bool:
+        self.write(rb)
+        self._loads[:] = (loads.Fx_ex, loads.Fy_ex, loads.My_ex, loads.Mz_ex)
+        if self._advance(ctypes.byref(self._params), self._state, h, self._loads, n) != OK:
+            return False
+        self.read(rb)
+        return True
+
+    def write(self, rb: Any) -> None:
+        s = self._state
+        s.Vx, s.vx, s.Vy, s.Oz = rb.y.tolist()
+        s.t, s.dv = rb.t, rb._dv
+        s.Tx, s.Ty, s.Mz, s.out_sliding = rb.out.Tx, rb.out.Ty, rb.out.Mz, int(rb.out.sliding)
+        self.params(rb)
+
+    def read(self, rb: Any) -> None:
+        s = self._state
+        rb.y = np.array([s.Vx, s.vx, s.Vy, s.Oz])
+        rb.t, rb._dv = s.t, s.dv
         rb.out = type(rb.out)(s.Tx, s.Ty, s.Mz, bool(s.out_sliding))
 
 

@@ -1,4 +1,4 @@
-/* Compiled twin of one path of integrator.RollingBody.advance (Lobatto IIIC, scalar).
+/* Compiled twin of integrator.RollingBody.advance on its Lobatto IIIC paths.
  *
  * The path: the thin-layer law (layer.LayerContact, Eqs. 40-43 corrected) or the
  * half-space creep-force table (halfspace/table.py) without spin, with lateral slip
@@ -15,8 +15,10 @@
  * does not converge (Python then brackets and calls brentq), and a stage with no root
  * (Python raises StageSolveError with its message).
  *
- * At the end, the strip march of the thin-layer law with spin (layer._Grid.march), which
- * the Python steppers call: one loop of the same operations.
+ * Then the strip march of the thin-layer law with spin (layer._Grid.march), which
+ * the Python steppers call: one loop of the same operations; and, at the end, the
+ * Lobatto IIIC step with Vy and/or Omega_z as stage unknowns (_lobatto_vector), which
+ * agrees with the Python path to the stage tolerance.
  */
 #include <float.h>
 #include <math.h>
@@ -43,6 +45,16 @@ typedef struct {
     const double *coef, *ax1, *ax2, *ax3;
     int n1, n2, n3;
     double ext1, ext2, ext3, xi_ref, phi_ref, c, saturation_width;
+    /* the vector path (cf_advance_vector): Iz (kg m^2), the held spin ratio (1/m),
+     * whether Vy (Eq. 10) and Omega_z (Eq. 11) are stage unknowns, and the thin-layer
+     * law's spin grid (a cf_strips, NULL for the table) */
+    double Iz, rz;
+    int dyn_vy, dyn_spin;
+    const void *strips;
+    /* solvers.newton: the forward-difference step, the smallest line-search fraction,
+     * the iteration cap */
+    double fd_step, line_search_min;
+    int newton_iterations;
 } cf_params;
 
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
@@ -367,10 +379,15 @@ static int admissible(const cf_params *p, double Fx, double My) {
     return hypot(target_x(p, Fx, My), 0.0) < cap;
 }
 
+/* kinematics.is_full_slip */
+static int full_slip(const cf_params *p, double vx, double vy, double Vx) {
+    double speed = hypot(vx, vy);
+    return speed > 0.0 && speed >= p->creep_full_slip * fabs(Vx);
+}
+
 /* is_full_slip at the state (vy = ry Vx, _apply_ratios) */
 static int saturated(const cf_params *p, double Vx, double vx) {
-    double speed = hypot(vx, p->ry * Vx);
-    return speed > 0.0 && speed >= p->creep_full_slip * fabs(Vx);
+    return full_slip(p, vx, p->ry * Vx, Vx);
 }
 
 /* RollingBody._lobatto_scalar with held loads (L1 = L2) */
@@ -612,4 +629,235 @@ void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double
             for (int c = 0; c < 3; c++) T[c] += with[c] - without[c];
         }
     }
+}
+
+/* ---- integrator.RollingBody._lobatto_vector: Vy and/or Omega_z as stage unknowns ---- */
+/* The Lobatto IIIC step of the full method with n = 2 or 3 unknowns u = (vx[, Vy][,
+ * Omega_z]) and its Newton iteration (solvers.newton with the block Jacobian of
+ * _lobatto_vector), for the thin-layer law (spin through the strip march) and the
+ * creep-force table. The 2n x 2n Newton systems are solved by Gaussian elimination with
+ * partial pivoting (LAPACK's, in numpy, runs its operations in another order): the two
+ * paths agree to the stage tolerance, not bit for bit (tests/test_native.py). What this
+ * path leaves to Python (CF_FALLBACK, state untouched): a singular Newton matrix or no
+ * convergence in newton_iterations (Python then calls scipy's hybrid method), and
+ * eta = inf with loads beyond mu P (Python raises). */
+typedef struct {
+    double Vx, vx, Vy, Oz, t, dv; /* y, t, _dv of RollingBody */
+    double Tx, Ty, Mz;            /* out: ContactOutputs */
+    int out_sliding;
+} cf_vstate;
+
+/* The last zero-spin march of forces_at: a Jacobian column in Omega_z changes only
+ * the spin, so its march without spin is the one before (the same doubles). */
+typedef struct {
+    int valid;
+    double vx, vy, V, R[3];
+} march_cache;
+
+/* RollingBody._forces at one state y = (Vx, vx, Vy, Omega_z); the thin-layer law as
+ * cf_layer_forces */
+static void forces_at(const cf_params *p, const double y[4], double T[3], march_cache *c) {
+    double V = fabs(y[0]) >= p->v_standstill ? y[0] : copysign(p->v_standstill, y[0]);
+    if (p->law == LAW_TABLE) {
+        double o[4];
+        table_scalar(p, y[1], y[2], y[3], V, o);
+        T[0] = o[0], T[1] = o[1], T[2] = o[2];
+        return;
+    }
+    forces(p, y[1], y[2], V, T);
+    if (y[3] == 0.0) return;
+    const cf_strips *g = (const cf_strips *)p->strips;
+    double with[3];
+    march_one(g, y[1], y[2], V, y[3], NULL, NULL, with);
+    if (!(c->valid && c->vx == y[1] && c->vy == y[2] && c->V == V)) {
+        march_one(g, y[1], y[2], V, 0.0, NULL, NULL, c->R);
+        c->valid = 1, c->vx = y[1], c->vy = y[2], c->V = V;
+    }
+    for (int k = 0; k < 3; k++) T[k] += with[k] - c->R[k];
+}
+
+typedef struct {
+    const cf_params *p;
+    int n, act[3];
+    double y[4], un[3], F1[3], F2[3], m[3], Vb[2], h;
+    march_cache *cache;
+} vstage;
+
+/* _lobatto_vector's states(U, stage): the state at the stage unknowns U */
+static void vstate_at(const vstage *s, const double *U, int stage, double Y[4]) {
+    for (int i = 0; i < 4; i++) Y[i] = s->y[i];
+    for (int i = 0; i < s->n; i++) Y[s->act[i] + 1] = U[i];
+    Y[0] = s->Vb[stage] + (s->m[0] / s->p->M) * (U[0] - s->un[0]);
+    if (!s->p->dyn_vy) Y[2] = s->p->ry * Y[0]; /* BodyState._apply_ratios */
+    if (!s->p->dyn_spin) Y[3] = s->p->rz * Y[0];
+}
+
+/* T[act] at stage `stage` for unknowns U */
+static void stage_forces(const vstage *s, const double *U, int stage, double *Ta) {
+    double Y[4], T[3];
+    vstate_at(s, U, stage, Y);
+    forces_at(s->p, Y, T, s->cache);
+    for (int i = 0; i < s->n; i++) Ta[i] = T[s->act[i]];
+}
+
+/* _lobatto_vector's residuals at UU = (u1, u2); the stage forces into T1, T2 */
+static void vresiduals(const vstage *s, const double *UU, double *R, double *T1, double *T2) {
+    const int n = s->n;
+    const double *U1 = UU, *U2 = UU + n;
+    stage_forces(s, U1, 0, T1);
+    stage_forces(s, U2, 1, T2);
+    for (int i = 0; i < n; i++) {
+        R[i] = s->m[i] * (U1[i] + U2[i] - 2.0 * s->un[i]) / s->h + T1[i] - s->F1[i];
+        R[n + i] = s->m[i] * (U2[i] - U1[i]) / s->h + T2[i] - s->F2[i];
+    }
+}
+
+/* _lobatto_vector's jacobian: the mass terms exactly, T(u_i) by forward differences in
+ * stage i's unknowns, J (2n x 2n, row major) */
+static void vjacobian(const vstage *s, const double *UU, const double *du, const double *T1,
+                      const double *T2, double *J) {
+    const int n = s->n, N = 2 * n;
+    for (int k = 0; k < N * N; k++) J[k] = 0.0;
+    for (int st = 0; st < 2; st++) {
+        const double *T = st == 0 ? T1 : T2;
+        for (int j = 0; j < n; j++) {
+            double U[3], Tp[3];
+            for (int i = 0; i < n; i++) U[i] = UU[st * n + i];
+            U[j] += du[st * n + j];
+            stage_forces(s, U, st, Tp);
+            for (int i = 0; i < n; i++)
+                J[(st * n + i) * N + st * n + j] = (Tp[i] - T[i]) / du[st * n + j];
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        double D = s->m[i] / s->h;
+        J[i * N + i] = D + J[i * N + i];
+        J[i * N + n + i] = D;
+        J[(n + i) * N + i] = -D;
+        J[(n + i) * N + n + i] = D + J[(n + i) * N + n + i];
+    }
+}
+
+/* solve J x = b (N <= 6) by Gaussian elimination with partial pivoting; 1 if singular */
+static int solve_small(int N, double *J, double *b) {
+    for (int c = 0; c < N; c++) {
+        int piv = c;
+        for (int r = c + 1; r < N; r++)
+            if (fabs(J[r * N + c]) > fabs(J[piv * N + c])) piv = r;
+        if (J[piv * N + c] == 0.0 || !isfinite(J[piv * N + c])) return 1;
+        if (piv != c) {
+            for (int k = 0; k < N; k++) {
+                double t = J[c * N + k];
+                J[c * N + k] = J[piv * N + k];
+                J[piv * N + k] = t;
+            }
+            double t = b[c];
+            b[c] = b[piv];
+            b[piv] = t;
+        }
+        for (int r = c + 1; r < N; r++) {
+            double f = J[r * N + c] / J[c * N + c];
+            for (int k = c; k < N; k++) J[r * N + k] -= f * J[c * N + k];
+            b[r] -= f * b[c];
+        }
+    }
+    for (int c = N - 1; c >= 0; c--) {
+        double v = b[c];
+        for (int k = c + 1; k < N; k++) v -= J[c * N + k] * b[k];
+        b[c] = v / J[c * N + c];
+    }
+    return 0;
+}
+
+static double norm2(int N, const double *r) {
+    double q = 0.0;
+    for (int i = 0; i < N; i++) q += r[i] * r[i];
+    return sqrt(q);
+}
+
+/* solvers.newton on the Lobatto stage system (u0 = (un, un)); CF_FALLBACK where Python
+ * goes on with scipy's hybrid method */
+static int vnewton(const vstage *s, const double *scale, double *u) {
+    const int N = 2 * s->n;
+    double r[6], T1[3], T2[3], J[36], step[6], du[6], un[6], rn[6], T1n[3], T2n[3];
+    vresiduals(s, u, r, T1, T2);
+    for (int it = 0; it < s->p->newton_iterations; it++) {
+        for (int i = 0; i < N; i++) du[i] = s->p->fd_step * (fabs(u[i]) + scale[i]);
+        vjacobian(s, u, du, T1, T2, J);
+        for (int i = 0; i < N; i++) step[i] = -r[i];
+        if (solve_small(N, J, step)) return CF_FALLBACK;
+        double lam = 1.0, norm0 = norm2(N, r);
+        for (;;) {
+            for (int i = 0; i < N; i++) un[i] = u[i] + lam * step[i];
+            vresiduals(s, un, rn, T1n, T2n);
+            if (norm2(N, rn) < norm0 || lam < s->p->line_search_min) break;
+            lam *= 0.5;
+        }
+        int done = 1;
+        for (int i = 0; i < N; i++) {
+            u[i] = un[i];
+            r[i] = rn[i];
+            if (!(fabs(lam * step[i]) <= s->p->solve_rtol * (fabs(u[i]) + scale[i]))) done = 0;
+        }
+        for (int i = 0; i < s->n; i++) T1[i] = T1n[i], T2[i] = T2n[i];
+        if (done) return CF_OK;
+    }
+    return CF_FALLBACK;
+}
+
+/* RollingBody._step of the full method with _lobatto_vector, held loads */
+static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4]) {
+    const double Fx = L[0], Fy = L[1], My = L[2], Mz = L[3];
+    march_cache cache = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
+    vstage s = {p, 0, {0, 0, 0}, {w->Vx, w->vx, w->Vy, w->Oz}, {0}, {0}, {0}, {0}, {0}, h, &cache};
+    double F[3] = {target_x(p, Fx, My), Fy, Mz}, m[3] = {p->m_slip, p->M, p->Iz};
+    s.act[s.n++] = 0;
+    if (p->dyn_vy) s.act[s.n++] = 1;
+    if (p->dyn_spin) s.act[s.n++] = 2;
+    if (p->m_slip == 0.0) { /* _admissible: Python raises beyond the capacity */
+        double cap = p->mu * p->P * (1.0 - p->capacity_margin);
+        if (!(hypot(target_x(p, Fx, My), p->dyn_vy ? Fy : 0.0) < cap)) return CF_FALLBACK;
+    }
+    double G = drive(p, Fx, My);
+    s.Vb[0] = s.y[0] + 0.5 * h * (G - G) / p->M;
+    s.Vb[1] = s.y[0] + 0.5 * h * (G + G) / p->M;
+    double v = p->creep_full_slip * py_max(fabs(s.Vb[1]), p->v_scale_floor);
+    double sc[3] = {v, v, v / p->a1}, scale[6], u[6];
+    for (int i = 0; i < s.n; i++) {
+        int a = s.act[i];
+        s.un[i] = s.y[a + 1];
+        s.F1[i] = s.F2[i] = F[a];
+        s.m[i] = m[a];
+        scale[i] = scale[s.n + i] = sc[a];
+        u[i] = u[s.n + i] = s.un[i];
+    }
+    if (vnewton(&s, scale, u)) return CF_FALLBACK;
+    double Y[4], T[3];
+    vstate_at(&s, u + s.n, 1, Y);
+    forces_at(p, Y, T, &cache);
+    w->dv = (Y[1] - w->vx) / h;
+    double cap = p->mu * p->P;
+    if (hypot(T[0], T[1]) > cap) {
+        double r = cap / hypot(T[0], T[1]);
+        T[0] *= r;
+        T[1] *= r;
+    }
+    w->Vx = Y[0], w->vx = Y[1], w->Vy = Y[2], w->Oz = Y[3];
+    w->Tx = T[0], w->Ty = T[1], w->Mz = T[2];
+    w->out_sliding = full_slip(p, Y[1], Y[2], Y[0]);
+    return CF_OK;
+}
+
+/* RollingBody.advance of the full method with Vy and/or Omega_z as unknowns, loads
+ * L = (Fx_ex, Fy_ex, My_ex, Mz_ex) held: h (s) in n equal steps. On CF_FALLBACK *y is
+ * unchanged. */
+int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
+    if (p->law == LAW_LAYER && p->strips == NULL) return CF_FALLBACK; /* no spin grid */
+    cf_vstate w = *y;
+    double dt = h / n;
+    for (int k = 0; k < n; k++)
+        if (vstep(p, &w, dt, L)) return CF_FALLBACK;
+    w.t = y->t + h;
+    *y = w;
+    return CF_OK;
 }
