@@ -151,6 +151,7 @@ def build(
             str(work / "dist"),
             str(stage / package),
             "--handle-state",
+            "--serialize-state",
         ]
         env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
         proc = subprocess.run(cmd, cwd=work, capture_output=True, text=True, env=env)

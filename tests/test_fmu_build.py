@@ -62,7 +62,7 @@ def test_model_description_has_units_ranges_and_complete_structure(built):
                 assert float(v.min) == lo, (name, v.name)
             if hi is not None:
                 assert float(v.max) == hi, (name, v.name)
-        assert md.coSimulation.canGetAndSetFMUstate
+        assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
         outputs = [v for v in md.modelVariables if v.causality == "output"]
         assert [u.variable for u in md.outputs] == outputs
         assert [u.variable for u in md.initialUnknowns] == outputs

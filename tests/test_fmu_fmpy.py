@@ -16,7 +16,7 @@ import fmu_build
 from contact_fmu import examples as ex
 from contact_fmu.dynamics import Body
 from contact_fmu.scenario import load, runner
-from contact_fmu.scenario.instance import DISCARD, FATAL, OK, Instance
+from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from contact_fmu.simulate import load_history, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -68,6 +68,91 @@ def test_fmu_state_in_contact_mode(fmus):
         assert c.step(2e-3) == OK and c.outputs() != before
         c.set_state(state)
         assert c.outputs() == before
+
+
+RESTORE_SCRIPT = """
+import json, sys
+from contact_fmu.scenario.instance import Instance
+with Instance(sys.argv[1], "restored") as b:
+    data = open(sys.argv[2], "rb").read()
+    b.set_state(b.deserialize_state(data, float(sys.argv[3])))
+    for _ in range(3):
+        assert b.step(1.75e-4) == 0, b.messages
+    print(json.dumps({k: v.hex() for k, v in b.outputs().items() if isinstance(v, float)}))
+"""
+
+
+def test_serialized_state_restores_bit_for_bit_in_another_process(fmus, tmp_path):
+    """fmi2SerializeFMUstate: a checkpoint of the body FMU (the compiled step's state
+    included), restored by a fresh instance in another Python process (the vendored
+    package found anew), steps to the same doubles as the original."""
+    import json
+    import subprocess
+    import sys
+
+    with body(fmus) as b:
+        for _ in range(4):
+            assert b.step(1.75e-4) == OK
+        state = b.get_state()
+        path = tmp_path / "state.bin"
+        path.write_bytes(b.serialize_state(state))
+        for _ in range(3):
+            assert b.step(1.75e-4) == OK
+        first = {k: v.hex() for k, v in b.outputs().items() if isinstance(v, float)}
+        b.free_state(state)
+    args = [sys.executable, "-c", RESTORE_SCRIPT, str(fmus["fig13"]), str(path), repr(state[1])]
+    proc = subprocess.run(args, capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout) == first
+
+
+def test_serialized_state_in_contact_mode(fmus):
+    """The contact FMU's state (the load of its law, the held outputs) through bytes into
+    another instance, and back into the first after a step at another load (the law
+    rebuilt at the state's load): the same outputs, and the same response to a new
+    input."""
+    with Instance(fmus["sweep"], "a") as a, Instance(fmus["sweep"], "b") as b:
+        a.set("Omega_y", ex.speed_unit() / ex.Rx * 0.998)
+        a.set("P", 0.8 * ex.P)
+        assert a.step(2e-3) == OK
+        state = a.get_state()
+        before = a.outputs()
+        b.set_state(b.deserialize_state(a.serialize_state(state), state[1]))
+        assert b.outputs() == before
+        a.set("P", 1.2 * ex.P)
+        assert a.step(2e-3) == OK and a.outputs() != before
+        a.set_state(state)
+        assert a.outputs() == before
+        for inst in (a, b):
+            inst.set("Omega_y", ex.speed_unit() / ex.Rx * 1.004)
+            assert inst.step(2e-3) == OK
+        assert b.outputs() == a.outputs()
+        assert all(s == OK for s, _ in b.messages), b.messages
+
+
+def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(fmus):
+    """Bytes that are not a state of this FMU (garbage, truncated, another FMU's state)
+    are refused at setFMUstate with a logged error naming the reason (pythonfmu would
+    turn an exception in deserialisation into fmi2Fatal): the state is unchanged, doStep
+    answers fmi2Discard with the reason until a valid state is set, then steps on."""
+    with Instance(fmus["railway"], "other") as other:
+        assert other.step(1e-4) == OK
+        foreign = other.serialize_state(other.get_state())
+    with body(fmus) as b:
+        assert b.step(1.75e-4) == OK
+        state = b.get_state()
+        good = b.serialize_state(state)
+        expected = ("not a serialized contact_fmu FMU state", "cannot be read", "of the FMU")
+        for data, reason in zip((b"garbage", good[:-20], foreign), expected, strict=True):
+            before = b.outputs()
+            b.set_state(b.deserialize_state(data, b.time))
+            status, text = b.messages[-1]
+            assert status == ERROR and reason in text, b.messages[-1:]
+            assert b.step(1.75e-4) == DISCARD and reason in b.messages[-1][1]
+            assert b.outputs() == before
+        b.set_state(b.deserialize_state(good, state[1]))
+        assert b.step(1.75e-4) == OK
+        assert all(s < FATAL for s, _ in b.messages)
 
 
 @pytest.mark.parametrize(

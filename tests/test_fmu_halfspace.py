@@ -260,7 +260,14 @@ def test_fmu_state_get_step_set_step_is_bit_identical(built, name):
         for k in range(60, 64):
             step(k)
         assert inst.outputs() == first
+        data = inst.serialize_state(state)
         inst.free_state(state)
+    # through bytes (fmi2SerializeFMUstate) into a fresh instance: the same doubles
+    with Instance(built[name].path, "restored") as inst:
+        inst.set_state(inst.deserialize_state(data, state[1]))
+        for k in range(60, 64):
+            step(k)
+        assert inst.outputs() == first
 
 
 # ---- bad input ------------------------------------------------------------------------------

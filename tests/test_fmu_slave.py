@@ -474,3 +474,25 @@ def test_empty_value_reference_lists_are_answered(monkeypatch, calls):
     assert b.s.get_real([]) == [] and b.s.set_real([], []) is None
     assert b.step() and b.s.get_real([]) == []
     assert not b.messages
+
+
+def test_state_bytes_admit_only_the_classes_a_state_holds():
+    """The unpickler of serialized FMU states resolves numpy's and the FMU package's
+    names only: a pickle that would call anything else (here os.system) is Unreadable,
+    naming it, and nothing is called; a real state round-trips exactly."""
+    import os
+    import pickle
+
+    from contact_fmu.fmu import state_bytes
+
+    class Payload:
+        def __reduce__(self):
+            return (os.system, ("echo should-not-run",))
+
+    evil = state_bytes.MAGIC + b"contact_fmu\n" + pickle.dumps(Payload(), protocol=5)
+    got = state_bytes.loads(evil, "contact_fmu")
+    assert isinstance(got, state_bytes.Unreadable)
+    assert f"{os.system.__module__}.system is not part of an FMU state" in got.reason
+    state = {"y": np.array([1.0, 2e-3, 0.0, 0.0]), "out": (1.5, np.float64(2.0), True)}
+    back = state_bytes.loads(state_bytes.dumps(state, "contact_fmu"), "contact_fmu")
+    assert back["out"] == state["out"] and np.array_equal(back["y"], state["y"])

@@ -104,8 +104,16 @@ def test_fmu_state_with_the_field_repeats_bit_for_bit(fmu, tmp_path):
             assert b.step(H) == OK
         assert b.outputs() == first
         assert path.read_text() == text
+        data = b.serialize_state(state)
         b.free_state(state)
         assert all(s < FATAL for s, _ in b.messages)
+    # serialized (fmi2SerializeFMUstate), the field restores into a fresh instance
+    with start(fmu) as c:
+        c.set_state(c.deserialize_state(data, state[1]))
+        for _ in range(25):
+            assert c.step(H) == OK
+        assert c.outputs() == first
+        assert path.read_text() == text  # the state's parameters: the same file
 
 
 def test_field_file_is_the_steppers_field_at_the_requested_times(fmu, tmp_path):

@@ -47,10 +47,13 @@ class ContactElement:
         return dict(self._out)
 
     def snapshot(self) -> Any:
-        return (self.law, dict(self._out))
+        # the load, not the law: the law at a load is a function of it (a half-space
+        # law holds its whole creep-force table, megabytes to copy and serialize)
+        return (self.law.P, dict(self._out))
 
     def restore(self, snap: Any) -> None:
-        self.law, out = snap
+        P, out = snap
+        self.law = self.law if P == self.law.P else self.law.with_load(P)
         self._out = dict(out)
 
 

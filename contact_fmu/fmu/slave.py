@@ -22,6 +22,11 @@ fmi2OK or fmi2Fatal. So nothing here raises to pythonfmu:
 
 FMU state (get/set) holds everything: the model's snapshot, parameter and input values,
 outputs, time and flags; get state, step, set state, step again repeats bit for bit.
+Serialized (``state_bytes``), it restores into another instance of the same FMU, in
+this process or another. Bytes that are not a state of this FMU cannot be refused at
+fmi2DeSerializeFMUstate (pythonfmu knows only fmi2Fatal there): setFMUstate with them
+logs an error, leaves the state as it is, and every doStep answers fmi2Discard naming
+the reason until a valid state is set.
 
 Compiled step: where the model offers one (``model.fast()``; the body model on the
 compiled stepper's path, contact_fmu/native), doStep makes the checks above and one C
@@ -52,6 +57,7 @@ from pythonfmu import (
 )
 from pythonfmu.enums import Fmi2Status
 
+from . import state_bytes
 from . import variables as fv
 from .config import ModelConfig
 
@@ -68,6 +74,10 @@ _CAUSALITY = {
     fv.OUTPUT: Fmi2Causality.output,
 }
 _TYPES = {"Real": Real, "Integer": Integer, "String": String}
+# This FMU's package (cfmu_<content hash> when built): the owner named in its state bytes
+_PACKAGE = __name__.split(".")[0]
+# the entry of _bad that a refused FMU state holds (no variable has this name)
+_STATE = "FMU state"
 
 
 class ContactSlave(Fmi2Slave):
@@ -368,7 +378,7 @@ class ContactSlave(Fmi2Slave):
 
     def _refresh(self) -> None:
         """Direct feedthrough: outputs for the current inputs (kept while inputs are bad)."""
-        if any(self._causality[n] == fv.INPUT for n in self._bad):
+        if any(self._causality.get(n) == fv.INPUT for n in self._bad):
             return
         snap = self._model.snapshot()
         try:
@@ -463,7 +473,13 @@ class ContactSlave(Fmi2Slave):
             }
         )
 
-    def _set_fmu_state(self, state: dict[str, Any]) -> None:
+    def _set_fmu_state(self, state: dict[str, Any] | state_bytes.Unreadable) -> None:
+        if isinstance(state, state_bytes.Unreadable):
+            msg = f"the FMU state given to setFMUstate is refused: {state.reason}"
+            self._fast_pull()  # the state stays; doSteps are refused until a valid one
+            self._bad[_STATE] = msg
+            self._error(msg + " (state unchanged; doStep refused until a valid state is set)")
+            return
         s = copy.deepcopy(state)
         self._time, self._values, self._bad = s["time"], s["values"], s["bad"]
         self._in = self._input_values()
@@ -480,6 +496,14 @@ class ContactSlave(Fmi2Slave):
             self._model.restore(snap)
         self._out, self._dirty = s["out"], s["dirty"]
         self._fast_enable()
+
+    @staticmethod
+    def _fmu_state_to_bytes(state: dict[str, Any]) -> bytes:
+        return state_bytes.dumps(state, _PACKAGE)
+
+    @staticmethod
+    def _fmu_state_from_bytes(data: bytes) -> dict[str, Any] | state_bytes.Unreadable:
+        return state_bytes.loads(data, _PACKAGE)
 
 
 def _describe(e: Exception) -> str:

@@ -115,6 +115,16 @@ class Instance:
     def free_state(self, state: Any) -> None:
         self.fmu.freeFMUstate(state[0])
 
+    def serialize_state(self, state: Any) -> bytes:
+        """A state of get_state as bytes (fmi2SerializeFMUstate; the master's time is
+        not in them)."""
+        return bytes(self.fmu.serializeFMUstate(state[0]))
+
+    def deserialize_state(self, data: bytes, time: float) -> Any:
+        """Bytes of serialize_state, from any instance of this FMU, as a state for
+        set_state at the master's ``time`` (s) (fmi2DeSerializeFMUstate)."""
+        return (self.fmu.deSerializeFMUstate(data), time)
+
     def close(self) -> None:
         try:
             self.fmu.terminate()
