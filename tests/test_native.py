@@ -54,11 +54,16 @@ def _histories(rng, lateral: Lateral = ROLLING_STRAIGHT):
                 for _ in range(60):
                     fx = rng.uniform(-1.5, 1.5) * F
                     L = Loads(fx, rng.uniform(-0.5, 0.5) * F * 0.05, 0.0, 0.0)
-                    if rng.uniform() < 0.05:
-                        P = CONTACT.P * rng.uniform(0.5, 1.5)
-                        a.set_load(P)
-                        b.set_load(P)
+                    _change_load(rng, 0.05, CONTACT, a, b)
                     yield a, b, (10 ** rng.uniform(-8, 1), L, int(rng.integers(1, 8)))
+
+
+def _change_load(rng, share: float, law, *bodies) -> None:
+    """With probability ``share``, the same new normal load (0.5-1.5 of law.P) on each."""
+    if rng.uniform() < share:
+        P = law.P * rng.uniform(0.5, 1.5)
+        for body in bodies:
+            body.set_load(P)
 
 
 def _advance(body, args):
@@ -154,10 +159,7 @@ def _vector_histories(law, rng, body_of, V0s, steps):
                         rng.uniform(-0.5, 0.5) * cap * body.Rx * 0.05,
                         rng.uniform(-1.0, 1.0) * cap * law.a1 * 0.1,
                     )
-                    if rng.uniform() < 0.1:
-                        P = law.P * rng.uniform(0.5, 1.5)
-                        a.set_load(P)
-                        b.set_load(P)
+                    _change_load(rng, 0.1, law, a, b)
                     yield a, b, (10 ** rng.uniform(-8, 0), L, int(rng.integers(1, 5)))
 
 
