@@ -79,11 +79,18 @@ def time_fmu(
     return float(t_fmu), float(t_model) if with_model else float("nan"), last
 
 
-def time_full_model(scene, case, n: int, repeats: int) -> tuple[float, float]:
+# The cornering load of time_full_model: a lateral force and a yaw moment, in units of
+# mu P and mu P Rx, that make Vy and Omega_z move (the law then marches its spin grid).
+CORNERING = {"Fy_ex": 0.3, "Mz_ex": 0.002}
+
+
+def time_full_model(
+    scene, case, n: int, repeats: int, cornering: bool = False
+) -> tuple[float, float]:
     """Best mean seconds per step of the full body FMU's model object stepped directly
     (no FMI), its stepper compiled (stepper.c's vector step, Eqs. 10-11 integrated) and
     in Python (RollingBody._lobatto_vector), interleaved step by step; NaN, NaN in
-    contact mode (no stepper)."""
+    contact mode (no stepper). ``cornering``: the scene's inputs plus CORNERING."""
     cfg = ModelConfig.full(scene.config.mode)
     if cfg.mode != "body":
         return float("nan"), float("nan")
@@ -93,6 +100,10 @@ def time_full_model(scene, case, n: int, repeats: int) -> tuple[float, float]:
     for r in range(WARMUP + repeats):
         models = [_model(scene, case, rows[0], cfg) for _ in range(2)]
         models[1].stepper._kernel = None  # the Python stepper
+        if cornering:
+            law, Rx = models[0].stepper.law, models[0].stepper.body.Rx
+            unit = {"Fy_ex": law.mu * law.P, "Mz_ex": law.mu * law.P * Rx}
+            rows = [row | {k: v * unit[k] for k, v in CORNERING.items()} for row in rows]
         for k in range(n):
             for i, model in enumerate(models):
                 t0 = time.perf_counter()
@@ -129,6 +140,7 @@ def measure(steps: int, repeats: int) -> list[dict]:
         t_own, t_model, out_own = time_fmu(own.path, scene, case, n, repeats, with_model=True)
         t_full, _, out_full = time_fmu(big.path, scene, case, n, max(2, repeats // 2))
         t_full_c, t_full_py = time_full_model(scene, case, n, max(2, repeats // 2))
+        corner = time_full_model(scene, case, n, max(2, repeats // 2), cornering=True)
         rows.append(
             {
                 "scene": scene.name,
@@ -144,6 +156,7 @@ def measure(steps: int, repeats: int) -> list[dict]:
                 "model": t_model,
                 "full_model": t_full_c,
                 "full_model_py": t_full_py,
+                "cornering": corner,
                 "dTx": abs(out_own["Tx"] - out_full["Tx"]),
                 "n": n,
                 "lateral": scene.config.vy != "zero",
@@ -196,7 +209,25 @@ def markdown(rows: list[dict], steps: int, repeats: int) -> str:
         "FMI, timed step by step between the scene FMU's steps. *full model*: the full "
         "FMU's model object stepped the same way, its stepper compiled (stepper.c's "
         "vector step) and in Python, interleaved step by step (fastest of "
-        f"{max(2, repeats // 2)} runs each).\n\n" + table(rows) + "\n"
+        f"{max(2, repeats // 2)} runs each).\n\n" + table(rows) + "\n" + cornering(rows)
+    )
+
+
+def cornering(rows: list[dict]) -> str:
+    """The full model's cost when its lateral degrees of freedom move (Markdown)."""
+    body = [r for r in rows if not np.isnan(r["cornering"][0])]
+    if not body:
+        return ""
+    cells = "; ".join(
+        f"{r['scene']} {r['cornering'][0] * 1e3:.3f} / {r['cornering'][1] * 1e3:.3f} ms "
+        f"({r['cornering'][1] / r['cornering'][0]:.1f}x)"
+        for r in body
+    )
+    return (
+        "\nCornering: the full model with Fy_ex = "
+        f"{CORNERING['Fy_ex']} mu P and Mz_ex = {CORNERING['Mz_ex']} mu P Rx added to "
+        "the scene's inputs, so that Vy and Omega_z move and the law marches its spin "
+        f"grid (layer.SPIN_GRID) in every evaluation, compiled / Python: {cells}.\n"
     )
 
 

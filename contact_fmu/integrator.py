@@ -110,6 +110,8 @@ class RollingBody(BodyState):
         self.scheme = scheme
         self.sliding = False
         self._dv = 0.0  # last step's dvx/dt (m/s^2): the predictor of the stage solves
+        # (h, Newton matrix) of the last vector step, kept for the next (solvers.newton)
+        self._jac: tuple[float, FloatArray] | None = None
         T = self._forces(self.y[None, :])[0]
         self.out = ContactOutputs(*map(float, T), _saturated(law, self.y))
         self._kernel = self._native_kernel()
@@ -124,10 +126,10 @@ class RollingBody(BodyState):
 
     def snapshot(self) -> tuple:
         """The whole internal state, for FMU get/set state: restore(snapshot()) is exact."""
-        return (self.y.copy(), self.t, self.sliding, self.out, self.law.P, self._dv)
+        return (self.y.copy(), self.t, self.sliding, self.out, self.law.P, self._dv, self._jac)
 
     def restore(self, snap: tuple) -> None:
-        y, t, sliding, out, P, self._dv = snap
+        y, t, sliding, out, P, self._dv, self._jac = snap
         self.y, self.t, self.sliding, self.out = np.array(y, float), float(t), bool(sliding), out
         self.law = self.law.with_load(P)
 
@@ -153,20 +155,20 @@ class RollingBody(BodyState):
             if self._kernel.advance(self, h, L, substeps):
                 return  # else a case the kernel leaves to this code
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
-        saved = (self.y.copy(), self.t, self.sliding, self.out, self._dv)
+        saved = (self.y.copy(), self.t, self.sliding, self.out, self._dv, self._jac)
         try:
             if substeps > 1 and self._exact_in_one_step(loads):
                 self._step(saved[1], h, load_at)
                 if not self.sliding:
                     self.t = saved[1] + h
                     return
-                self.y, self.t, self.sliding, self.out, self._dv = saved
+                self.y, self.t, self.sliding, self.out, self._dv, self._jac = saved
             dt = h / substeps
             for k in range(substeps):
                 self._step(saved[1] + k * dt, dt, load_at)
             self.t = saved[1] + h
         except Exception:
-            self.y, self.t, self.sliding, self.out, self._dv = saved
+            self.y, self.t, self.sliding, self.out, self._dv, self._jac = saved
             raise
 
     def _native_kernel(self) -> native.Kernel | None:
@@ -198,6 +200,8 @@ class RollingBody(BodyState):
             "max_newton": solvers.MAX_NEWTON,
             "fd_step": solvers.FD_STEP,
             "line_search_min": solvers.LINE_SEARCH_MIN,
+            "contraction_max": solvers.CONTRACTION_MAX,
+            "contraction_fast": solvers.CONTRACTION_FAST,
             "newton_iterations": solvers.NEWTON_ITERATIONS,
         }
         if vector:
@@ -398,7 +402,11 @@ class RollingBody(BodyState):
             D = np.diag(m / h)
             return np.block([[D + d1, D], [-D, D + d2]])
 
-        UU = newton(residuals, np.concatenate([un, un]), np.concatenate([scale, scale]), jacobian)
+        memo = {"J": self._jac[1]} if self._jac is not None and self._jac[0] == h else {}
+        UU = newton(
+            residuals, np.concatenate([un, un]), np.concatenate([scale, scale]), jacobian, memo
+        )
+        self._jac = (h, memo["J"]) if "J" in memo else None
         Y2 = states(UU[None, n:], 1)
         return Y2[0], self._forces(Y2)[0]
 

@@ -17,6 +17,11 @@ FD_STEP = 1e-7
 # ``newton``: iteration cap before scipy's hybrid method, smallest backtracking fraction.
 NEWTON_ITERATIONS = 50
 LINE_SEARCH_MIN = 1e-4
+# ``newton`` with a kept Jacobian: the least reduction of |r| per step that keeps it.
+CONTRACTION_MAX = 0.25
+# ... and after a kept Jacobian's step that reduced |r| by less than this, it is renewed
+# (linear convergence at that rate would take more law evaluations than a new one).
+CONTRACTION_FAST = 1e-2
 # Bracket search: the step grows by this factor, at most this many times.
 EXPAND = 4.0
 MAX_EXPANSIONS = 60
@@ -101,6 +106,7 @@ def newton(
     u0: FloatArray,
     scale: FloatArray,
     jacobian: Callable[[FloatArray, FloatArray], FloatArray] | None = None,
+    memo: dict[str, FloatArray] | None = None,
 ) -> FloatArray:
     """Solve residuals(u) = 0, u of shape (n,).
 
@@ -109,30 +115,49 @@ def newton(
     that Jacobian (n, n) for the steps du instead (a caller that knows which residuals
     an unknown moves evaluates fewer). Newton with backtracking on |r|; scipy's hybrid
     method if that stalls.
+
+    ``memo``: a Jacobian kept from an earlier solve (memo["J"]) and the one this solve
+    forms last, written back. A kept Jacobian (and the last fresh one, in later
+    iterations: simplified Newton, Hairer & Wanner IV.8) is used while a full step
+    reduces |r| by CONTRACTION_MAX; otherwise the step is dropped and the Jacobian
+    formed anew at the current u, as it is after a kept step that reduced |r| by less
+    than CONTRACTION_FAST. The contraction bound makes the error after the last step
+    at most a third of that step, within the stopping rule.
     """
     n = len(u0)
     u = np.array(u0, float)
     r = residuals(u[None, :])[0]
+    J = None if memo is None else memo.get("J")
     for _ in range(NEWTON_ITERATIONS):
-        du = FD_STEP * (np.abs(u) + scale)
-        if jacobian is None:
-            J = (residuals(u + np.diag(du)) - r).T / du
-        else:
-            J = jacobian(u, du)
+        kept = J is not None
+        if not kept:
+            du = FD_STEP * (np.abs(u) + scale)
+            J = (residuals(u + np.diag(du)) - r).T / du if jacobian is None else jacobian(u, du)
+            if memo is not None:
+                memo["J"] = J
         try:
             step = np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
-            break
+            if not kept:
+                break
+            J = None
+            continue
         lam, norm0 = 1.0, np.linalg.norm(r)
         while True:
             u_new = u + lam * step
             r_new = residuals(u_new[None, :])[0]
-            if np.linalg.norm(r_new) < norm0 or lam < LINE_SEARCH_MIN:
+            norm = np.linalg.norm(r_new)
+            if kept or norm < norm0 or lam < LINE_SEARCH_MIN:
                 break
             lam *= 0.5
+        if kept and not norm <= CONTRACTION_MAX * norm0:
+            J = None  # the step is dropped; a new Jacobian at u
+            continue
         u, r = u_new, r_new
         if np.all(np.abs(lam * step) <= SOLVE_RTOL * (np.abs(u) + scale)):
             return u
+        if memo is None or (kept and norm > CONTRACTION_FAST * norm0):
+            J = None  # Newton; or a kept Jacobian that converges slowly, renewed
     sol = root(lambda v: residuals(v[None, :])[0], u, method="hybr", options={"xtol": SOLVE_RTOL})
     if not sol.success:
         raise StageSolveError(f"stage solve failed after Newton and hybr: {sol.message}")

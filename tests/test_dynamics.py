@@ -300,14 +300,20 @@ def test_quasistationary_takes_held_loads_in_one_step(vy_ratio):
 
 
 # ---- state handling ---------------------------------------------------------------------------
-def test_snapshot_and_restore_are_exact():
-    rb = RollingBody(C, ex.body(3.0), Vx0=V0, Omega_y0=V0 / ex.Rx)
-    rb.advance(TC / 10, Loads(Fx_ex=F))
+@pytest.mark.parametrize("dynamic", [False, True])
+def test_snapshot_and_restore_are_exact(dynamic):
+    """Also with Eqs. (10)-(11) integrated, whose stage solves keep their Newton matrix
+    from step to step (RollingBody._jac, part of the snapshot)."""
+    lat = Lateral(vy_ratio=None, spin_ratio=None) if dynamic else Lateral()
+    b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 3, Iz=0.4 * ex.M * ex.Rx**2)
+    rb = RollingBody(C, b, lat, Vx0=V0, Omega_y0=V0 / ex.Rx)
+    rb.advance(TC / 10, Loads(Fx_ex=F, Fy_ex=0.2 * F), 3)  # the substeps that follow
     snap = rb.snapshot()
-    rb.advance(TC / 10, Loads(Fx_ex=F, My_ex=0.1 * F * ex.Rx))
+    later = Loads(Fx_ex=F, Fy_ex=-0.2 * F, My_ex=0.1 * F * ex.Rx)
+    rb.advance(TC / 10, later, 3)
     first = rb.outputs()
     rb.restore(snap)
-    rb.advance(TC / 10, Loads(Fx_ex=F, My_ex=0.1 * F * ex.Rx))
+    rb.advance(TC / 10, later, 3)
     assert rb.outputs() == first
 
 

@@ -302,3 +302,32 @@ def test_full_body_fmu_lateral_dynamics_and_method_parameter():
         assert b.step(1e-4) == DISCARD
         b.set("method", "full")  # not initialised: a parameter may still be corrected
         assert b.step(1e-4) == OK
+
+
+def test_full_body_fmu_state_with_lateral_dynamics_repeats_bit_for_bit():
+    """The full body FMU steps Eqs. (10)-(11) compiled (stepper.c's vector step), keeping
+    its Newton matrix from step to step: the FMU state holds it, so get state, step, set
+    state, step again repeats the outputs bit for bit, here and through bytes in a fresh
+    instance."""
+    from contact_fmu.fmu.config import ModelConfig
+
+    path = fmu_build.build(ModelConfig.full("body"), OUT).path
+    with Instance(path, "a", {"h_max": 5e-5}) as a, Instance(path, "b") as b:
+        a.set("Fx_ex", 0.2 * MU_P)
+        a.set("Fy_ex", 0.3 * MU_P)
+        a.set("Mz_ex", 0.01 * MU_P * ex.Rx)
+        for _ in range(5):
+            assert a.step(1e-4) == OK
+        state = a.get_state()
+        for _ in range(3):
+            assert a.step(1e-4) == OK
+        first = a.outputs()
+        assert first["Omega_z"] != 0.0 and first["Vy"] != 0.0
+        a.set_state(state)
+        for _ in range(3):
+            assert a.step(1e-4) == OK
+        assert a.outputs() == first
+        b.set_state(b.deserialize_state(a.serialize_state(state), state[1]))
+        for _ in range(3):
+            assert b.step(1e-4) == OK
+        assert b.outputs() == first

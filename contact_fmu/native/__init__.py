@@ -62,6 +62,7 @@ class Params(ctypes.Structure):
         for n in ("ext1", "ext2", "ext3", "xi_ref", "phi_ref", "c", "saturation_width", "Iz", "rz")
     ] + [("dyn_vy", ctypes.c_int), ("dyn_spin", ctypes.c_int), ("strips", ctypes.c_void_p)] + [
         ("fd_step", ctypes.c_double), ("line_search_min", ctypes.c_double),
+        ("contraction_max", ctypes.c_double), ("contraction_fast", ctypes.c_double),
         ("newton_iterations", ctypes.c_int),
     ]  # fmt: skip
 
@@ -78,7 +79,10 @@ class VState(ctypes.Structure):
 
     _fields_ = [
         (n, ctypes.c_double) for n in ("Vx", "vx", "Vy", "Oz", "t", "dv", "Tx", "Ty", "Mz")
-    ] + [("out_sliding", ctypes.c_int)]
+    ] + [
+        ("out_sliding", ctypes.c_int), ("jac_valid", ctypes.c_int), ("jac_h", ctypes.c_double),
+        ("J", ctypes.c_double * 36),
+    ]  # fmt: skip
 
 
 # RollingBody.outputs() keys in the order of stepper.c's cf_body.out
@@ -314,6 +318,10 @@ class VectorKernel(Kernel):
         s.Vx, s.vx, s.Vy, s.Oz = rb.y.tolist()
         s.t, s.dv = rb.t, rb._dv
         s.Tx, s.Ty, s.Mz, s.out_sliding = rb.out.Tx, rb.out.Ty, rb.out.Mz, int(rb.out.sliding)
+        s.jac_valid = rb._jac is not None
+        if rb._jac is not None:  # the kept Newton matrix (solvers.newton's memo)
+            s.jac_h, J = rb._jac
+            s.J[: J.size] = J.ravel().tolist()
         self.params(rb)
 
     def read(self, rb: Any) -> None:
@@ -321,6 +329,8 @@ class VectorKernel(Kernel):
         rb.y = np.array([s.Vx, s.vx, s.Vy, s.Oz])
         rb.t, rb._dv = s.t, s.dv
         rb.out = type(rb.out)(s.Tx, s.Ty, s.Mz, bool(s.out_sliding))
+        N = 2 * len(rb._idx)
+        rb._jac = (s.jac_h, np.array(s.J[: N * N]).reshape(N, N)) if s.jac_valid else None
 
 
 class FastBody:

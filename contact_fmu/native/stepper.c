@@ -52,8 +52,8 @@ typedef struct {
     int dyn_vy, dyn_spin;
     const void *strips;
     /* solvers.newton: the forward-difference step, the smallest line-search fraction,
-     * the iteration cap */
-    double fd_step, line_search_min;
+     * the contractions that keep and renew a Jacobian, the iteration cap */
+    double fd_step, line_search_min, contraction_max, contraction_fast;
     int newton_iterations;
 } cf_params;
 
@@ -645,6 +645,8 @@ typedef struct {
     double Vx, vx, Vy, Oz, t, dv; /* y, t, _dv of RollingBody */
     double Tx, Ty, Mz;            /* out: ContactOutputs */
     int out_sliding;
+    int jac_valid;                /* RollingBody._jac: (jac_h, J) kept, or none */
+    double jac_h, J[36];          /* 2n x 2n, row major */
 } cf_vstate;
 
 /* The last zero-spin march of forces_at: a Jacobian column in Omega_z changes only
@@ -775,32 +777,50 @@ static double norm2(int N, const double *r) {
     return sqrt(q);
 }
 
-/* solvers.newton on the Lobatto stage system (u0 = (un, un)); CF_FALLBACK where Python
- * goes on with scipy's hybrid method */
-static int vnewton(const vstage *s, const double *scale, double *u) {
+/* solvers.newton on the Lobatto stage system (u0 = (un, un)) with its memo: Jk (valid if
+ * *kept) the Jacobian kept from the last step, replaced by the last one formed;
+ * CF_FALLBACK where Python goes on with scipy's hybrid method */
+static int vnewton(const vstage *s, const double *scale, double *u, double *Jk, int *kept_in) {
+    const cf_params *p = s->p;
     const int N = 2 * s->n;
-    double r[6], T1[3], T2[3], J[36], step[6], du[6], un[6], rn[6], T1n[3], T2n[3];
+    double r[6], T1[3], T2[3], J[36], step[6], du[6], un[6], rn[6], T1n[3], T2n[3], norm = 0.0;
+    int have = *kept_in;
     vresiduals(s, u, r, T1, T2);
-    for (int it = 0; it < s->p->newton_iterations; it++) {
-        for (int i = 0; i < N; i++) du[i] = s->p->fd_step * (fabs(u[i]) + scale[i]);
-        vjacobian(s, u, du, T1, T2, J);
+    for (int it = 0; it < p->newton_iterations; it++) {
+        int kept = have;
+        if (!kept) {
+            for (int i = 0; i < N; i++) du[i] = p->fd_step * (fabs(u[i]) + scale[i]);
+            vjacobian(s, u, du, T1, T2, Jk);
+            have = *kept_in = 1;
+        }
+        for (int k = 0; k < N * N; k++) J[k] = Jk[k]; /* solve_small overwrites */
         for (int i = 0; i < N; i++) step[i] = -r[i];
-        if (solve_small(N, J, step)) return CF_FALLBACK;
+        if (solve_small(N, J, step)) {
+            if (!kept) return CF_FALLBACK;
+            have = 0;
+            continue;
+        }
         double lam = 1.0, norm0 = norm2(N, r);
         for (;;) {
             for (int i = 0; i < N; i++) un[i] = u[i] + lam * step[i];
             vresiduals(s, un, rn, T1n, T2n);
-            if (norm2(N, rn) < norm0 || lam < s->p->line_search_min) break;
+            norm = norm2(N, rn);
+            if (kept || norm < norm0 || lam < p->line_search_min) break;
             lam *= 0.5;
+        }
+        if (kept && !(norm <= p->contraction_max * norm0)) {
+            have = 0; /* the step is dropped; a new Jacobian at u */
+            continue;
         }
         int done = 1;
         for (int i = 0; i < N; i++) {
             u[i] = un[i];
             r[i] = rn[i];
-            if (!(fabs(lam * step[i]) <= s->p->solve_rtol * (fabs(u[i]) + scale[i]))) done = 0;
+            if (!(fabs(lam * step[i]) <= p->solve_rtol * (fabs(u[i]) + scale[i]))) done = 0;
         }
         for (int i = 0; i < s->n; i++) T1[i] = T1n[i], T2[i] = T2n[i];
         if (done) return CF_OK;
+        if (kept && norm > p->contraction_fast * norm0) have = 0; /* slow: renewed */
     }
     return CF_FALLBACK;
 }
@@ -831,7 +851,9 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4]) 
         scale[i] = scale[s.n + i] = sc[a];
         u[i] = u[s.n + i] = s.un[i];
     }
-    if (vnewton(&s, scale, u)) return CF_FALLBACK;
+    int kept = w->jac_valid && w->jac_h == h; /* RollingBody._jac for this h */
+    if (vnewton(&s, scale, u, w->J, &kept)) return CF_FALLBACK;
+    w->jac_valid = 1, w->jac_h = h;
     double Y[4], T[3];
     vstate_at(&s, u + s.n, 1, Y);
     forces_at(p, Y, T, &cache);
