@@ -303,11 +303,18 @@ class RollingBody(BodyState):
         return T, (self._law(vx + dv, Vx + k * dv)[0] - T) / dv
 
     def _forces(self, Y: FloatArray) -> FloatArray:
-        """(Tx, Ty, Mz) at states Y (k, 4), shape (k, 3): one vectorised law call."""
-        Vx = Y[:, 0]
-        V = np.where(np.abs(Vx) >= V_STANDSTILL, Vx, np.copysign(V_STANDSTILL, Vx))
-        T = self.law.forces(Y[:, 1], Y[:, 2], Y[:, 3], V)
-        return np.stack([np.broadcast_to(t, Vx.shape) for t in T], axis=1)
+        """(Tx, Ty, Mz) at states Y (k, 4), shape (k, 3): one vectorised law call, with
+        the law at standstill of ``forces_at_rest`` for |Vx| < V_STANDSTILL."""
+        k, Vx = Y.shape[0], Y[:, 0]
+        near = np.flatnonzero(np.abs(Vx) < V_STANDSTILL)
+        rows = np.concatenate([np.arange(k), near])  # near rows twice: at +V_s and -V_s
+        V = np.concatenate([Vx, np.full(near.size, -V_STANDSTILL)])
+        V[near] = V_STANDSTILL
+        T = self.law.forces(Y[rows, 1], Y[rows, 2], Y[rows, 3], V)
+        T = np.stack([np.broadcast_to(t, V.shape) for t in T], axis=1)
+        w = standstill_weight(Vx[near])[:, None]
+        T[near] = w * T[near] + (1.0 - w) * T[k:]
+        return T[:k]
 
     def _scale(self, Vx: float) -> FloatArray:
         """Scales of the unknowns (vx, Vy, Omega_z) for the solvers."""
@@ -478,6 +485,26 @@ class RollingBody(BodyState):
 def _shift(f_df: tuple[float, float], target: float) -> tuple[float, float]:
     """(f - target, f') for the root finder."""
     return f_df[0] - target, f_df[1]
+
+
+def standstill_weight(Vx: FloatArray | float) -> FloatArray | float:
+    """Weight of the law at +V_STANDSTILL (against -V_STANDSTILL) for |Vx| below it."""
+    return 0.5 * (1.0 + Vx / V_STANDSTILL)
+
+
+def forces_at_rest(law: ContactLaw, vx: float, vy: float, phi: float, Vx: float) -> tuple:
+    """(Tx, Ty, Mz) at the state's speed Vx; for |Vx| < V_STANDSTILL, where the creep
+    law tends to Coulomb's set-valued law, the linear blend of the law at +V_STANDSTILL
+    and at -V_STANDSTILL (standstill_weight). The two differ (Mz flips with the rolling
+    direction, the spin march runs the other way), so evaluating at the nearer of them
+    would make the stage residuals jump where Vx crosses zero; the blend keeps them
+    continuous (docs/model.md, "Standstill")."""
+    if abs(Vx) >= V_STANDSTILL:
+        return tuple(float(t) for t in law.forces(vx, vy, phi, Vx))
+    w = standstill_weight(Vx)
+    plus = law.forces(vx, vy, phi, V_STANDSTILL)
+    minus = law.forces(vx, vy, phi, -V_STANDSTILL)
+    return tuple(float(w * a + (1.0 - w) * b) for a, b in zip(plus, minus, strict=True))
 
 
 def _checked(L: Loads) -> Loads:

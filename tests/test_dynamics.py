@@ -243,6 +243,53 @@ def test_slip_decays_to_zero_through_underflow():
     assert abs(tr.vx[-1]) < 1e-200 * V0 and abs(tr.Tx[-1]) < 1e-190 * MU_P
 
 
+def test_law_at_standstill_is_continuous_through_zero_speed():
+    """Below V_STANDSTILL the stage solves see the blend of the law at +V_STANDSTILL and
+    -V_STANDSTILL (integrator.forces_at_rest): with lateral slip and spin the two sides
+    differ by a finite amount (Mz flips with the rolling direction, the spin march runs
+    the other way), which the blend turns into a ramp of slope jump/(2 V_STANDSTILL),
+    continuous at 0 and at +-V_STANDSTILL: across 2e-3 V_STANDSTILL about each of these
+    points the forces move by at most 1e-3 of the jump (1.1e-3 with the law's own
+    variation outside)."""
+    from contact_fmu.integrator import V_STANDSTILL
+
+    b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 3, Iz=0.4 * ex.M * ex.Rx**2)
+    rb = RollingBody(C, b, Lateral(vy_ratio=None, spin_ratio=None))
+    Vs, d = V_STANDSTILL, 1e-3
+    Vx = np.array([p + o * Vs for p in (-Vs, 0.0, Vs) for o in (-d, d)])
+    Y = np.stack([Vx, np.full(6, 2e-4), np.full(6, 3e-4), np.full(6, 2.0)], axis=1)
+    jump = np.abs(np.subtract(*rb._forces(np.array([[Vs, 2e-4, 3e-4, 2.0],
+                                                     [-Vs, 2e-4, 3e-4, 2.0]]))))  # fmt: skip
+    assert jump.max() > 1e-3 * MU_P  # the two sides differ: the floor alone would jump
+    T = rb._forces(Y)
+    for i in (0, 2, 4):
+        assert np.all(np.abs(T[i + 1] - T[i]) <= 1.1e-3 * jump), np.abs(T[i + 1] - T[i]) / jump
+
+
+@pytest.mark.parametrize("h", [1e-5, 1.2e-5, 2.5e-5])
+def test_lateral_dynamics_through_zero_speed(h):
+    """Eqs. (8)-(11) under braking and a lateral force: Vx passes zero (at 2 ms, a step
+    boundary for h = 1e-5 and 2.5e-5) and reverses, the lateral slip and the spin with it.
+    Every stage solve converges (before the blend at standstill the residual jumped
+    where Vx crossed zero and h = 1e-5 failed), |T| <= mu P, the run ends backwards at
+    the speed of Eq. (8) with Tx = -A2 0.75 mu P (Eq. 26), and the compiled step
+    (stepper.c, the same blend) ends where the Python one does, to the bound of
+    tests/test_native.py's vector-path comparisons (1e-12 of mu P; measured 1e-15)."""
+    b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 2.0, Iz=0.4 * ex.M * ex.Rx**2)
+    lat = Lateral(vy_ratio=None, spin_ratio=None)
+    bodies = [RollingBody(C, b, lat, Vx0=0.3, Omega_y0=0.3 / ex.Rx) for _ in range(2)]
+    bodies[1]._kernel = None  # the Python path
+    L = Loads(Fx_ex=-0.75 * MU_P, Fy_ex=0.2 * MU_P)
+    for rb in bodies:
+        for _ in range(round(4e-3 / h)):
+            rb.advance(h, L, 4)
+            assert math.hypot(rb.out.Tx, rb.out.Ty) <= MU_P * (1 + 1e-12)
+        assert rb.y[0] == pytest.approx(0.3 - b.A1 * 0.75 * MU_P / b.M * rb.t, rel=1e-2)
+        assert rb.out.Tx == pytest.approx(-b.A2 * 0.75 * MU_P, rel=1e-3)
+    a, p = (np.array([rb.out.Tx, rb.out.Ty, rb.out.Mz / C.a1]) for rb in bodies)
+    assert np.abs(a - p).max() <= 1e-12 * MU_P
+
+
 # ---- lateral dynamics, Eqs. (10)-(11), (29)-(30) ------------------------------------------
 def test_lateral_force_balances_the_load_eq29():
     b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 3)

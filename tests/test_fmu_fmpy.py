@@ -331,3 +331,51 @@ def test_full_body_fmu_state_with_lateral_dynamics_repeats_bit_for_bit():
         for _ in range(3):
             assert b.step(1e-4) == OK
         assert b.outputs() == first
+
+
+def _lateral_history(kind: str, t: float) -> dict[str, float]:
+    """Loads of the lateral extremes at time t (s), in units of mu P (and mu P Rx)."""
+    on = 5e-4 <= t < 2.5e-3
+    return {
+        "beyond": {"Fy_ex": 1.2 * on * MU_P},
+        "combined": {"Fx_ex": 0.7 * MU_P * min(t / 1e-3, 1.0),
+                     "My_ex": -0.7 * MU_P * ex.Rx * min(t / 1e-3, 1.0),
+                     "Fy_ex": 0.7 * MU_P * min(t / 1e-3, 1.0)},
+        "yaw": {"Fy_ex": 0.3 * MU_P, "Mz_ex": (0.05 if on else -0.1) * MU_P * ex.contact().a1},
+        "reversal": {"Fx_ex": -0.75 * MU_P, "Fy_ex": 0.2 * MU_P},
+    }[kind]  # fmt: skip
+
+
+@pytest.mark.parametrize("kind", ["beyond", "combined", "yaw", "reversal"])
+def test_full_body_fmu_lateral_extremes(kind):
+    """The full body FMU (Eqs. 8-11, the law with spin, the compiled vector step) through
+    fmpy at its edges: a lateral force of 1.2 mu P for 2 ms (gross sliding sideways, then
+    rolling again), Tx and Fy_ex each at 0.7 mu P (|T| = 0.99 mu P), yaw-moment steps,
+    and Vx through zero under a lateral force (at 2 ms, a communication point). Every
+    doStep OK, every output finite, |T| <= mu P to rounding (16 eps), and the power of
+    the creep forces on the rigid slip of Eq. (3), Tx vx + Ty vy + Mz Omega_z, never
+    negative beyond the stage tolerance (100 SOLVE_RTOL mu P v_s, as the stiff suite's
+    dissipation check)."""
+    from contact_fmu.fmu.config import ModelConfig
+    from contact_fmu.solvers import SOLVE_RTOL
+
+    path = fmu_build.build(ModelConfig.full("body"), OUT).path
+    h = 1e-5
+    V0 = 0.3 if kind == "reversal" else ex.speed_unit()
+    starts = {"h_max": h / 4, "Vx0": V0, "Omega_y0": V0 / ex.Rx, "Iy": ex.M * ex.Rx**2 / 2}
+    cfs = ex.contact().creep_full_slip
+    with Instance(path, kind, starts) as b:
+        b.set("P", ex.P)
+        for k in range(400):
+            for name, value in _lateral_history(kind, k * h).items():
+                b.set(name, value)
+            assert b.step(h) == OK, b.messages[-1:]
+            o = b.outputs()
+            assert all(math.isfinite(v) for v in o.values() if isinstance(v, float))
+            assert math.hypot(o["Tx"], o["Ty"]) <= MU_P * (1 + 16 * np.finfo(float).eps)
+            power = o["Tx"] * o["vx"] + o["Ty"] * o["vy"] + o["Mz"] * o["Omega_z"]
+            vs = cfs * max(abs(o["Vx"]), 1e-9)
+            assert power >= -100 * SOLVE_RTOL * MU_P * vs, (k, power)
+        if kind == "reversal":
+            assert o["Vx"] < -0.2  # through zero and backwards
+        assert all(s < FATAL for s, _ in b.messages)

@@ -656,10 +656,10 @@ typedef struct {
     double vx, vy, V, R[3];
 } march_cache;
 
-/* RollingBody._forces at one state y = (Vx, vx, Vy, Omega_z); the thin-layer law as
+/* the law at state y = (Vx, vx, Vy, Omega_z) and speed V; the thin-layer law as
  * cf_layer_forces */
-static void forces_at(const cf_params *p, const double y[4], double T[3], march_cache *c) {
-    double V = fabs(y[0]) >= p->v_standstill ? y[0] : copysign(p->v_standstill, y[0]);
+static void law_at(const cf_params *p, const double y[4], double V, double T[3],
+                   march_cache *c) {
     if (p->law == LAW_TABLE) {
         double o[4];
         table_scalar(p, y[1], y[2], y[3], V, o);
@@ -676,6 +676,19 @@ static void forces_at(const cf_params *p, const double y[4], double T[3], march_
         c->valid = 1, c->vx = y[1], c->vy = y[2], c->V = V;
     }
     for (int k = 0; k < 3; k++) T[k] += with[k] - c->R[k];
+}
+
+/* RollingBody._forces at one state: the law at Vx, or for |Vx| < v_standstill the blend
+ * of the law at +v_standstill and -v_standstill (integrator.forces_at_rest) */
+static void forces_at(const cf_params *p, const double y[4], double T[3], march_cache *c) {
+    if (fabs(y[0]) >= p->v_standstill) {
+        law_at(p, y, y[0], T, c);
+        return;
+    }
+    double Tp[3], Tm[3], w = 0.5 * (1.0 + y[0] / p->v_standstill);
+    law_at(p, y, p->v_standstill, Tp, c);
+    law_at(p, y, -p->v_standstill, Tm, c);
+    for (int k = 0; k < 3; k++) T[k] = w * Tp[k] + (1.0 - w) * Tm[k];
 }
 
 typedef struct {

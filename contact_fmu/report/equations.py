@@ -13,12 +13,12 @@ This is written from the paper's equations, not from the stepper: the state is
 
 so the slip vx is integrated directly (integrating Omega_y instead would lose vx ~ 1e-4 Vx
 to cancellation in Vx - Omega_y Rx). The contact law is the model's law; like the
-stepper it is evaluated at |Vx| >= V_STANDSTILL (the model's definition at standstill).
+stepper's vector path it is blended at |Vx| < V_STANDSTILL (integrator.forces_at_rest,
+the model's definition at standstill).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..dynamics import Body, Lateral
-from ..integrator import V_STANDSTILL
+from ..integrator import forces_at_rest
 from ..layer import LayerContact
 
 FloatArray = NDArray[np.float64]
@@ -78,9 +78,7 @@ class RollingEquations:
         Vx, vx, vy, phi = self.kinematics(y)
         P = self.loads(t)[0]
         law = self.law if P == self.law.P else self.law.with_load(P)
-        V = Vx if abs(Vx) >= V_STANDSTILL else math.copysign(V_STANDSTILL, Vx)
-        Tx, Ty, Mz = law.forces(vx, vy, phi, V)
-        return float(Tx), float(Ty), float(Mz)
+        return forces_at_rest(law, vx, vy, phi, Vx)
 
     def rhs(self, t: float, y: FloatArray) -> FloatArray:
         """dy/dt of Eqs. (8)-(11)."""
