@@ -286,12 +286,16 @@ class LayerContact:
         """
         if isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float) and phi == 0.0:
             return self._forces_scalar(vx, vy, Vx)
-        lib, args = _rolling_inputs((vx, vy, phi, Vx), Vx_at=3)
+        v = (vx, vy, phi, Vx)
+        scalar = all(np.ndim(a) == 0 for a in v)  # floats with spin: one input, floats out
+        lib, args = _rolling_inputs(tuple(map(np.atleast_1d, v)) if scalar else v, Vx_at=3)
         if lib is not None:  # the same in C (stepper.c, cf_layer_forces), to rounding
             out = np.empty((args[0].size, 3))
             grid = self.native_strips()
             ptrs = (a.ctypes.data for a in args)
             lib.cf_layer_forces(self._native_params, grid, out.shape[0], *ptrs, out.ctypes.data)
+            if scalar:
+                return float(out[0, 0]), float(out[0, 1]), float(out[0, 2])
             Tx, Ty, Mz = out.T.copy()
             return Tx, Ty, Mz
         vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))

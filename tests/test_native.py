@@ -391,8 +391,8 @@ def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
     of them without spin (the closed form of Eqs. 40-43). |tau| in C is sqrt(a^2 +
     b^2), within two roundings of numpy's complex abs, and the projection on |tau| <=
     mu p does not expand a difference, so along a strip of 64 nodes the tractions differ
-    by at most about 128 roundings: 2e-14 of mu p0. The resultants are summed node by
-    node in C, pairwise in numpy: each differs by at most 3072 roundings of sum w |tau|
+    by at most about 128 roundings: 2e-14 of mu p0. The resultants are summed strip by
+    strip in C, pairwise in numpy: each differs by at most 3072 roundings of sum w |tau|
     <= mu P (times max(a1, a2) for Mz), and forces takes the difference of two: 7e-13."""
     from contact_fmu.layer import SPIN_GRID
 
@@ -421,6 +421,21 @@ def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
         forces_c, forces_p, (F, F, F * max(CONTACT.a1, CONTACT.a2)), strict=True
     ):
         assert np.abs(a - b).max() <= 7e-13 * scale
+
+
+def test_spin_law_for_floats_runs_compiled_and_returns_floats(monkeypatch):
+    """LayerContact.forces with float inputs and spin (the scalar stage solves with a
+    held spin ratio, the report's reference equations): the compiled law for one input,
+    floats out, the same doubles as for a one-element array, and numpy's to the bounds
+    of the strip-march test (7e-13 of mu P)."""
+    v = (0.01, 0.002, 0.5, -5.0)
+    got = CONTACT.forces(*v)
+    assert all(type(t) is float for t in got)
+    assert got == tuple(float(t[0]) for t in CONTACT.forces(*(np.array([a]) for a in v)))
+    monkeypatch.setattr(native, "_LOADED", {"stepper": None})
+    ref = CONTACT.forces(*v)
+    scale = (F, F, F * max(CONTACT.a1, CONTACT.a2))
+    assert all(abs(a - float(b)) <= 7e-13 * s for a, b, s in zip(got, ref, scale, strict=True))
 
 
 def test_a_law_that_ran_compiled_pickles_and_copies():

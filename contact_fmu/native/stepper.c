@@ -568,6 +568,8 @@ typedef struct {
  * sqrt(a^2 + b^2), within two roundings of numpy's complex abs (hypot where the squares
  * overflow), and the sums run in another order than numpy's: the two paths agree to
  * rounding, not bit for bit (tests/test_native.py). */
+#define MARCH_LANES 8 /* strips marched together: their chains are independent */
+
 static void march_one(const cf_strips *g, double vx, double vy, double Vx, double phi,
                       double *tau, unsigned char *slip, double R[3]) {
     const int ny = g->ny, nx = g->nx;
@@ -575,28 +577,40 @@ static void march_one(const cf_strips *g, double vx, double vy, double Vx, doubl
     const double gain = 1.0 / (fabs(Vx) * g->k);
     const double sphi = s * phi;
     double Tr = 0.0, Ti = 0.0, M = 0.0;
-    for (int i = 0; i < ny; i++) {
-        const size_t row = (size_t)i * nx;
-        const double Y = g->y[i], re = vx - phi * Y;
-        double tr = 0.0, ti = 0.0;
+    /* Each strip's march is one chain of dependent operations (a square root and a
+     * division per node); MARCH_LANES strips side by side let the processor overlap
+     * them. The resultants are summed per strip, then over the strips in order. */
+    for (int i0 = 0; i0 < ny; i0 += MARCH_LANES) {
+        const int m = ny - i0 < MARCH_LANES ? ny - i0 : MARCH_LANES;
+        double tr[MARCH_LANES] = {0.0}, ti[MARCH_LANES] = {0.0}, re[MARCH_LANES];
+        double sr[MARCH_LANES] = {0.0}, si[MARCH_LANES] = {0.0}, sm[MARCH_LANES] = {0.0};
+        for (int l = 0; l < m; l++) re[l] = vx - phi * g->y[i0 + l];
         for (int j = 0; j < nx; j++) {
-            const size_t e = row + j;
-            const double gd = gain * g->dist[e], c = g->cap[e];
-            const double a = tr + gd * re, b = ti + gd * (vy - sphi * g->mid[e]);
-            double mag = sqrt(a * a + b * b); /* hypot's cost, 5x, only on overflow */
-            if (!(mag <= DBL_MAX)) mag = hypot(a, b);
-            const double q = c / (g->tiny > mag ? g->tiny : mag);
-            const double f = q < 1.0 ? q : 1.0;
-            tr = a * f;
-            ti = b * f;
-            if (tau) {
-                tau[2 * e] = tr;
-                tau[2 * e + 1] = ti;
-                slip[e] = mag > c;
+            const double sx = -s * g->x[j];
+            for (int l = 0; l < m; l++) {
+                const size_t e = (size_t)(i0 + l) * nx + j;
+                const double gd = gain * g->dist[e], c = g->cap[e];
+                const double a = tr[l] + gd * re[l], b = ti[l] + gd * (vy - sphi * g->mid[e]);
+                double mag = sqrt(a * a + b * b); /* hypot's cost, 5x, only on overflow */
+                if (!(mag <= DBL_MAX)) mag = hypot(a, b);
+                const double q = c / (g->tiny > mag ? g->tiny : mag);
+                const double f = q < 1.0 ? q : 1.0;
+                tr[l] = a * f;
+                ti[l] = b * f;
+                if (tau) {
+                    tau[2 * e] = tr[l];
+                    tau[2 * e + 1] = ti[l];
+                    slip[e] = mag > c;
+                }
+                sr[l] += g->w[e] * tr[l];
+                si[l] += g->w[e] * ti[l];
+                sm[l] += g->w[e] * (sx * ti[l] - g->y[i0 + l] * tr[l]);
             }
-            Tr += g->w[e] * tr;
-            Ti += g->w[e] * ti;
-            M += g->w[e] * (-s * g->x[j] * ti - Y * tr);
+        }
+        for (int l = 0; l < m; l++) {
+            Tr += sr[l];
+            Ti += si[l];
+            M += sm[l];
         }
     }
     R[0] = Tr;
