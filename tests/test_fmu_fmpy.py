@@ -43,17 +43,20 @@ def body(fmus, **params) -> Instance:
     return inst
 
 
+def steps(inst: Instance, n: int, h: float) -> None:
+    """n doSteps of h, each fmi2OK."""
+    for _ in range(n):
+        assert inst.step(h) == OK, inst.messages[-1:]
+
+
 def test_fmu_state_get_step_set_step_is_bit_identical(fmus):
     with body(fmus) as b:
-        for _ in range(4):
-            assert b.step(1.75e-4) == OK
+        steps(b, 4, 1.75e-4)
         state = b.get_state()
-        for _ in range(3):
-            assert b.step(1.75e-4) == OK
+        steps(b, 3, 1.75e-4)
         first = b.outputs()
         b.set_state(state)
-        for _ in range(3):
-            assert b.step(1.75e-4) == OK
+        steps(b, 3, 1.75e-4)
         assert b.outputs() == first
         b.free_state(state)
 
@@ -91,13 +94,11 @@ def test_serialized_state_restores_bit_for_bit_in_another_process(fmus, tmp_path
     import sys
 
     with body(fmus) as b:
-        for _ in range(4):
-            assert b.step(1.75e-4) == OK
+        steps(b, 4, 1.75e-4)
         state = b.get_state()
         path = tmp_path / "state.bin"
         path.write_bytes(b.serialize_state(state))
-        for _ in range(3):
-            assert b.step(1.75e-4) == OK
+        steps(b, 3, 1.75e-4)
         first = {k: v.hex() for k, v in b.outputs().items() if isinstance(v, float)}
         b.free_state(state)
     args = [sys.executable, "-c", RESTORE_SCRIPT, str(fmus["fig13"]), str(path), repr(state[1])]
@@ -316,20 +317,16 @@ def test_full_body_fmu_state_with_lateral_dynamics_repeats_bit_for_bit():
         a.set("Fx_ex", 0.2 * MU_P)
         a.set("Fy_ex", 0.3 * MU_P)
         a.set("Mz_ex", 0.01 * MU_P * ex.Rx)
-        for _ in range(5):
-            assert a.step(1e-4) == OK
+        steps(a, 5, 1e-4)
         state = a.get_state()
-        for _ in range(3):
-            assert a.step(1e-4) == OK
+        steps(a, 3, 1e-4)
         first = a.outputs()
         assert first["Omega_z"] != 0.0 and first["Vy"] != 0.0
         a.set_state(state)
-        for _ in range(3):
-            assert a.step(1e-4) == OK
+        steps(a, 3, 1e-4)
         assert a.outputs() == first
         b.set_state(b.deserialize_state(a.serialize_state(state), state[1]))
-        for _ in range(3):
-            assert b.step(1e-4) == OK
+        steps(b, 3, 1e-4)
         assert b.outputs() == first
 
 
