@@ -17,10 +17,11 @@ FD_STEP = 1e-7
 # ``newton``: iteration cap before scipy's hybrid method, smallest backtracking fraction.
 NEWTON_ITERATIONS = 50
 LINE_SEARCH_MIN = 1e-4
-# ``newton`` with a kept Jacobian: the least reduction of |r| per step that keeps it.
+# ``newton`` with a kept Jacobian: the largest |r_new|/|r| of a full step it may take
+# (beyond, the step is dropped and the Jacobian renewed) ...
 CONTRACTION_MAX = 0.25
-# ... and after a kept Jacobian's step that reduced |r| by less than this, it is renewed
-# (linear convergence at that rate would take more law evaluations than a new one).
+# ... and the largest after which it is kept: linear convergence at a slower rate would
+# take more law evaluations than a new Jacobian.
 CONTRACTION_FAST = 1e-2
 # Bracket search: the step grows by this factor, at most this many times.
 EXPAND = 4.0
@@ -118,11 +119,11 @@ def newton(
 
     ``memo``: a Jacobian kept from an earlier solve (memo["J"]) and the one this solve
     forms last, written back. A kept Jacobian (and the last fresh one, in later
-    iterations: simplified Newton, Hairer & Wanner IV.8) is used while a full step
-    reduces |r| by CONTRACTION_MAX; otherwise the step is dropped and the Jacobian
-    formed anew at the current u, as it is after a kept step that reduced |r| by less
-    than CONTRACTION_FAST. The contraction bound makes the error after the last step
-    at most a third of that step, within the stopping rule.
+    iterations: simplified Newton, Hairer & Wanner IV.8) takes full steps while each
+    shrinks |r| to at most CONTRACTION_MAX of its value; otherwise the step is dropped
+    and the Jacobian formed anew at the current u, as it is after a kept step that left
+    more than CONTRACTION_FAST of |r|. The contraction bound makes the error after the
+    last step at most a third of that step, within the stopping rule.
     """
     n = len(u0)
     u = np.array(u0, float)
