@@ -5,7 +5,7 @@ the scene's data on a path that does not go through the FMU, its adapter or fmpy
 
 - ``quasistationary``: the closed form Tx = A2 Fx_ex - A1 My_ex / Rx of Eq. (26)
   (dimensional; ``dynamics.Body.tx_quasistationary``), valid in rolling after the slip
-  transient, with regime = 0;
+  transient, with regime = 0; where Vy follows Eq. (10), also Ty = Fy_ex (Eq. 29);
 - ``full_slip``: Coulomb's law in gross sliding, Tx = sign mu P and regime = 1, over a
   window the scene asserts to be sliding;
 - ``simulate``: the pure-numerics stepper of ``simulate.simulate`` (RollingBody) with
@@ -91,7 +91,10 @@ def quasistationary(scene: Scene, ref: Reference, case: Case) -> dict[str, Float
     k = _samples(scene, ref)
     u = _held_inputs(scene, case)
     Tx = _body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
-    return {"time": scene.grid[k], "Tx": Tx, "regime": np.zeros(k.size)}
+    out = {"time": scene.grid[k], "Tx": Tx, "regime": np.zeros(k.size)}
+    if scene.config.vy == "eq10":  # Eq. (29): the lateral force balances the load
+        out["Ty"] = u["Fy_ex"][k]
+    return out
 
 
 def full_slip(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
