@@ -71,6 +71,9 @@ Z_ALGEBRAIC = 1e13
 # Loads within this relative margin of the capacity mu P count as gross sliding in the
 # quasistationary method (the inverse creep law runs to infinity there).
 CAPACITY_MARGIN = 1e-9
+# The key of RollingBody._jac for the algebraic stage (the quasistationary method in
+# rolling: T(u) = F, no step size in it); Lobatto's coupled stages key theirs by h.
+ALGEBRAIC = -1.0
 # Load history: a function of time returning Loads, or constant Loads.
 LoadInput = Loads | Callable[[float], Loads]
 
@@ -110,7 +113,8 @@ class RollingBody(BodyState):
         self.scheme = scheme
         self.sliding = False
         self._dv = 0.0  # last step's dvx/dt (m/s^2): the predictor of the stage solves
-        # (h, Newton matrix) of the last vector step, kept for the next (solvers.newton)
+        # (h or ALGEBRAIC, Newton matrix) of the last vector stage solve, kept for the
+        # next one of the same kind (solvers.newton's memo)
         self._jac: tuple[float, FloatArray] | None = None
         T = self._forces(self.y[None, :])[0]
         self.out = ContactOutputs(*map(float, T), _saturated(law, self.y))
@@ -373,8 +377,13 @@ class RollingBody(BodyState):
             Y[:, 0] = Vb[stage] + (m[0] / b.M) * (U[:, 0] - un[0])
             return self._apply_ratios(Y.T).T
 
-        if not np.any(m):  # algebraic: T(u2) = F2
-            u2 = newton(lambda U: self._forces(states(U, 1))[:, self._act] - F2, un, scale)
+        if not np.any(m):  # algebraic: T(u2) = F2; its Jacobian kept under the key ALGEBRAIC
+            key = ALGEBRAIC
+            memo = {"J": self._jac[1]} if self._jac is not None and self._jac[0] == key else {}
+            u2 = newton(
+                lambda U: self._forces(states(U, 1))[:, self._act] - F2, un, scale, None, memo
+            )
+            self._jac = (key, memo["J"]) if "J" in memo else None
             Y2 = states(u2[None, :], 1)
             T = self._forces(Y2)[0]
             T[self._act] = F2
