@@ -1,6 +1,7 @@
 """An independent engine: libcosim (Open Simulation Platform) runs the same FMUs.
 
-1. The Fig. 13 scene's FMU under libcosim gives fmpy's numbers (within 1e-9).
+1. The Fig. 13 and cornering scenes' FMUs under libcosim give fmpy's numbers (within
+   1e-9).
 2. A contact-mode FMU and a separate rigid-body FMU (Eqs. 8-9), connected through
    libcosim (Vx, Omega_y -> contact; Tx -> body), reproduce the body-mode FMU.
 
@@ -56,15 +57,19 @@ def quiet():
     log_output_level(CosimLogLevel.ERROR)
 
 
-def test_libcosim_matches_fmpy_on_the_fig13_scene():
-    scene = load(ROOT / "scenarios" / "fig13.toml")
+@pytest.mark.parametrize(("name", "case_name"), [("fig13", "eta = 3"), ("cornering", "cornering")])
+def test_libcosim_matches_fmpy_on_the_scene(name, case_name):
+    """The scene's FMU under libcosim against fmpy, 60 steps: Fig. 13 (the compiled
+    doStep) and cornering (Eqs. 10-11, the compiled vector step with its kept Newton
+    matrix; the lateral force steps at 0.5 ms, step 25)."""
+    scene = load(ROOT / "scenarios" / f"{name}.toml")
     fmu = fmu_build.build(scene.config, OUT).path
-    case = scene.case("eta = 3")
+    case = scene.case(case_name)
     n = 60
     assert ns(scene.step) * 1e-9 == scene.step  # libcosim counts integer nanoseconds
 
     execution = CosimExecution.from_step_size(step_size=ns(scene.step))
-    slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu), instance_name="fig13"))
+    slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu), instance_name=name))
     vr = references(execution, slave)
     for name, value in runner.start_values(scene, case).items():
         assert execution.real_initial_value(slave, vr[name], float(value))
