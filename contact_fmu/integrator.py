@@ -32,7 +32,9 @@ Eqs. (8) and (20) gives Vx explicitly,
     M (V_i - V_n) = h sum_j a_ij A1 (Fx_j + My_j/Rx) + M A2 (vx_i - vx_n),
 
 so with one unknown every stage equation is one increasing scalar function (Lobatto's
-two coupled stages included, see ``_lobatto_scalar``): bracketed root finding.
+two coupled stages included, see ``_lobatto_scalar``): bracketed root finding. With
+several, ``_lobatto_vector``: Newton with a per-stage Jacobian kept from step to step
+(simplified Newton, ``solvers.newton``'s memo; docs/model.md).
 """
 
 from __future__ import annotations
