@@ -61,9 +61,10 @@ GAMMA = 1.0 - 0.5 * math.sqrt(2.0)
 # Lobatto IIIC, two stages: A = [[1/2, -1/2], [1/2, 1/2]], c = (0, 1), b = last row.
 STAGE_TIMES = {"sdirk2": (GAMMA, 1.0), "lobatto3c": (0.0, 1.0)}
 
-# |Vx| (m/s) below which the contact law is evaluated at this speed: the creep law's
-# Vx -> 0 limit is Coulomb's set-valued law; the floor keeps every stage equation
-# single-valued (at rest the body "creeps" at v ~ 1e-2 x 1e-9 m/s). docs/model.md.
+# |Vx| (m/s) below which the contact law is the blend of its values at +-V_STANDSTILL
+# (forces_at_rest): the creep law's Vx -> 0 limit is Coulomb's set-valued law; the
+# floor keeps every stage equation single-valued and the blend continuous (at rest the
+# body "creeps" at v ~ 1e-2 x 1e-9 m/s). docs/model.md.
 V_STANDSTILL = 1e-9
 # Floor of |Vx| (m/s) for the velocity scales of the stage solver (not the physics).
 V_SCALE_FLOOR = 1e-9
@@ -289,9 +290,10 @@ class RollingBody(BodyState):
         return np.array([b.m_slip, b.M, b.Iz if b.Iz is not None else 0.0])[self._act]
 
     def _law(self, vx: float, Vx: float) -> tuple:
-        """The law at slip vx and speed Vx with the held lateral ratios (floats)."""
-        V = Vx if abs(Vx) >= V_STANDSTILL else math.copysign(V_STANDSTILL, Vx)
-        return self.law.forces(vx, self.lateral.vy_ratio * Vx, self.lateral.spin_ratio * Vx, V)
+        """The law at slip vx and speed Vx with the held lateral ratios (floats), at
+        standstill as ``forces_at_rest``."""
+        ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
+        return forces_at_rest(self.law, vx, ry * Vx, rz * Vx, Vx)
 
     def _law_x(self, vx: float, Vx: float, k: float, scale: float) -> tuple[float, float]:
         """Tx and dTx/dvx along a stage path on which Vx moves by k per unit of vx
@@ -300,10 +302,17 @@ class RollingBody(BodyState):
         ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
         slope = getattr(self.law, "tx_slope", None)
         if slope is not None and rz == 0.0:
-            floored = abs(Vx) < V_STANDSTILL
-            V = math.copysign(V_STANDSTILL, Vx) if floored else Vx
-            T, d_vx, d_vy, d_V = slope(vx, ry * Vx, V)
-            return T, d_vx + k * ry * d_vy + (0.0 if floored else k * d_V)
+            if abs(Vx) >= V_STANDSTILL:
+                T, d_vx, d_vy, d_V = slope(vx, ry * Vx, Vx)
+                return T, d_vx + k * ry * d_vy + k * d_V
+            # forces_at_rest's blend, and its slope: Vx, hence the weight, moves by k
+            # per unit of vx
+            w = standstill_weight(Vx)
+            Tp, ap, bp, _ = slope(vx, ry * Vx, V_STANDSTILL)
+            Tm, am, bm, _ = slope(vx, ry * Vx, -V_STANDSTILL)
+            sp, sm = ap + k * ry * bp, am + k * ry * bm
+            T = w * Tp + (1.0 - w) * Tm
+            return T, w * sp + (1.0 - w) * sm + k * (Tp - Tm) / (2.0 * V_STANDSTILL)
         T = self._law(vx, Vx)[0]
         dv = FD_STEP * (abs(vx) + scale)
         return T, (self._law(vx + dv, Vx + k * dv)[0] - T) / dv

@@ -285,20 +285,33 @@ static void table_tx_slope(const cf_params *p, double vx, double vy, double Vx, 
 }
 
 /* ---- integrator.py -------------------------------------------------------------- */
-/* RollingBody._law_x: Tx and dTx/dvx along a stage path (slope, k) */
-static void law_x(const cf_params *p, double vx, double Vx, double k, double out[2]) {
-    int floored = fabs(Vx) < p->v_standstill;
-    double V = floored ? copysign(p->v_standstill, Vx) : Vx;
-    double r[4];
-    if (p->law == LAW_TABLE) table_tx_slope(p, vx, p->ry * Vx, V, r);
-    else tx_slope(p, vx, p->ry * Vx, V, r);
-    out[0] = r[0];
-    out[1] = r[1] + k * p->ry * r[2] + (floored ? 0.0 : k * r[3]);
+/* the law's Tx and its slopes (dTx/dvx, dTx/dvy, dTx/dV) at speed V */
+static void slope_at(const cf_params *p, double vx, double vy, double V, double r[4]) {
+    if (p->law == LAW_TABLE) table_tx_slope(p, vx, vy, V, r);
+    else tx_slope(p, vx, vy, V, r);
 }
 
-/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx */
-static void law(const cf_params *p, double vx, double Vx, double T[3]) {
-    double V = fabs(Vx) >= p->v_standstill ? Vx : copysign(p->v_standstill, Vx);
+/* RollingBody._law_x: Tx and dTx/dvx along a stage path (slope, k); below
+ * v_standstill the blend of integrator.forces_at_rest and its slope */
+static void law_x(const cf_params *p, double vx, double Vx, double k, double out[2]) {
+    const double vs = p->v_standstill, vy = p->ry * Vx;
+    if (fabs(Vx) >= vs) {
+        double r[4];
+        slope_at(p, vx, vy, Vx, r);
+        out[0] = r[0];
+        out[1] = r[1] + k * p->ry * r[2] + k * r[3];
+        return;
+    }
+    double w = 0.5 * (1.0 + Vx / vs), rp[4], rm[4];
+    slope_at(p, vx, vy, vs, rp);
+    slope_at(p, vx, vy, -vs, rm);
+    double sp = rp[1] + k * p->ry * rp[2], sm = rm[1] + k * p->ry * rm[2];
+    out[0] = w * rp[0] + (1.0 - w) * rm[0];
+    out[1] = w * sp + (1.0 - w) * sm + k * (rp[0] - rm[0]) / (2.0 * vs);
+}
+
+/* the law (Tx, Ty, Mz) at slip vx, lateral slip ry Vx, no spin, speed V */
+static void law_plain(const cf_params *p, double vx, double Vx, double V, double T[3]) {
     if (p->law == LAW_TABLE) {
         double o[4];
         table_scalar(p, vx, p->ry * Vx, 0.0 * Vx, V, o);
@@ -306,6 +319,20 @@ static void law(const cf_params *p, double vx, double Vx, double T[3]) {
     } else {
         forces(p, vx, p->ry * Vx, V, T);
     }
+}
+
+/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx (forces_at_rest below
+ * v_standstill) */
+static void law(const cf_params *p, double vx, double Vx, double T[3]) {
+    const double vs = p->v_standstill;
+    if (fabs(Vx) >= vs) {
+        law_plain(p, vx, Vx, Vx, T);
+        return;
+    }
+    double w = 0.5 * (1.0 + Vx / vs), Tp[3], Tm[3];
+    law_plain(p, vx, Vx, vs, Tp);
+    law_plain(p, vx, Vx, -vs, Tm);
+    for (int c = 0; c < 3; c++) T[c] = w * Tp[c] + (1.0 - w) * Tm[c];
 }
 
 /* the stage residuals: algebraic (T(v, V2b) - Fe2) or Lobatto's coupled pair (g) */

@@ -13,8 +13,8 @@ This is written from the paper's equations, not from the stepper: the state is
 
 so the slip vx is integrated directly (integrating Omega_y instead would lose vx ~ 1e-4 Vx
 to cancellation in Vx - Omega_y Rx). The contact law is the model's law; like the
-stepper's vector path it is blended at |Vx| < V_STANDSTILL (integrator.forces_at_rest,
-the model's definition at standstill).
+stepper it is blended at |Vx| < V_STANDSTILL (integrator.forces_at_rest, the model's
+definition at standstill).
 """
 
 from __future__ import annotations
