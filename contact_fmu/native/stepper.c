@@ -66,6 +66,16 @@ typedef struct {
     int sliding;          /* RollingBody.sliding (quasistationary gross sliding) */
 } cf_state;
 
+/* The last zero-spin march of forces_at: a Jacobian column in Omega_z changes only
+ * the spin, so its march without spin is the one before (the same doubles). */
+typedef struct {
+    int valid;
+    double vx, vy, V, R[3];
+} march_cache;
+
+/* the law at a state (Vx, vx, Vy, Omega_z), below v_standstill blended (further down) */
+static void forces_at(const cf_params *p, const double y[4], double T[3], march_cache *c);
+
 /* Python's min(x, c) and max(x, c) for a constant c: the first argument unless c is
  * strictly smaller (larger). */
 static double py_min(double x, double c) { return c < x ? c : x; }
@@ -310,29 +320,13 @@ static void law_x(const cf_params *p, double vx, double Vx, double k, double out
     out[1] = w * sp + (1.0 - w) * sm + k * (rp[0] - rm[0]) / (2.0 * vs);
 }
 
-/* the law (Tx, Ty, Mz) at slip vx, lateral slip ry Vx, no spin, speed V */
-static void law_plain(const cf_params *p, double vx, double Vx, double V, double T[3]) {
-    if (p->law == LAW_TABLE) {
-        double o[4];
-        table_scalar(p, vx, p->ry * Vx, 0.0 * Vx, V, o);
-        T[0] = o[0], T[1] = o[1], T[2] = o[2];
-    } else {
-        forces(p, vx, p->ry * Vx, V, T);
-    }
-}
-
-/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx (forces_at_rest below
- * v_standstill) */
+/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx, lateral slip ry Vx, no spin:
+ * the vector path's forces_at (the blend of integrator.forces_at_rest below
+ * v_standstill) at that state; without spin it marches nothing */
 static void law(const cf_params *p, double vx, double Vx, double T[3]) {
-    const double vs = p->v_standstill;
-    if (fabs(Vx) >= vs) {
-        law_plain(p, vx, Vx, Vx, T);
-        return;
-    }
-    double w = 0.5 * (1.0 + Vx / vs), Tp[3], Tm[3];
-    law_plain(p, vx, Vx, vs, Tp);
-    law_plain(p, vx, Vx, -vs, Tm);
-    for (int c = 0; c < 3; c++) T[c] = w * Tp[c] + (1.0 - w) * Tm[c];
+    const double y[4] = {Vx, vx, p->ry * Vx, 0.0 * Vx};
+    march_cache unused = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
+    forces_at(p, y, T, &unused);
 }
 
 /* the stage residuals: algebraic (T(v, V2b) - Fe2) or Lobatto's coupled pair (g) */
@@ -689,13 +683,6 @@ typedef struct {
     int jac_valid;                /* RollingBody._jac: (jac_h, J) kept, or none */
     double jac_h, J[36];          /* 2n x 2n, row major */
 } cf_vstate;
-
-/* The last zero-spin march of forces_at: a Jacobian column in Omega_z changes only
- * the spin, so its march without spin is the one before (the same doubles). */
-typedef struct {
-    int valid;
-    double vx, vy, V, R[3];
-} march_cache;
 
 /* the law at state y = (Vx, vx, Vy, Omega_z) and speed V; the thin-layer law as
  * cf_layer_forces */
