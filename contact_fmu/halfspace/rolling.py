@@ -57,7 +57,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -68,6 +68,7 @@ from numpy.typing import NDArray
 from scipy.sparse.linalg import LinearOperator, gmres
 
 from .._validate import InputError, finite, nonnegative, positive
+from . import multigrid
 from .influence import BlockConvolution, Grid, coupling_displacement, tangential_operator
 
 FloatArray = NDArray[np.float64]
@@ -177,6 +178,7 @@ class RollingPatch:
     theta: FloatArray | None = None
     kappa: float = 0.0
     backend: str = "fft"
+    preconditioner: str = "block"
     use_closure: bool = False
     operator: BlockConvolution | None = None
     coarsen: Callable[[str], RollingPatch] | None = field(default=None, repr=False, compare=False)
@@ -194,6 +196,8 @@ class RollingPatch:
         finite("kappa", self.kappa)
         if self.backend not in ("fft", "dense"):
             raise InputError("backend", self.backend, '"fft" or "dense"')
+        if self.preconditioner not in ("block", "multigrid"):
+            raise InputError("preconditioner", self.preconditioner, '"block" or "multigrid"')
         if np.any(self.contact[:, 0]):
             raise InputError(
                 "grid", "contact in the first column", "one element behind each trailing edge"
@@ -224,7 +228,20 @@ class RollingPatch:
     @cached_property
     def coarse(self) -> RollingPatch | None:
         """The next coarser level (cached, with its own coarse levels), or None."""
-        return None if self.coarsen is None else self.coarsen(self.backend)
+        if self.coarsen is None:
+            return None
+        coarse = self.coarsen(self.backend)
+        if coarse.preconditioner != self.preconditioner:
+            coarse = replace(coarse, preconditioner=self.preconditioner)
+        return coarse
+
+    @cached_property
+    def mg_kernels(self) -> list[multigrid.KernelLevel]:
+        """The influence kernels of the multigrid levels (geometry only; ``multigrid``)."""
+        op = self.op
+        return multigrid.kernel_levels(
+            op.kernel, self.grid.dx, self.grid.dy, op.local, self.grid.shape
+        )
 
     @cached_property
     def op(self) -> BlockConvolution:
@@ -672,6 +689,51 @@ def _newton_direction(
         out_S = cS_S * x[2 * nH :] + (t_S[0] * Kd[0, iS] + t_S[1] * Kd[1, iS])
         return np.concatenate([Kd.ravel()[iHH], out_S])
 
+    psolve = None
+    if getattr(patch, "preconditioner", "block") == "multigrid":
+        try:
+            psolve = _multigrid_psolve(patch, H, Sl, that, cS, iH, iS)
+        except np.linalg.LinAlgError:
+            psolve = None  # a singular row block: this step takes the block preconditioner
+    if psolve is None:
+        psolve = _block_psolve(patch, H, Sl, that, cS, iH, iS, slip_block)
+
+    N = 2 * nH + nS
+    count = [0]
+
+    def cb(_):
+        count[0] += 1
+
+    x, _info = gmres(
+        LinearOperator((N, N), matvec=matvec, dtype=float),
+        b,
+        M=LinearOperator((N, N), matvec=psolve, dtype=float),
+        rtol=rtol,
+        atol=0.0,
+        restart=GMRES_RESTART,
+        maxiter=GMRES_MAXIT // GMRES_RESTART,
+        callback=cb,
+        callback_type="pr_norm",
+    )
+    return to_field(x) + dn * zhat, count[0]
+
+
+def _block_psolve(
+    patch: RollingPatch,
+    H: BoolArray,
+    Sl: BoolArray,
+    that: FloatArray,
+    cS: FloatArray,
+    iH: NDArray[np.int_],
+    iS: NDArray[np.int_],
+    slip_block: float,
+) -> Callable[[FloatArray], FloatArray]:
+    """The block preconditioner of the Newton system (``_newton_direction``)."""
+    n = H.size
+    nH = len(iH)
+    iHH = np.concatenate([iH, n + iH])
+    t_S = that.reshape(2, n)[:, iS]
+    shape = (2, *patch.grid.shape)
     Ktt = that[0] ** 2 * patch.diag[0] + that[1] ** 2 * patch.diag[1]
     dS = np.where(Sl, cS + Ktt, 1.0)
     # slip elements preconditioned with the adhesion block (see the docstring)
@@ -696,24 +758,37 @@ def _newton_direction(
         xs = np.where(in_block, t_S[0] * d[0, iS] + t_S[1] * d[1, iS], vs / dS_S)
         return np.concatenate([d.ravel()[iHH], xs])
 
-    N = 2 * nH + nS
-    count = [0]
+    return psolve
 
-    def cb(_):
-        count[0] += 1
 
-    x, _info = gmres(
-        LinearOperator((N, N), matvec=matvec, dtype=float),
-        b,
-        M=LinearOperator((N, N), matvec=psolve, dtype=float),
-        rtol=rtol,
-        atol=0.0,
-        restart=GMRES_RESTART,
-        maxiter=GMRES_MAXIT // GMRES_RESTART,
-        callback=cb,
-        callback_type="pr_norm",
-    )
-    return to_field(x) + dn * zhat, count[0]
+def _multigrid_psolve(
+    patch: RollingPatch,
+    H: BoolArray,
+    Sl: BoolArray,
+    that: FloatArray,
+    cS: FloatArray,
+    iH: NDArray[np.int_],
+    iS: NDArray[np.int_],
+) -> Callable[[FloatArray], FloatArray]:
+    """One multigrid V-cycle (``multigrid``) as the preconditioner of the Newton system,
+    in the unknowns' order of ``_newton_direction`` (adhesion x, adhesion y, slip)."""
+    kern = patch.mg_kernels
+    fine = multigrid.newton_level(kern[0], H, Sl, that, cS, patch.k_extra)
+    cycle = multigrid.VCycle(fine, kern)
+    nx, n = patch.grid.nx, H.size
+    nH = len(iH)
+    pos = np.zeros(n, dtype=np.int_)
+    pos[iH] = np.arange(nH)
+    pos[iS] = 2 * nH + np.arange(len(iS))
+    e = fine.ur * nx + fine.uc
+    order = pos[e] + np.where(H.ravel()[e], fine.ud * nH, 0)  # fine unknown -> Newton row
+
+    def psolve(v: FloatArray) -> FloatArray:
+        out = np.empty_like(v)
+        out[order] = cycle(v[order])
+        return out
+
+    return psolve
 
 
 def ellipse_patch(

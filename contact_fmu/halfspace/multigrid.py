@@ -1,0 +1,418 @@
+"""Multigrid preconditioner for the Newton systems of steady rolling (rolling.py).
+
+The semismooth Newton system of ``rolling._newton_direction``, written on fields. The
+unknowns of an element e are coordinates along the columns of a basis Q_e (2 x k_e:
+both traction components in adhesion, k_e = 2; the tangent t to the slip direction in
+slip, k_e = 1; none outside the contact), and
+
+    J x = Q^T (M K M Q x + Lam Q x),    K f = A * (D f) + kx (D f),
+
+with M_e = Q_e Q_e^T, Lam_e = cS_e t t^T in slip (the local slip coefficient), A the
+influence convolution plus the layer term (``RollingPatch.op``), D the upwind difference
+along x and kx the leading-edge layer term (``RollingPatch.k_extra``).
+
+Levels. Each coarser level aggregates 2 x 2 elements. The fine K is a convolution
+acting on differences, and so is its piecewise-constant projection: with P0 the
+injection of an aggregate into its four children, D P0 = E D_c (the differences of a
+piecewise-constant field sit on the children in the odd columns, E injects there), so
+P0^T K P0 = A_c * (D_c q) + kx_c D_c q with A_c(dR, dC) = sum over the children pairs of
+A (``_coarsen_table``) and kx_c the sum of the odd-column children's kx. The coarse
+operator is the Galerkin product P^T J P with each child's M replaced by the mean over
+its aggregate (the "cheap" coarse operator of docs/halfspace.md, O(N) to form):
+K_c = P0^T K P0 / 16, M_c and Lam_c the sums over the children, and Q_c the
+eigenvectors of M_c whose eigenvalue exceeds AGGREGATE_MIN times the number of fine
+elements per aggregate. The prolongation copies a coarse field to the children and
+projects it on their unknowns; the restriction is its transpose.
+
+Smoother: symmetric Gauss-Seidel over the grid rows, lines along the rolling direction
+(forward in y, then backward), each row's block banded to |column offset| <= LINE_BAND
+and solved by banded LU. The coupling of the rows already relaxed to the others runs
+through the whole nonlocal kernel (a lagged or truncated coupling loses the bound, see
+docs/halfspace.md): it is added by divide and conquer over the rows, one FFT
+convolution of a window of rows per node of the recursion, so a sweep costs
+O(N log^2 N). One V-cycle (one smoothing before and after the coarse correction,
+dense LU on the coarsest level) is the preconditioner of GMRES.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.fft as sfft
+import scipy.linalg as sla
+from numpy.typing import NDArray
+from scipy.linalg.lapack import dgbtrf, dgbtrs
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+# Half-width of the row blocks of the smoother in elements: the block of a row keeps the
+# couplings |column offset| <= LINE_BAND. Measured on the railway cases (dense lab,
+# docs/halfspace.md): 0 loses the bound (13 -> 67 iterations from 16 to 64 per side),
+# 1 holds it with one or two more iterations than 3, 3 as good as the exact row block.
+LINE_BAND = 3
+# A coarse element keeps the directions of M_c whose eigenvalue exceeds AGGREGATE_MIN
+# times the number of fine elements it aggregates (M_c sums their projections).
+AGGREGATE_MIN = 0.05
+# The coarsest level, solved by dense LU: at most COARSEST_UNKNOWNS unknowns, or a grid
+# that cannot be halved again.
+COARSEST_UNKNOWNS = 300
+MIN_SIDE = 4
+
+
+@dataclass(frozen=True)
+class KernelLevel:
+    """The influence convolution A of one level (geometry only, reused by every solve).
+
+    shape (ny, nx); table (2, 2, 2 Ry + 1, 2 Rx + 1): A at row/column offsets -Ry..Ry,
+    -Rx..Rx (offset (0, 0) at [Ry, Rx]), field minus source, the local layer term
+    included; Ry >= ny - 1 and Rx >= nx - 1."""
+
+    shape: tuple[int, int]
+    table: FloatArray
+
+    @property
+    def R(self) -> tuple[int, int]:
+        return (self.table.shape[2] - 1) // 2, (self.table.shape[3] - 1) // 2
+
+    def at(self, dr: NDArray[np.int_], dc: NDArray[np.int_]) -> FloatArray:
+        """A at offsets (dr, dc) (arrays of the same shape): (2, 2, *dr.shape)."""
+        Ry, Rx = self.R
+        return self.table[:, :, np.clip(dr, -Ry, Ry) + Ry, np.clip(dc, -Rx, Rx) + Rx]
+
+    @cached_property
+    def Lx(self) -> int:
+        return sfft.next_fast_len(2 * self.shape[1] - 1, real=True)
+
+    def symbols(self, h: int) -> NDArray[np.complex128]:
+        """Symbols of A on a window of h rows (row offsets |dr| <= h - 1, all columns),
+        zero-padded so that the linear convolution is exact: (2, 2, Lh, Lx // 2 + 1)."""
+        cache = self.__dict__.setdefault("_symbols", {})
+        if h not in cache:
+            ny, nx = self.shape
+            Ry, Rx = self.R
+            h = min(h, ny)
+            Lh = sfft.next_fast_len(2 * h - 1, real=True)
+            torus = np.zeros((2, 2, Lh, self.Lx))
+            rows = np.arange(-(h - 1), h)
+            cols = np.arange(-(nx - 1), nx)
+            sub = self.table[:, :, rows[:, None] + Ry, cols[None, :] + Rx]
+            torus[:, :, (rows % Lh)[:, None], (cols % self.Lx)[None, :]] = sub
+            cache[h] = sfft.rfft2(torus, axes=(-2, -1))
+        return cache[min(h, self.shape[0])]
+
+    def convolve(self, q: FloatArray, h: int | None = None) -> FloatArray:
+        """A * q for a field q (2, hq, nx) on a window of h >= hq rows: (2, h, nx)."""
+        h = self.shape[0] if h is None else h
+        S = self.symbols(h)
+        Lh = S.shape[2]
+        fq = sfft.rfft2(q, s=(Lh, self.Lx), axes=(-2, -1))
+        out = np.stack([S[a, 0] * fq[0] + S[a, 1] * fq[1] for a in range(2)])
+        return sfft.irfft2(out, s=(Lh, self.Lx), axes=(-2, -1))[:, :h, : self.shape[1]]
+
+
+def fine_kernel(kernel, dx: float, dy: float, local: float, shape, R) -> KernelLevel:
+    """The fine level from the element kernel kernel(X, Y) (blocks at offsets X, Y in m,
+    as BlockConvolution.kernel) plus the local term on the diagonal blocks."""
+    Ry, Rx = R
+    X, Y = np.meshgrid(np.arange(-Rx, Rx + 1) * dx, np.arange(-Ry, Ry + 1) * dy)
+    table = np.array(kernel(X, Y), dtype=float)
+    for a in range(2):
+        table[a, a, Ry, Rx] += local
+    return KernelLevel(tuple(shape), table)
+
+
+def _coarsen_table(fine: KernelLevel, shape, R) -> KernelLevel:
+    """A_c(dR, dC) = sum_{t in 0, 1} [A(2dR - 1, c) + 2 A(2dR, c) + A(2dR + 1, c)] at
+    c = 2 dC + t - 1 (module docstring), over |dR| <= R[0], |dC| <= R[1]."""
+    dR = np.arange(-R[0], R[0] + 1)[:, None]
+    dC = np.arange(-R[1], R[1] + 1)[None, :]
+    acc = 0.0
+    for t in (0, 1):
+        c = 2 * dC + t - 1
+        for s, wgt in ((-1, 1.0), (0, 2.0), (1, 1.0)):
+            acc = acc + wgt * fine.at(np.broadcast_to(2 * dR + s, (dR.size, dC.size)), c + 0 * dR)
+    return KernelLevel(tuple(shape), acc / 16.0)
+
+
+def kernel_levels(kernel, dx: float, dy: float, local: float, shape) -> list[KernelLevel]:
+    """The kernels of all levels for a fine grid of ``shape`` (cached by the caller)."""
+    shapes = [tuple(shape)]
+    while min(shapes[-1]) > MIN_SIDE:
+        ny, nx = shapes[-1]
+        shapes.append(((ny + 1) // 2, (nx + 1) // 2))
+    # offset ranges: each level its own grid, and what the next coarser one needs
+    R = [(s[0] - 1, s[1] - 1) for s in shapes]
+    for k in range(len(shapes) - 2, -1, -1):
+        R[k] = (max(R[k][0], 2 * R[k + 1][0] + 1), max(R[k][1], 2 * R[k + 1][1] + 1))
+    levels = [fine_kernel(kernel, dx, dy, local, shapes[0], R[0])]
+    for k in range(1, len(shapes)):
+        levels.append(_coarsen_table(levels[-1], shapes[k], R[k]))
+    return levels
+
+
+def _difference(f: FloatArray) -> FloatArray:
+    """D f: f_I - f_I+ along x (zero ahead of the last column)."""
+    d = f.copy()
+    d[..., :-1] -= f[..., 1:]
+    return d
+
+
+class Level:
+    """One level of the Newton system: kernel, per-element M, Lam (2, 2, ny, nx), kx
+    (ny, nx), basis q (2 directions, 2 components, ny, nx) with ``active`` (2, ny, nx);
+    the unknowns are the active (row, column, direction) in row-major order."""
+
+    def __init__(
+        self,
+        kern: KernelLevel,
+        M: FloatArray,
+        Lam: FloatArray,
+        kx: FloatArray,
+        q: FloatArray,
+        active: BoolArray,
+    ) -> None:
+        self.kern, self.M, self.Lam, self.kx, self.q = kern, M, Lam, kx, q
+        self.active = active
+        ny, nx = kern.shape
+        r, c, d = np.nonzero(np.moveaxis(active, 0, -1))
+        self.ur, self.uc, self.ud = r, c, d
+        self.n = len(r)
+        counts = np.bincount(r, minlength=ny)
+        self.rowptr = np.concatenate([[0], np.cumsum(counts)])
+
+    # ---- fields and unknowns -----------------------------------------------------------
+    def to_field(self, x: FloatArray) -> FloatArray:
+        """Q x as a field (2, ny, nx)."""
+        coef = np.zeros((2, *self.kern.shape))
+        coef[self.ud, self.ur, self.uc] = x
+        return np.einsum("kaij,kij->aij", self.q, coef)
+
+    def from_field(self, g: FloatArray) -> FloatArray:
+        """Q^T g at the unknowns."""
+        proj = np.einsum("kaij,aij->kij", self.q, g)
+        return proj[self.ud, self.ur, self.uc]
+
+    def mfield(self, f: FloatArray, rows: slice = slice(None)) -> FloatArray:
+        """M f on the rows of a field f (2, h, nx)."""
+        return np.einsum("abij,bij->aij", self.M[:, :, rows], f)
+
+    def K(self, f: FloatArray) -> FloatArray:
+        d = _difference(f)
+        return self.kern.convolve(d) + self.kx * d
+
+    def apply(self, x: FloatArray) -> FloatArray:
+        """J x (module docstring)."""
+        d = self.to_field(x)
+        g = self.mfield(self.K(self.mfield(d))) + np.einsum("abij,bij->aij", self.Lam, d)
+        return self.from_field(g)
+
+    # ---- dense and banded pieces ----------------------------------------------------------
+    def entries(self, u: NDArray[np.int_], v: NDArray[np.int_]) -> FloatArray:
+        """Matrix entries J[u, v] for index arrays u, v (same shape)."""
+        ru, cu, du = self.ur[u], self.uc[u], self.ud[u]
+        rv, cv, dv = self.ur[v], self.uc[v], self.ud[v]
+        # K's kernel: A(I - J) - A(I - J + e_x) (the latter only if J has an element
+        # behind it), plus kx_I at J = I and -kx_I at J = I + e_x
+        Kf = self.kern.at(ru - rv, cu - cv)
+        Kf = Kf - np.where(cv >= 1, 1.0, 0.0) * self.kern.at(ru - rv, cu - cv + 1)
+        eye = np.eye(2)[:, :, None]
+        same = (ru == rv) & (cu == cv)
+        ahead = (ru == rv) & (cv == cu + 1)
+        kxu = self.kx[ru, cu]
+        Kf = Kf + eye * (kxu * same - kxu * ahead)
+        a = np.einsum("abn,bn->an", self.M[:, :, ru, cu], self.q[du, :, ru, cu].T)
+        b = np.einsum("abn,bn->an", self.M[:, :, rv, cv], self.q[dv, :, rv, cv].T)
+        out = np.einsum("an,abn,bn->n", a, Kf, b)
+        lam = np.einsum(
+            "an,abn,bn->n", self.q[du, :, ru, cu].T, self.Lam[:, :, ru, cu], self.q[dv, :, rv, cv].T
+        )
+        return out + np.where(same, lam, 0.0)
+
+    def dense(self) -> FloatArray:
+        """The whole matrix (for the coarsest level and for tests)."""
+        idx = np.arange(self.n)
+        U, V = np.meshgrid(idx, idx, indexing="ij")
+        return self.entries(U.ravel(), V.ravel()).reshape(self.n, self.n)
+
+    @cached_property
+    def band(self) -> int:
+        return 2 * LINE_BAND + 1
+
+    @cached_property
+    def row_factors(self) -> list:
+        """Banded LU of each row's block (|column offset| <= LINE_BAND): (lu, ipiv) or None."""
+        kl = self.band
+        out = []
+        ny = self.kern.shape[0]
+        # all pairs of unknowns in one row within the band
+        us, vs = [], []
+        for off in range(-kl, kl + 1):
+            u = np.arange(max(0, -off), min(self.n, self.n - off))
+            v = u + off
+            keep = (self.ur[u] == self.ur[v]) & (np.abs(self.uc[u] - self.uc[v]) <= LINE_BAND)
+            us.append(u[keep])
+            vs.append(v[keep])
+        u = np.concatenate(us)
+        v = np.concatenate(vs)
+        val = self.entries(u, v)
+        ab = np.zeros((3 * kl + 1, self.n))
+        ab[2 * kl + u - v, v] = val  # LAPACK band storage with room for the fill-in
+        for i in range(ny):
+            a, b = self.rowptr[i], self.rowptr[i + 1]
+            if a == b:
+                out.append(None)
+                continue
+            lu, piv, info = dgbtrf(ab[:, a:b], kl, kl)
+            if info != 0:
+                raise np.linalg.LinAlgError(f"multigrid: singular row block {i}")
+            out.append((lu, piv))
+        return out
+
+    def solve_row(self, i: int, rhs: FloatArray) -> FloatArray:
+        lu, piv = self.row_factors[i]
+        x, info = dgbtrs(lu, self.band, self.band, rhs, piv)
+        return x
+
+    # ---- smoother ------------------------------------------------------------------------
+    def _sweep(self, r: FloatArray, forward: bool) -> FloatArray:
+        """delta with (B + L) delta = r (forward; L: rows below) or (B + U) delta = r."""
+        ny, nx = self.kern.shape
+        delta = np.zeros(self.n)
+        acc = np.zeros((2, ny, nx))  # A * (D M Q delta) from the rows already relaxed
+        Df = np.zeros((2, ny, nx))
+        rp = self.rowptr
+        top = 1 << max(0, (ny - 1).bit_length())
+
+        def leaf(i: int) -> None:
+            a, b = rp[i], rp[i + 1]
+            if a == b:
+                return
+            coup = self.mfield(acc[:, i : i + 1], slice(i, i + 1))
+            proj = np.einsum("kaj,aj->kj", self.q[:, :, i], coup[:, 0])
+            rhs = r[a:b] - proj[self.ud[a:b], self.uc[a:b]]
+            delta[a:b] = self.solve_row(i, rhs)
+            f = self.mfield(self.to_field_rows(delta, i), slice(i, i + 1))
+            Df[:, i : i + 1] = _difference(f)
+
+        def couple(src: tuple[int, int], dst: tuple[int, int], lo: int, h: int) -> None:
+            s0, s1 = src
+            d0, d1 = dst
+            if rp[min(s1, ny)] == rp[min(s0, ny)] or rp[min(d1, ny)] == rp[min(d0, ny)]:
+                return
+            s1, d1 = min(s1, ny), min(d1, ny)
+            # window rows lo .. lo + h - 1 hold both ranges
+            win = np.zeros((2, min(h, ny - lo), nx))
+            win[:, s0 - lo : s1 - lo] = Df[:, s0:s1]
+            u = self.kern.convolve(win, win.shape[1])
+            acc[:, d0:d1] += u[:, d0 - lo : d1 - lo]
+
+        def rec(a: int, b: int) -> None:
+            if a >= ny:
+                return
+            if b - a == 1:
+                leaf(a)
+                return
+            mid = (a + b) // 2
+            first, second = ((a, mid), (mid, b)) if forward else ((mid, b), (a, mid))
+            rec(*first)
+            couple(first, second, a, b - a)
+            rec(*second)
+
+        rec(0, top)
+        return delta
+
+    def to_field_rows(self, x: FloatArray, i: int) -> FloatArray:
+        """Q x on row i only: (2, 1, nx)."""
+        a, b = self.rowptr[i], self.rowptr[i + 1]
+        coef = np.zeros((2, self.kern.shape[1]))
+        coef[self.ud[a:b], self.uc[a:b]] = x[a:b]
+        return np.einsum("kaj,kj->aj", self.q[:, :, i], coef)[:, None, :]
+
+    def smooth(self, v: FloatArray, x: FloatArray | None) -> FloatArray:
+        """One symmetric Gauss-Seidel step from x (None: zero) for J x = v."""
+        x = self._sweep(v, True) if x is None else x + self._sweep(v - self.apply(x), True)
+        return x + self._sweep(v - self.apply(x), False)
+
+    # ---- coarsening ----------------------------------------------------------------------
+    def coarsen(self, kern: KernelLevel, children: int) -> Level:
+        """The next level (module docstring); ``children``: fine elements per aggregate."""
+        nyc, nxc = kern.shape
+
+        def agg(a: FloatArray) -> FloatArray:
+            ny, nx = a.shape[-2:]
+            pad = np.zeros((*a.shape[:-2], 2 * nyc, 2 * nxc))
+            pad[..., :ny, :nx] = a
+            return pad.reshape(*a.shape[:-2], nyc, 2, nxc, 2).sum(axis=(-3, -1))
+
+        Mc = agg(self.M)
+        Lc = agg(self.Lam)
+        ny, nx = self.kx.shape
+        kxp = np.zeros((2 * nyc, 2 * nxc))
+        kxp[:ny, :nx] = self.kx
+        kxc = kxp.reshape(nyc, 2, nxc, 2)[:, :, :, 1].sum(axis=1) / 16.0
+        w, V = np.linalg.eigh(np.moveaxis(Mc, (0, 1), (-2, -1)))  # (nyc, nxc, 2), (.., 2, 2)
+        active = np.moveaxis(w > AGGREGATE_MIN * children, -1, 0)
+        q = np.moveaxis(V, (-1, -2), (0, 1))  # q[k, a] = V[a, k]
+        return Level(kern, Mc, Lc, kxc, q, active)
+
+    def prolong(self, coarse: Level, e: FloatArray) -> FloatArray:
+        d = coarse.to_field(e)
+        ny, nx = self.kern.shape
+        f = np.repeat(np.repeat(d, 2, axis=1), 2, axis=2)[:, :ny, :nx]
+        return self.from_field(f)
+
+    def restrict(self, coarse: Level, r: FloatArray) -> FloatArray:
+        f = self.to_field(r)
+        nyc, nxc = coarse.kern.shape
+        ny, nx = self.kern.shape
+        pad = np.zeros((2, 2 * nyc, 2 * nxc))
+        pad[:, :ny, :nx] = f
+        return coarse.from_field(pad.reshape(2, nyc, 2, nxc, 2).sum(axis=(2, 4)))
+
+
+class VCycle:
+    """The multigrid V-cycle for the fine level ``fine`` over the kernels ``kernels``."""
+
+    def __init__(self, fine: Level, kernels: list[KernelLevel]) -> None:
+        self.levels = [fine]
+        k = 1
+        while k < len(kernels) and self.levels[-1].n > COARSEST_UNKNOWNS:
+            self.levels.append(self.levels[-1].coarsen(kernels[k], 4**k))
+            k += 1
+        for lev in self.levels[:-1]:
+            _ = lev.row_factors  # factorised here, so that a singular block fails now
+        last = self.levels[-1]
+        self.lu = sla.lu_factor(last.dense()) if last.n else None
+
+    def _cycle(self, k: int, v: FloatArray) -> FloatArray:
+        lev = self.levels[k]
+        if k == len(self.levels) - 1:
+            return sla.lu_solve(self.lu, v) if lev.n else v
+        x = lev.smooth(v, None)
+        coarse = self.levels[k + 1]
+        e = self._cycle(k + 1, lev.restrict(coarse, v - lev.apply(x)))
+        x = x + lev.prolong(coarse, e)
+        return lev.smooth(v, x)
+
+    def __call__(self, v: FloatArray) -> FloatArray:
+        return self._cycle(0, v)
+
+
+def newton_level(
+    kern: KernelLevel, H: BoolArray, Sl: BoolArray, that: FloatArray, cS: FloatArray, kx: FloatArray
+) -> Level:
+    """The fine level of a Newton system: adhesion elements H (both components), slip
+    elements Sl (the tangent ``that`` (2, ny, nx), local coefficient cS (ny, nx)), kx
+    the leading-edge layer term (ny, nx)."""
+    ny, nx = kern.shape
+    q = np.zeros((2, 2, ny, nx))
+    q[0, 0] = np.where(H, 1.0, np.where(Sl, that[0], 0.0))
+    q[0, 1] = np.where(Sl, that[1], 0.0)
+    q[1, 1] = np.where(H, 1.0, 0.0)
+    active = np.stack([H | Sl, H])
+    M = np.einsum("kaij,kbij->abij", q, q)
+    Lam = np.where(Sl, cS, 0.0) * M
+    return Level(kern, M, Lam, kx, q, active)
