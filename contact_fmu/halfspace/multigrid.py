@@ -58,8 +58,12 @@ LINE_BAND = 3
 AGGREGATE_MIN = 0.05
 # The coarsest level, solved by dense LU: at most COARSEST_UNKNOWNS unknowns, or a grid
 # that cannot be halved again.
-COARSEST_UNKNOWNS = 300
+COARSEST_UNKNOWNS = 120
 MIN_SIDE = 4
+# Windows of the smoother's divide and conquer up to DIRECT_ROWS rows take a dense
+# product (the same for every window of that height) instead of an FFT convolution:
+# cheaper below about 8 rows, and the matrices stay small (16 nx^2 numbers for 4 rows).
+DIRECT_ROWS = 4
 
 
 @dataclass(frozen=True)
@@ -81,6 +85,48 @@ class KernelLevel:
         """A at offsets (dr, dc) (arrays of the same shape): (2, 2, *dr.shape)."""
         Ry, Rx = self.R
         return self.table[:, :, np.clip(dr, -Ry, Ry) + Ry, np.clip(dc, -Rx, Rx) + Rx]
+
+    @cached_property
+    def _difference_table(self) -> FloatArray:
+        """A(dr, dc) - A(dr, dc + 1), the kernel of A D (same layout as ``table``)."""
+        t = self.table.copy()
+        t[..., :-1] -= self.table[..., 1:]
+        return t
+
+    def at_difference(self, dr: NDArray[np.int_], dc: NDArray[np.int_]) -> FloatArray:
+        """A(dr, dc) - A(dr, dc + 1) at offsets (dr, dc): (2, 2, *dr.shape) (a copy)."""
+        Ry, Rx = self.R
+        return self._difference_table[:, :, np.clip(dr, -Ry, Ry) + Ry, np.clip(dc, -Rx, Rx) + Rx]
+
+    def window_matrix(self, h: int, forward: bool) -> FloatArray:
+        """The coupling of a window of h rows as one matrix: from its first h/2 rows to
+        its last h/2 (forward) or the reverse, fields ordered (row, component, column):
+        (h nx, h nx) (cached)."""
+        cache = self.__dict__.setdefault("_windows", {})
+        if (h, forward) not in cache:
+            h2, nx = h // 2, self.shape[1]
+            Ry, Rx = self.R
+            i = np.arange(h2)[:, None, None, None, None, None]
+            a = np.arange(2)[None, :, None, None, None, None]
+            c = np.arange(nx)[None, None, :, None, None, None]
+            j = np.arange(h2)[None, None, None, :, None, None]
+            b = np.arange(2)[None, None, None, None, :, None]
+            cc = np.arange(nx)[None, None, None, None, None, :]
+            dr = (h2 + i - j) if forward else (i - h2 - j)
+            W = self.table[a, b, np.clip(dr, -Ry, Ry) + Ry, np.clip(c - cc, -Rx, Rx) + Rx]
+            cache[(h, forward)] = W.reshape(h * nx, h * nx)
+        return cache[(h, forward)]
+
+    def convolve_rows(self, q: FloatArray) -> FloatArray:
+        """A * q for a field q (h, 2, nx) in row-major layout on a window of its h rows."""
+        h = q.shape[0]
+        S = self.symbols(h)
+        shape = (S.shape[2], self.Lx)
+        fq = sfft.rfft2(q, s=shape, axes=(0, 2))
+        out = np.empty_like(fq)
+        for a in range(2):
+            out[:, a] = S[a, 0] * fq[:, 0] + S[a, 1] * fq[:, 1]
+        return sfft.irfft2(out, s=shape, axes=(0, 2))[:h, :, : self.shape[1]]
 
     @cached_property
     def Lx(self) -> int:
@@ -210,26 +256,39 @@ class Level:
         return self.from_field(g)
 
     # ---- dense and banded pieces ----------------------------------------------------------
+    @cached_property
+    def _unit(self) -> tuple[FloatArray, FloatArray]:
+        """Per unknown: its basis vector q_u and M_u q_u, (2, n) each."""
+        qu = self.q[self.ud, :, self.ur, self.uc].T
+        mq = np.einsum("abn,bn->an", self.M[:, :, self.ur, self.uc], qu)
+        return qu, mq
+
     def entries(self, u: NDArray[np.int_], v: NDArray[np.int_]) -> FloatArray:
         """Matrix entries J[u, v] for index arrays u, v (same shape)."""
-        ru, cu, du = self.ur[u], self.uc[u], self.ud[u]
-        rv, cv, dv = self.ur[v], self.uc[v], self.ud[v]
+        ru, cu, rv, cv = self.ur[u], self.uc[u], self.ur[v], self.uc[v]
         # K's kernel: A(I - J) - A(I - J + e_x) (the latter only if J has an element
         # behind it), plus kx_I at J = I and -kx_I at J = I + e_x
-        Kf = self.kern.at(ru - rv, cu - cv)
-        Kf = Kf - np.where(cv >= 1, 1.0, 0.0) * self.kern.at(ru - rv, cu - cv + 1)
-        eye = np.eye(2)[:, :, None]
-        same = (ru == rv) & (cu == cv)
-        ahead = (ru == rv) & (cv == cu + 1)
-        kxu = self.kx[ru, cu]
-        Kf = Kf + eye * (kxu * same - kxu * ahead)
-        a = np.einsum("abn,bn->an", self.M[:, :, ru, cu], self.q[du, :, ru, cu].T)
-        b = np.einsum("abn,bn->an", self.M[:, :, rv, cv], self.q[dv, :, rv, cv].T)
-        out = np.einsum("an,abn,bn->n", a, Kf, b)
-        lam = np.einsum(
-            "an,abn,bn->n", self.q[du, :, ru, cu].T, self.Lam[:, :, ru, cu], self.q[dv, :, rv, cv].T
-        )
-        return out + np.where(same, lam, 0.0)
+        dr, dc = ru - rv, cu - cv
+        Kf = self.kern.at_difference(dr, dc)
+        first = np.flatnonzero(cv == 0)
+        if first.size:
+            Kf[:, :, first] += self.kern.at(dr[first], dc[first] + 1)
+        kx = self.kx[ru, cu] * ((dr == 0) * ((dc == 0) * 1.0 - (dc == -1)))
+        Kf[0, 0] += kx
+        Kf[1, 1] += kx
+        qu, mq = self._unit
+        a, b = mq[:, u], mq[:, v]
+        out = a[0] * (Kf[0, 0] * b[0] + Kf[0, 1] * b[1])
+        out += a[1] * (Kf[1, 0] * b[0] + Kf[1, 1] * b[1])
+        same = np.flatnonzero((dr == 0) & (dc == 0))
+        if same.size:
+            us, vs = u[same], v[same]
+            L = self.Lam[:, :, ru[same], cu[same]]
+            qa, qb = qu[:, us], qu[:, vs]
+            out[same] += qa[0] * (L[0, 0] * qb[0] + L[0, 1] * qb[1]) + qa[1] * (
+                L[1, 0] * qb[0] + L[1, 1] * qb[1]
+            )
+        return out
 
     def dense(self) -> FloatArray:
         """The whole matrix (for the coarsest level and for tests)."""
@@ -281,21 +340,27 @@ class Level:
         """delta with (B + L) delta = r (forward; L: rows below) or (B + U) delta = r."""
         ny, nx = self.kern.shape
         delta = np.zeros(self.n)
-        acc = np.zeros((2, ny, nx))  # A * (D M Q delta) from the rows already relaxed
-        Df = np.zeros((2, ny, nx))
+        # row-major (row, component, column): a window's rows are one contiguous block
+        acc = np.zeros((ny, 2, nx))  # A * (D M Q delta) from the rows already relaxed
+        Df = np.zeros((ny, 2, nx))
         rp = self.rowptr
         top = 1 << max(0, (ny - 1).bit_length())
+
+        mq = self._unit[1]
 
         def leaf(i: int) -> None:
             a, b = rp[i], rp[i + 1]
             if a == b:
                 return
-            coup = self.mfield(acc[:, i : i + 1], slice(i, i + 1))
-            proj = np.einsum("kaj,aj->kj", self.q[:, :, i], coup[:, 0])
-            rhs = r[a:b] - proj[self.ud[a:b], self.uc[a:b]]
-            delta[a:b] = self.solve_row(i, rhs)
-            f = self.mfield(self.to_field_rows(delta, i), slice(i, i + 1))
-            Df[:, i : i + 1] = _difference(f)
+            cols, m = self.uc[a:b], mq[:, a:b]
+            rhs = r[a:b] - (m[0] * acc[i, 0, cols] + m[1] * acc[i, 1, cols])
+            d = self.solve_row(i, rhs)
+            delta[a:b] = d
+            # D M Q delta on this row (Q^T M = (M Q)^T: the same vectors both ways)
+            for c in range(2):
+                f = np.bincount(cols, weights=m[c] * d, minlength=nx)
+                Df[i, c] = f
+                Df[i, c, :-1] -= f[1:]
 
         def couple(src: tuple[int, int], dst: tuple[int, int], lo: int, h: int) -> None:
             s0, s1 = src
@@ -303,11 +368,18 @@ class Level:
             if rp[min(s1, ny)] == rp[min(s0, ny)] or rp[min(d1, ny)] == rp[min(d0, ny)]:
                 return
             s1, d1 = min(s1, ny), min(d1, ny)
+            if h <= DIRECT_ROWS:  # small windows: one product with the window's matrix
+                h2 = h // 2
+                blk = np.zeros((h2, 2, nx))
+                blk[: s1 - s0] = Df[s0:s1]
+                u = (self.kern.window_matrix(h, forward) @ blk.ravel()).reshape(h2, 2, nx)
+                acc[d0:d1] += u[: d1 - d0]
+                return
             # window rows lo .. lo + h - 1 hold both ranges
-            win = np.zeros((2, min(h, ny - lo), nx))
-            win[:, s0 - lo : s1 - lo] = Df[:, s0:s1]
-            u = self.kern.convolve(win, win.shape[1])
-            acc[:, d0:d1] += u[:, d0 - lo : d1 - lo]
+            win = np.zeros((min(h, ny - lo), 2, nx))
+            win[s0 - lo : s1 - lo] = Df[s0:s1]
+            u = self.kern.convolve_rows(win)
+            acc[d0:d1] += u[d0 - lo : d1 - lo]
 
         def rec(a: int, b: int) -> None:
             if a >= ny:
@@ -323,13 +395,6 @@ class Level:
 
         rec(0, top)
         return delta
-
-    def to_field_rows(self, x: FloatArray, i: int) -> FloatArray:
-        """Q x on row i only: (2, 1, nx)."""
-        a, b = self.rowptr[i], self.rowptr[i + 1]
-        coef = np.zeros((2, self.kern.shape[1]))
-        coef[self.ud[a:b], self.uc[a:b]] = x[a:b]
-        return np.einsum("kaj,kj->aj", self.q[:, :, i], coef)[:, None, :]
 
     def smooth(self, v: FloatArray, x: FloatArray | None) -> FloatArray:
         """One symmetric Gauss-Seidel step from x (None: zero) for J x = v."""

@@ -70,6 +70,7 @@ from scipy.sparse.linalg import LinearOperator, gmres
 from .._validate import InputError, finite, nonnegative, positive
 from . import multigrid
 from .influence import BlockConvolution, Grid, coupling_displacement, tangential_operator
+from .krylov import fgmres
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -689,14 +690,16 @@ def _newton_direction(
         out_S = cS_S * x[2 * nH :] + (t_S[0] * Kd[0, iS] + t_S[1] * Kd[1, iS])
         return np.concatenate([Kd.ravel()[iHH], out_S])
 
-    psolve = None
     if getattr(patch, "preconditioner", "block") == "multigrid":
         try:
-            psolve = _multigrid_psolve(patch, H, Sl, that, cS, iH, iS)
+            cycle = _multigrid_psolve(patch, H, Sl, that, cS, iH, iS)
         except np.linalg.LinAlgError:
-            psolve = None  # a singular row block: this step takes the block preconditioner
-    if psolve is None:
-        psolve = _block_psolve(patch, H, Sl, that, cS, iH, iS, slip_block)
+            pass  # a singular row block: this step takes the block preconditioner
+        else:
+            # right preconditioning, one V-cycle per iteration (krylov.py)
+            x, its = fgmres(matvec, b, cycle, rtol, GMRES_RESTART)
+            return to_field(x) + dn * zhat, its
+    psolve = _block_psolve(patch, H, Sl, that, cS, iH, iS, slip_block)
 
     N = 2 * nH + nS
     count = [0]
