@@ -19,7 +19,9 @@ elements per side give the initial guess, docs/halfspace.md); "single-level" is 
 same solver started from the calibrated FASTSIM guess on the fine grid
 (``replace(patch, coarsen=None)``), and "previous" the solver as it was before nested
 iteration (single level, slip rows preconditioned by their diagonal alone, no
-oversolving guard), all three timed alternately. Newton and GMRES counts are the fine
+oversolving guard), and the default with the multigrid preconditioner
+(``RollingPatch(preconditioner="multigrid")``, contact_fmu.halfspace.multigrid), all
+four timed alternately. Newton and GMRES counts are the fine
 grid's; "GMRES all levels" weights each coarse level's iterations by its share of the
 elements.
 
@@ -107,6 +109,13 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
             _ = lev.op.symbols, lev.op.inverse_symbols, lev.op.inverse_offsets
         _ = levels[-1].flexibilities
         setup = time.perf_counter() - t0
+        # the multigrid preconditioner (its kernels built here, as the patch's are above)
+        mg_patch = replace(patch, preconditioner="multigrid")
+        t0 = time.perf_counter()
+        for lev in _levels(mg_patch):
+            _ = lev.op.symbols, lev.mg_kernels
+        _levels(mg_patch)[-1].__dict__["flexibilities"] = levels[-1].flexibilities
+        mg_setup = time.perf_counter() - t0
         # the single-level solver (FASTSIM guess on the fine grid, no coarse levels)
         single = replace(patch, coarsen=None)
         t0 = time.perf_counter()
@@ -128,17 +137,19 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
         results["setup"][n] = {
             "elements_in_contact": m,
             "fft_setup_s": setup,
+            "multigrid_setup_s": mg_setup,
             "single_setup_s": single_setup,
             "dense_matrix_MB": dense_mb,
             "dense_setup_s": dense_setup,
         }
         for name, w in CASES.items():
             args = (w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
-            (t_fft, sol), (t_single, s1), (t_prev, s0) = _time_interleaved(
+            (t_fft, sol), (t_single, s1), (t_prev, s0), (t_mg, smg) = _time_interleaved(
                 [
                     lambda a=args, p=patch: solve_rolling(p, *a),
                     lambda a=args, p=single: solve_rolling(p, *a),
                     lambda a=args, p=single: _previous(p, *a),
+                    lambda a=args, p=mg_patch: solve_rolling(p, *a),
                 ],
                 repeat,
             )
@@ -157,6 +168,11 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
                 "previous_newton": s0.newton_iterations,
                 "previous_gmres": s0.gmres_iterations,
                 "max_dtau_previous_over_g": float(np.abs(s0.tau - sol.tau).max() / g),
+                "multigrid_s": t_mg,
+                "multigrid_newton": smg.newton_iterations,
+                "multigrid_gmres": smg.gmres_iterations,
+                "multigrid_levels": [list(lv) for lv in smg.levels],
+                "max_dtau_multigrid_over_g": float(np.abs(smg.tau - sol.tau).max() / g),
                 "Tx/muP": sol.Tx / (contact.mu * contact.P),
                 "Ty/muP": sol.Ty / (contact.mu * contact.P),
                 "adhesion": sol.adhesion_fraction,
@@ -177,7 +193,9 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
                 f"previous {s0.newton_iterations:2d})  "
                 f"GMRES {sol.gmres_iterations:4d} (single {s1.gmres_iterations:4d}, "
                 f"previous {s0.gmres_iterations:4d}, "
-                f"all levels {sol.gmres_work:.0f} fine-equivalent)  levels {sol.levels}",
+                f"all levels {sol.gmres_work:.0f} fine-equivalent)  levels {sol.levels}  "
+                f"multigrid {t_mg:8.4f} s Newton {smg.newton_iterations} "
+                f"GMRES {smg.gmres_iterations} levels {smg.levels}",
                 flush=True,
             )
     return results
@@ -218,20 +236,41 @@ def markdown(res: dict) -> str:
                 f" | {e['gmres']} ({e['single_gmres']}, {e['previous_gmres']})"
                 f" | {e['gmres'] / max(e['newton'], 1):.1f} | {e['gmres_work']:.0f} | {coarse} |"
             )
+        lines.append(
+            "\nThe same solves with the multigrid preconditioner "
+            '(`RollingPatch(preconditioner="multigrid")`), timed alternately with the above:\n'
+        )
+        lines.append(
+            "| grid | multigrid (s) | multigrid/FFT | Newton | GMRES | GMRES/Newton "
+            "| coarse levels Newton/GMRES | max abs(dtau)/max g vs FFT |"
+        )
+        lines.append("|---|---|---|---|---|---|---|---|")
+        for n in res["grids"]:
+            e = res["cases"][case][n]
+            coarse = ", ".join(f"{lv[0]}: {lv[2]}/{lv[3]}" for lv in e["multigrid_levels"][:-1])
+            lines.append(
+                f"| {n}x{n} | {e['multigrid_s']:.4f} | {e['multigrid_s'] / e['fft_s']:.1f} "
+                f"| {e['multigrid_newton']} | {e['multigrid_gmres']} "
+                f"| {e['multigrid_gmres'] / max(e['multigrid_newton'], 1):.1f} | {coarse or '-'} "
+                f"| {e['max_dtau_multigrid_over_g']:.1e} |"
+            )
         fx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "fft_s", case))
+        mx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "multigrid_s", case))
         dx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "dense_s", case))
         lines.append(
-            f"\nScaling exponent p of time ~ N^p (N = n^2 elements): FFT {fx}; dense {dx}."
+            f"\nScaling exponent p of time ~ N^p (N = n^2 elements): FFT {fx}; dense {dx}; "
+            f"multigrid {mx}."
         )
     lines.append(
-        "\n| grid | FFT setup, all levels (s) | single-level setup (s) | dense matrix (MB) "
-        "| dense setup (s) |"
+        "\n| grid | FFT setup, all levels (s) | multigrid kernels, all levels (s) "
+        "| single-level setup (s) | dense matrix (MB) | dense setup (s) |"
     )
-    lines.append("|---|---|---|---|---|")
+    lines.append("|---|---|---|---|---|---|")
     for n in res["grids"]:
         s = res["setup"][n]
         lines.append(
-            f"| {n}x{n} | {s['fft_setup_s']:.3f} | {s['single_setup_s']:.3f} "
+            f"| {n}x{n} | {s['fft_setup_s']:.3f} | {s['multigrid_setup_s']:.3f} "
+            f"| {s['single_setup_s']:.3f} "
             f"| {s['dense_matrix_MB']:.0f} | {s['dense_setup_s']:.3f} |"
         )
     return "\n".join(lines)

@@ -44,7 +44,10 @@ over each adhesion interval (a small dense system, one unknown per interval and
 component), and the march from the leading edge that turns differences into
 tractions. For the thin layer this preconditioner is the exact inverse (the march of
 LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
-|F| globalises the iteration.
+|F| globalises the iteration. ``RollingPatch(preconditioner="multigrid")`` replaces the
+block preconditioner by a multigrid V-cycle (multigrid.py) with GMRES on the right
+(krylov.py): 1-2 GMRES iterations per Newton step on every grid, at 2-3 times the time
+(docs/halfspace.md, "Iteration counts").
 
 Nested iteration: a patch from ellipse_patch carries its coarse levels (n/2, n/4, ...
 elements per side over the same ellipse, down to NESTED_MIN_N); solve_rolling solves the
