@@ -148,11 +148,13 @@ def test_fgmres_is_gmres(rtol):
     assert k == 1 and np.linalg.norm(b - A @ x) <= max(rtol, 1e-12) * np.linalg.norm(b)
 
 
-def _carter():
-    grid = Grid(102, 1, 0.02, 1.0, -1.02, -0.5)
+def _carter(n: int = 100):
+    """Carter's plane-strain patch (test_halfspace_rolling) with n elements, kappa 0.3."""
+    dx = 2.0 / n
+    grid = Grid(n + 2, 1, dx, 1.0, -1.0 - dx, -0.5)
     X, _ = grid.mesh()
     p = np.sqrt(np.maximum(1 - X**2, 0.0))
-    theta = np.where(p > 0, np.clip((1.0 - X) / 0.02, 1e-300, 1.0), 1.0)
+    theta = np.where(p > 0, np.clip((1.0 - X) / dx, 1e-300, 1.0), 1.0)
     op = plane_strain_operator(grid, 1.0, 0.3)
     patch = RollingPatch(
         grid, normalise_load(p, grid, 1.0), 0.5, 1.0, 0.3, theta=theta, operator=op
@@ -205,3 +207,14 @@ def test_multigrid_gives_the_default_solution(case):
     assert abs(sol.Ty - ref.Ty) <= 1e-7 * scale
     assert np.array_equal(sol.adhesion, ref.adhesion)
     assert sol.gmres_iterations <= 2 * max(sol.newton_iterations, 1)
+
+
+def test_a_level_too_large_for_its_lu_takes_the_block_preconditioner():
+    """A patch that cannot be coarsened (one row) with more unknowns than COARSEST_MAX:
+    the V-cycle is refused and each Newton step takes the block preconditioner, so the
+    solve is the default one, bit for bit."""
+    patch, args = _carter(2 * mg.COARSEST_MAX)
+    ref = solve_rolling(patch, *args)
+    sol = solve_rolling(replace(patch, preconditioner="multigrid"), *args)
+    assert np.array_equal(sol.tau, ref.tau)
+    assert sol.gmres_iterations == ref.gmres_iterations

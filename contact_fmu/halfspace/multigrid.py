@@ -28,14 +28,16 @@ Smoother: symmetric Gauss-Seidel over the grid rows, lines along the rolling dir
 (forward in y, then backward), each row's block banded to |column offset| <= LINE_BAND
 and solved by banded LU. The coupling of the rows already relaxed to the others runs
 through the whole nonlocal kernel (a lagged or truncated coupling loses the bound, see
-docs/halfspace.md): it is added by divide and conquer over the rows, one FFT
-convolution of a window of rows per node of the recursion, so a sweep costs
-O(N log^2 N). One V-cycle (one smoothing before and after the coarse correction,
-dense LU on the coarsest level) is the preconditioner of GMRES.
+docs/halfspace.md): it is added by divide and conquer over the rows (the first half of
+a window of rows acts on the second by one FFT convolution, or by one dense product for
+windows of at most DIRECT_ROWS rows), so a sweep costs O(N log^2 N). One V-cycle (one
+smoothing before and after the coarse correction, dense LU on the coarsest level) is
+the preconditioner of GMRES (krylov.fgmres).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -60,6 +62,10 @@ AGGREGATE_MIN = 0.05
 # that cannot be halved again.
 COARSEST_UNKNOWNS = 120
 MIN_SIDE = 4
+# ... and a coarsest level larger than COARSEST_MAX (a grid of few rows, which is not
+# coarsened) is refused: its LU would cost more than the solve (the caller then takes
+# the block preconditioner).
+COARSEST_MAX = 2000
 # Windows of the smoother's divide and conquer up to DIRECT_ROWS rows take a dense
 # product (the same for every window of that height) instead of an FFT convolution:
 # cheaper below about 8 rows, and the matrices stay small (16 nx^2 numbers for 4 rows).
@@ -149,17 +155,22 @@ class KernelLevel:
             cache[h] = sfft.rfft2(torus, axes=(-2, -1))
         return cache[min(h, self.shape[0])]
 
-    def convolve(self, q: FloatArray, h: int | None = None) -> FloatArray:
-        """A * q for a field q (2, hq, nx) on a window of h >= hq rows: (2, h, nx)."""
-        h = self.shape[0] if h is None else h
-        S = self.symbols(h)
-        Lh = S.shape[2]
-        fq = sfft.rfft2(q, s=(Lh, self.Lx), axes=(-2, -1))
+    def convolve(self, q: FloatArray) -> FloatArray:
+        """A * q for a field q (2, ny, nx) on the whole level."""
+        ny, nx = self.shape
+        S = self.symbols(ny)
+        shape = (S.shape[2], self.Lx)
+        fq = sfft.rfft2(q, s=shape, axes=(-2, -1))
         out = np.stack([S[a, 0] * fq[0] + S[a, 1] * fq[1] for a in range(2)])
-        return sfft.irfft2(out, s=(Lh, self.Lx), axes=(-2, -1))[:, :h, : self.shape[1]]
+        return sfft.irfft2(out, s=shape, axes=(-2, -1))[:, :ny, :nx]
 
 
-def fine_kernel(kernel, dx: float, dy: float, local: float, shape, R) -> KernelLevel:
+Kernel = Callable[[FloatArray, FloatArray], tuple]
+
+
+def fine_kernel(
+    kernel: Kernel, dx: float, dy: float, local: float, shape: tuple[int, int], R: tuple[int, int]
+) -> KernelLevel:
     """The fine level from the element kernel kernel(X, Y) (blocks at offsets X, Y in m,
     as BlockConvolution.kernel) plus the local term on the diagonal blocks."""
     Ry, Rx = R
@@ -170,7 +181,7 @@ def fine_kernel(kernel, dx: float, dy: float, local: float, shape, R) -> KernelL
     return KernelLevel(tuple(shape), table)
 
 
-def _coarsen_table(fine: KernelLevel, shape, R) -> KernelLevel:
+def _coarsen_table(fine: KernelLevel, shape: tuple[int, int], R: tuple[int, int]) -> KernelLevel:
     """A_c(dR, dC) = sum_{t in 0, 1} [A(2dR - 1, c) + 2 A(2dR, c) + A(2dR + 1, c)] at
     c = 2 dC + t - 1 (module docstring), over |dR| <= R[0], |dC| <= R[1]."""
     dR = np.arange(-R[0], R[0] + 1)[:, None]
@@ -183,7 +194,9 @@ def _coarsen_table(fine: KernelLevel, shape, R) -> KernelLevel:
     return KernelLevel(tuple(shape), acc / 16.0)
 
 
-def kernel_levels(kernel, dx: float, dy: float, local: float, shape) -> list[KernelLevel]:
+def kernel_levels(
+    kernel: Kernel, dx: float, dy: float, local: float, shape: tuple[int, int]
+) -> list[KernelLevel]:
     """The kernels of all levels for a fine grid of ``shape`` (cached by the caller)."""
     shapes = [tuple(shape)]
     while min(shapes[-1]) > MIN_SIDE:
@@ -221,8 +234,7 @@ class Level:
         active: BoolArray,
     ) -> None:
         self.kern, self.M, self.Lam, self.kx, self.q = kern, M, Lam, kx, q
-        self.active = active
-        ny, nx = kern.shape
+        ny = kern.shape[0]
         r, c, d = np.nonzero(np.moveaxis(active, 0, -1))
         self.ur, self.uc, self.ud = r, c, d
         self.n = len(r)
@@ -241,9 +253,9 @@ class Level:
         proj = np.einsum("kaij,aij->kij", self.q, g)
         return proj[self.ud, self.ur, self.uc]
 
-    def mfield(self, f: FloatArray, rows: slice = slice(None)) -> FloatArray:
-        """M f on the rows of a field f (2, h, nx)."""
-        return np.einsum("abij,bij->aij", self.M[:, :, rows], f)
+    def mfield(self, f: FloatArray) -> FloatArray:
+        """M f for a field f (2, ny, nx)."""
+        return np.einsum("abij,bij->aij", self.M, f)
 
     def K(self, f: FloatArray) -> FloatArray:
         d = _difference(f)
@@ -450,6 +462,8 @@ class VCycle:
         for lev in self.levels[:-1]:
             _ = lev.row_factors  # factorised here, so that a singular block fails now
         last = self.levels[-1]
+        if last.n > COARSEST_MAX:
+            raise np.linalg.LinAlgError(f"multigrid: {last.n} unknowns on the coarsest level")
         self.lu = sla.lu_factor(last.dense()) if last.n else None
 
     def _cycle(self, k: int, v: FloatArray) -> FloatArray:

@@ -697,7 +697,7 @@ def _newton_direction(
         try:
             cycle = _multigrid_psolve(patch, H, Sl, that, cS, iH, iS)
         except np.linalg.LinAlgError:
-            pass  # a singular row block: this step takes the block preconditioner
+            pass  # singular row block, or too large a coarsest level: the block one
         else:
             # right preconditioning, one V-cycle per iteration (krylov.py)
             x, its = fgmres(matvec, b, cycle, rtol, GMRES_RESTART)
