@@ -68,12 +68,11 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.ndimage as ndi
 from numpy.typing import NDArray
-from scipy.sparse.linalg import LinearOperator, gmres
 
 from .._validate import InputError, finite, nonnegative, positive
 from . import multigrid
 from .influence import BlockConvolution, Grid, coupling_displacement, tangential_operator
-from .krylov import fgmres
+from .krylov import fgmres, gmres
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -414,21 +413,10 @@ class RollingPatch:
             return np.concatenate([d[0][C], d[1][C]])
 
         b = np.concatenate([W[0][C], W[1][C]])
-        count = [0]
-        x, _ = gmres(
-            LinearOperator((2 * m, 2 * m), matvec=matvec, dtype=float),
-            b,
-            M=LinearOperator((2 * m, 2 * m), matvec=psolve, dtype=float),
-            rtol=rtol,
-            atol=0.0,
-            restart=GMRES_RESTART,
-            maxiter=GMRES_MAXIT // GMRES_RESTART,
-            callback=lambda _: count.__setitem__(0, count[0] + 1),
-            callback_type="pr_norm",
-        )
+        x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
         tau = np.zeros((2, *self.grid.shape))
         tau[0][C], tau[1][C] = x[:m], x[m:]
-        return tau, count[0]
+        return tau, its
 
     @cached_property
     def flexibilities(self) -> tuple[float, float, float]:
@@ -668,7 +656,7 @@ def _newton_direction(
     # slip elements: the component along z is local, dtau_n = -F_n
     dn = np.where(Sl, -(F[0] * zhat[0] + F[1] * zhat[1]), 0.0)
     tau_t = tau[0] * that[0] + tau[1] * that[1]
-    nH, nS = int(H.sum()), int(Sl.sum())
+    nH = int(H.sum())
     Kn = patch.apply_K(dn * zhat)
     bH = (S - Kn)[:, H]
     bS = (-(ratio * tau_t) / r - (that[0] * Kn[0] + that[1] * Kn[1]))[Sl]
@@ -703,25 +691,8 @@ def _newton_direction(
             x, its = fgmres(matvec, b, cycle, rtol, GMRES_RESTART)
             return to_field(x) + dn * zhat, its
     psolve = _block_psolve(patch, H, Sl, that, cS, iH, iS, slip_block)
-
-    N = 2 * nH + nS
-    count = [0]
-
-    def cb(_):
-        count[0] += 1
-
-    x, _info = gmres(
-        LinearOperator((N, N), matvec=matvec, dtype=float),
-        b,
-        M=LinearOperator((N, N), matvec=psolve, dtype=float),
-        rtol=rtol,
-        atol=0.0,
-        restart=GMRES_RESTART,
-        maxiter=GMRES_MAXIT // GMRES_RESTART,
-        callback=cb,
-        callback_type="pr_norm",
-    )
-    return to_field(x) + dn * zhat, count[0]
+    x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
+    return to_field(x) + dn * zhat, its
 
 
 def _block_psolve(

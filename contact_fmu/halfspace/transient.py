@@ -75,7 +75,6 @@ from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse.linalg import LinearOperator, gmres
 
 from .._validate import InputError, count, finite, positive
 from ..body_state import BodyState, ContactOutputs
@@ -86,6 +85,7 @@ from ..layer import LayerContact, TractionField
 from ..solvers import StageSolveError
 from .contact import HalfSpaceContact
 from .influence import BlockConvolution, Grid, tangential_operator
+from .krylov import gmres
 from .rolling import (
     GMRES_MAXIT,
     GMRES_RESTART,
@@ -263,19 +263,8 @@ def linear_response(
     if N == 0:
         return np.zeros(shape), 0
     b = np.concatenate([d[0][H], d[1][H], (that[0] * d[0] + that[1] * d[1])[Sl]])
-    count = [0]
-    x, _ = gmres(
-        LinearOperator((N, N), matvec=matvec, dtype=float),
-        b,
-        M=LinearOperator((N, N), matvec=psolve, dtype=float),
-        rtol=rtol,
-        atol=0.0,
-        restart=GMRES_RESTART,
-        maxiter=GMRES_MAXIT // GMRES_RESTART,
-        callback=lambda _: count.__setitem__(0, count[0] + 1),
-        callback_type="pr_norm",
-    )
-    return to_field(x), count[0]
+    x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
+    return to_field(x), its
 
 
 # ---- the field -----------------------------------------------------------------------
