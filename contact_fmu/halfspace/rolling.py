@@ -46,7 +46,7 @@ tractions. For the thin layer this preconditioner is the exact inverse (the marc
 LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
 |F| globalises the iteration. ``RollingPatch(preconditioner="multigrid")`` replaces the
 block preconditioner by a multigrid V-cycle (multigrid.py) with GMRES on the right
-(krylov.py): 1-2 GMRES iterations per Newton step on every grid, at 2-3 times the time
+(krylov.py): 1-2 GMRES iterations per Newton step on every grid, at 1.6-3.3 times the time
 (docs/halfspace.md, "Iteration counts").
 
 Nested iteration: a patch from ellipse_patch carries its coarse levels (n/2, n/4, ...
