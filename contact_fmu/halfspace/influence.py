@@ -189,6 +189,14 @@ def plane_strain_kernel(X: FloatArray, dx: float, G: float, nu: float, L: float)
 KernelFunction = Callable[[FloatArray, FloatArray], tuple[tuple[FloatArray, ...], ...]]
 
 
+def difference(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """D q: q_I - q_I+ along x (axis -1; the forward neighbour of the last column is 0),
+    the upwind difference of steady rolling (rolling.py)."""
+    d = q.copy()
+    d[..., :-1] -= q[..., 1:]
+    return d
+
+
 @dataclass(frozen=True)
 class BlockConvolution:
     """u_a = sum_b K_ab * q_b for a block of kernels (ncomp x ncomp), by FFT.

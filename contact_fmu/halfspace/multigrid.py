@@ -48,6 +48,8 @@ import scipy.linalg as sla
 from numpy.typing import NDArray
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
+from .influence import difference
+
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
@@ -197,13 +199,6 @@ def kernel_levels(
     return levels
 
 
-def _difference(f: FloatArray) -> FloatArray:
-    """D f: f_I - f_I+ along x (zero ahead of the last column)."""
-    d = f.copy()
-    d[..., :-1] -= f[..., 1:]
-    return d
-
-
 class Level:
     """One level of the Newton system: kernel, per-element M, Lam (2, 2, ny, nx), kx
     (ny, nx), basis q (2 directions, 2 components, ny, nx) with ``active`` (2, ny, nx);
@@ -243,7 +238,7 @@ class Level:
         return np.einsum("abij,bij->aij", self.M, f)
 
     def K(self, f: FloatArray) -> FloatArray:
-        d = _difference(f)
+        d = difference(f)
         return self.kern.convolve(d) + self.kx * d
 
     def apply(self, x: FloatArray) -> FloatArray:

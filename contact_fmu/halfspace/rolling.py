@@ -71,7 +71,13 @@ from numpy.typing import NDArray
 
 from .._validate import InputError, finite, nonnegative, positive
 from . import multigrid
-from .influence import BlockConvolution, Grid, coupling_displacement, tangential_operator
+from .influence import (
+    BlockConvolution,
+    Grid,
+    coupling_displacement,
+    difference,
+    tangential_operator,
+)
 from .krylov import fgmres, gmres
 
 FloatArray = NDArray[np.float64]
@@ -300,16 +306,9 @@ class RollingPatch:
         return full[keep], cols
 
     # ---- operators ---------------------------------------------------------------------
-    @staticmethod
-    def difference(tau: FloatArray) -> FloatArray:
-        """D tau: tau_I - tau_I+ along x (the forward neighbour of the last column is 0)."""
-        d = tau.copy()
-        d[..., :-1] -= tau[..., 1:]
-        return d
-
     def apply_K(self, tau: FloatArray) -> FloatArray:
         """K tau = (A + k) D tau + (k/theta - k) D tau at the leading elements (m)."""
-        dq = self.difference(tau)
+        dq = difference(tau)
         if self.backend == "fft":
             u = self.op.apply(dq)
         else:
