@@ -218,3 +218,15 @@ def test_a_level_too_large_for_its_lu_takes_the_block_preconditioner():
     sol = solve_rolling(replace(patch, preconditioner="multigrid"), *args)
     assert np.array_equal(sol.tau, ref.tau)
     assert sol.gmres_iterations == ref.gmres_iterations
+
+
+def test_fgmres_stops_at_maxit_with_its_best_iterate():
+    """A preconditioner that does not help (a tenth of the identity on an operator with
+    spread eigenvalues): after maxit iterations fgmres returns the minimal-residual
+    iterate of the Krylov space, so the residual has fallen but not to rtol."""
+    A = np.diag(np.linspace(1.0, 100.0, 200))
+    b = np.ones(200)
+    x, k = fgmres(lambda v: A @ v, b, lambda v: 0.1 * v, 1e-12, 5)
+    res = np.linalg.norm(b - A @ x) / np.linalg.norm(b)
+    assert k == 5
+    assert 1e-12 < res < 1.0

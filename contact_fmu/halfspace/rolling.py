@@ -104,6 +104,10 @@ OVERSOLVE = 0.1
 SLIP_BLOCK_RATIO = 0.5
 # GMRES restart length and cap on the total number of inner iterations per Newton step.
 GMRES_RESTART = 60
+# With the multigrid preconditioner: at most MULTIGRID_MAXIT V-cycles per Newton step
+# (measured 1-3 on every grid, docs/halfspace.md); a step whose cycle stalls then ends
+# with GMRES's best iterate, and backtracking on |F| takes over, for a bounded cost.
+MULTIGRID_MAXIT = 20
 GMRES_MAXIT = 600
 # Backtracking: sufficient decrease factor on |F|_2 and the smallest step fraction.
 ARMIJO = 1e-4
@@ -689,7 +693,7 @@ def _newton_direction(
             pass  # singular row block, or too large a coarsest level: the block one
         else:
             # right preconditioning, one V-cycle per iteration (krylov.py)
-            x, its = fgmres(matvec, b, cycle, rtol, GMRES_RESTART)
+            x, its = fgmres(matvec, b, cycle, rtol, MULTIGRID_MAXIT)
             return to_field(x) + dn * zhat, its
     psolve = _block_psolve(patch, H, Sl, that, cS, iH, iS, slip_block)
     x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
