@@ -686,31 +686,40 @@ def _newton_direction(
         out_S = cS_S * x[2 * nH :] + (t_S[0] * Kd[0, iS] + t_S[1] * Kd[1, iS])
         return np.concatenate([Kd.ravel()[iHH], out_S])
 
+    unknowns = _Unknowns(H, Sl, that, cS, iH, iS)
     if getattr(patch, "preconditioner", "block") == "multigrid":
         try:
-            cycle = _multigrid_psolve(patch, H, Sl, that, cS, iH, iS)
+            cycle = _multigrid_psolve(patch, unknowns)
         except np.linalg.LinAlgError:
             pass  # singular row block, or too large a coarsest level: the block one
         else:
             # right preconditioning, one V-cycle per iteration (krylov.py)
             x, its = fgmres(matvec, b, cycle, rtol, MULTIGRID_MAXIT)
             return to_field(x) + dn * zhat, its
-    psolve = _block_psolve(patch, H, Sl, that, cS, iH, iS, slip_block)
+    psolve = _block_psolve(patch, unknowns, slip_block)
     x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
     return to_field(x) + dn * zhat, its
 
 
+@dataclass(frozen=True)
+class _Unknowns:
+    """The unknowns of a Newton system (``_newton_direction``): the adhesion elements H
+    (both components; flat indices iH) and the slip elements Sl (the component along
+    the tangent ``that`` (2, ny, nx); flat indices iS) with their local coefficient cS."""
+
+    H: BoolArray
+    Sl: BoolArray
+    that: FloatArray
+    cS: FloatArray
+    iH: NDArray[np.int_]
+    iS: NDArray[np.int_]
+
+
 def _block_psolve(
-    patch: RollingPatch,
-    H: BoolArray,
-    Sl: BoolArray,
-    that: FloatArray,
-    cS: FloatArray,
-    iH: NDArray[np.int_],
-    iS: NDArray[np.int_],
-    slip_block: float,
+    patch: RollingPatch, u: _Unknowns, slip_block: float
 ) -> Callable[[FloatArray], FloatArray]:
     """The block preconditioner of the Newton system (``_newton_direction``)."""
+    H, Sl, that, cS, iH, iS = u.H, u.Sl, u.that, u.cS, u.iH, u.iS
     n = H.size
     nH = len(iH)
     iHH = np.concatenate([iH, n + iH])
@@ -743,17 +752,10 @@ def _block_psolve(
     return psolve
 
 
-def _multigrid_psolve(
-    patch: RollingPatch,
-    H: BoolArray,
-    Sl: BoolArray,
-    that: FloatArray,
-    cS: FloatArray,
-    iH: NDArray[np.int_],
-    iS: NDArray[np.int_],
-) -> Callable[[FloatArray], FloatArray]:
+def _multigrid_psolve(patch: RollingPatch, u: _Unknowns) -> Callable[[FloatArray], FloatArray]:
     """One multigrid V-cycle (``multigrid``) as the preconditioner of the Newton system,
     in the unknowns' order of ``_newton_direction`` (adhesion x, adhesion y, slip)."""
+    H, Sl, that, cS, iH, iS = u.H, u.Sl, u.that, u.cS, u.iH, u.iS
     kern = patch.mg_kernels
     fine = multigrid.newton_level(kern[0], H, Sl, that, cS, patch.k_extra)
     cycle = multigrid.VCycle(fine, kern)
