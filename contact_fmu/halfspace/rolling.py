@@ -193,10 +193,11 @@ class RollingPatch:
     theta: FloatArray | None = None
     kappa: float = 0.0
     backend: str = "fft"
-    preconditioner: str = "block"
     use_closure: bool = False
     operator: BlockConvolution | None = None
     coarsen: Callable[[str], RollingPatch] | None = field(default=None, repr=False, compare=False)
+    # last, so that the fields before it keep their positions
+    preconditioner: str = "block"
 
     def __post_init__(self) -> None:
         self.p = np.asarray(self.p, float)
