@@ -90,22 +90,22 @@ class KernelLevel:
     def R(self) -> tuple[int, int]:
         return (self.table.shape[2] - 1) // 2, (self.table.shape[3] - 1) // 2
 
+    def _lookup(self, t: FloatArray, dr: NDArray[np.int_], dc: NDArray[np.int_]) -> FloatArray:
+        Ry, Rx = self.R
+        return t[:, :, np.clip(dr, -Ry, Ry) + Ry, np.clip(dc, -Rx, Rx) + Rx]
+
     def at(self, dr: NDArray[np.int_], dc: NDArray[np.int_]) -> FloatArray:
         """A at offsets (dr, dc) (arrays of the same shape): (2, 2, *dr.shape)."""
-        Ry, Rx = self.R
-        return self.table[:, :, np.clip(dr, -Ry, Ry) + Ry, np.clip(dc, -Rx, Rx) + Rx]
+        return self._lookup(self.table, dr, dc)
 
     @cached_property
     def _difference_table(self) -> FloatArray:
         """A(dr, dc) - A(dr, dc + 1), the kernel of A D (same layout as ``table``)."""
-        t = self.table.copy()
-        t[..., :-1] -= self.table[..., 1:]
-        return t
+        return difference(self.table)
 
     def at_difference(self, dr: NDArray[np.int_], dc: NDArray[np.int_]) -> FloatArray:
         """A(dr, dc) - A(dr, dc + 1) at offsets (dr, dc): (2, 2, *dr.shape) (a copy)."""
-        Ry, Rx = self.R
-        return self._difference_table[:, :, np.clip(dr, -Ry, Ry) + Ry, np.clip(dc, -Rx, Rx) + Rx]
+        return self._lookup(self._difference_table, dr, dc)
 
     @cached_property
     def row_symbols(self) -> NDArray[np.complex128]:
@@ -341,7 +341,6 @@ class Level:
         rp = self.rowptr
         top = 1 << max(0, (ny - 1).bit_length())
         mq = self._unit[1]
-        Df = np.zeros((2, nx))
 
         def leaf(i: int) -> None:
             a, b = rp[i], rp[i + 1]
@@ -353,11 +352,8 @@ class Level:
             d = self.solve_row(i, rhs)
             delta[a:b] = d
             # D M Q delta on this row (Q^T M = (M Q)^T: the same vectors both ways)
-            for c in range(2):
-                f = np.bincount(cols, weights=m[c] * d, minlength=nx)
-                Df[c] = f
-                Df[c, :-1] -= f[1:]
-            F[i] = sfft.rfft(Df, Lx, axis=-1)
+            f = np.stack([np.bincount(cols, weights=m[c] * d, minlength=nx) for c in range(2)])
+            F[i] = sfft.rfft(difference(f), Lx, axis=-1)
 
         def couple(src: tuple[int, int], dst: tuple[int, int], h: int) -> None:
             s0, s1 = src[0], min(src[1], ny)
