@@ -509,8 +509,9 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
             + ") a step costs "
             + ", ".join(f"{r['step'] / r['trivial']:.0f}" for r in lateral)
             + " trivial steps: the adapter in Python around the compiled vector step "
-            "(full method; the quasistationary one steps in Python), whose law marches "
-            "its spin grid in every evaluation.",
+            "(stepper.c, cf_advance_vector; for the quasistationary method its algebraic "
+            "stage, one Newton system of n unknowns instead of Lobatto's 2n), whose law "
+            "marches its spin grid in every evaluation.",
         ]
     out += [
         "",

@@ -183,8 +183,9 @@ class RollingBody(BodyState):
         covers it: Lobatto IIIC and a law with ``native_constants`` (thin layer,
         half-space table), and either vx the only unknown with vy held at a ratio and no
         spin (``_lobatto_scalar``: the Python path's doubles for the thin layer without
-        lateral slip, the same to rounding else) or the full method with Vy and/or
-        Omega_z as unknowns (``_lobatto_vector``: the same to the stage tolerance)."""
+        lateral slip, the same to rounding else) or Vy and/or Omega_z as unknowns, either
+        method (``_lobatto_vector`` and the quasistationary regime: the same to the stage
+        tolerance)."""
         law_constants = getattr(type(self.law), "native_constants", None)
         if law_constants is None or self.scheme != "lobatto3c":
             return None
@@ -193,7 +194,7 @@ class RollingBody(BodyState):
             and self.lateral.vy_ratio is not None
             and self.lateral.spin_ratio == 0.0
         )
-        vector = len(self._idx) > 1 and self.method == "full"
+        vector = len(self._idx) > 1
         lib = native.library() if scalar or vector else None
         if lib is None:
             return None
@@ -210,9 +211,10 @@ class RollingBody(BodyState):
             "contraction_max": solvers.CONTRACTION_MAX,
             "contraction_fast": solvers.CONTRACTION_FAST,
             "newton_iterations": solvers.NEWTON_ITERATIONS,
+            "algebraic_key": ALGEBRAIC,
         }
         if vector:
-            return native.VectorKernel(lib, constants)
+            return native.VectorKernel(lib, constants, self.method == "quasistationary")
         return native.Kernel(lib, constants, self.method == "quasistationary")
 
     def _exact_in_one_step(self, loads: LoadInput) -> bool:

@@ -119,8 +119,9 @@ def test_paths_the_kernel_leaves_out_step_in_python():
     assert RollingBody(CONTACT, body, scheme="sdirk2")._kernel is None
     assert RollingBody(CONTACT, body, Lateral(spin_ratio=1.0))._kernel is None
     assert RollingBody(CONTACT, body, dynamic_vy, scheme="sdirk2")._kernel is None
-    assert RollingBody(CONTACT, body, dynamic_vy, method="quasistationary")._kernel is None
-    assert type(RollingBody(CONTACT, body, dynamic_vy)._kernel) is native.VectorKernel
+    for method in ("full", "quasistationary"):
+        a = RollingBody(CONTACT, body, dynamic_vy, method=method)
+        assert type(a._kernel) is native.VectorKernel
 
 
 def _steady_histories():
@@ -193,7 +194,7 @@ VECTOR_PATHS = (
 )
 
 
-def _vector_histories(law, rng, body_of, V0s, steps):
+def _vector_histories(law, rng, body_of, V0s, steps, method="full"):
     """Random histories of all four loads (to 1.2 mu P: gross sliding; Fy_ex and Mz_ex
     drive Vy and Omega_z), steps of 1e-8 to 1 s in 1-4 substeps, load changes, for
     each vector path, eta (inf: no slip mass) and initial speed (reversed included)."""
@@ -207,6 +208,7 @@ def _vector_histories(law, rng, body_of, V0s, steps):
                         law,
                         body,
                         lateral,
+                        method,
                         Vx0=V0,
                         Omega_y0=V0 / body.Rx * 0.999,
                         Vy0=0.01 * V0,
@@ -232,10 +234,18 @@ def _assert_vector_paths_agree(law, histories):
     order than LAPACK's), so the converged stage unknowns differ by about that
     tolerance, and the L-stable step does not amplify it from step to step: 1e-12 of
     the scale (measured: 5e-14). The forces are Lipschitz in u with constant about
-    mu P / scale: 1e-12 of mu P (of mu P a1 for Mz)."""
+    mu P / scale: 1e-12 of mu P (of mu P a1 for Mz). Returns the number of steps that
+    completed."""
     cap = law.mu * law.P
+    completed = 0
     for a, b, args in histories:
-        assert _advance(a, args) == _advance(b, args)
+        ea, eb = _advance(a, args), _advance(b, args)
+        if ea is not None and ea[0] == "StageSolveError" == eb[0]:
+            # both fail alike; after "hybr:" scipy's diagnostic of its last iterate, which
+            # differs where the states before the step differ by rounding
+            ea, eb = ea[1].split(":")[0], eb[1].split(":")[0]
+        assert ea == eb
+        assert a.sliding == b.sliding  # the quasistationary regime
         v = law.creep_full_slip * max(abs(b.y[0]), 1e-9)  # the stage solves' scale
         assert abs(a.y[0] - b.y[0]) <= 1e-12 * max(abs(b.y[0]), 1e-9)
         for k, unit in ((1, v), (2, v), (3, v / law.a1)):
@@ -244,15 +254,21 @@ def _assert_vector_paths_agree(law, histories):
         assert abs(a.out.Ty - b.out.Ty) <= 1e-12 * cap
         assert abs(a.out.Mz - b.out.Mz) <= 1e-12 * cap * law.a1
         assert a.out.sliding == b.out.sliding and a.t == b.t
-        # _dv = (vx - vx_n)/dt of the last substep dt: the vx bound over dt, twice
+        # _dv = (vx - vx_n)/dt of the last substep dt: the vx bound over dt, twice (a
+        # step that raised left the _dv of the step before, checked with its own dt)
         dt = args[0] / args[2]
-        assert abs(a._dv - b._dv) <= 2e-12 * (abs(b.y[1]) + v) / dt
+        assert ea is not None or abs(a._dv - b._dv) <= 2e-12 * (abs(b.y[1]) + v) / dt
+        completed += ea is None
+    return completed
 
 
-def test_vector_kernel_agrees_with_the_python_path_on_the_thin_layer(monkeypatch):
+@pytest.mark.parametrize("method", ["full", "quasistationary"])
+def test_vector_kernel_agrees_with_the_python_path_on_the_thin_layer(monkeypatch, method):
     """Eqs. (8)-(11) with the thin-layer law and spin (the strip march in the stage
     residuals): the compiled Lobatto IIIC vector step (cf_advance_vector) against
-    RollingBody._lobatto_vector."""
+    RollingBody._lobatto_vector; quasistationary: the algebraic stage T(u2) = F2 while
+    rolling, the Lobatto stages in gross sliding (loads to 1.2 mu P), and the regime
+    (RollingBody._step, _update_regime, advance's one step under held loads)."""
     counts = _counting(monkeypatch, native.VectorKernel)
     histories = _vector_histories(
         CONTACT,
@@ -260,10 +276,19 @@ def test_vector_kernel_agrees_with_the_python_path_on_the_thin_layer(monkeypatch
         lambda eta: Body.from_eta(1.0, 0.05, eta, Iz=2e-3),
         V0s=(5.0, 1e-3, -2.0),
         steps=12,
+        method=method,
     )
-    _assert_vector_paths_agree(CONTACT, histories)
-    # eta = inf with loads beyond mu P: both raise (the kernel leaves them to Python)
-    assert counts["kernel"] > 0.9 * (counts["kernel"] + counts["python"])
+    sliding, completed = [], 0
+    for a, b, args in histories:
+        completed += _assert_vector_paths_agree(CONTACT, [(a, b, args)])
+        sliding.append(b.sliding)
+    # the kernel took the steps that completed, but for few its Newton left to scipy's
+    # hybrid method. Those that raise (eta = inf with loads beyond mu P in the full
+    # method; in the quasistationary one an Mz_ex the law cannot balance, T(u) = F
+    # without a root) raise on both paths, the kernel leaving them to Python.
+    assert counts["kernel"] > 0.9 * completed
+    if method == "quasistationary":  # both regimes were stepped
+        assert 0 < sum(sliding) < len(sliding), sum(sliding)
 
 
 def test_without_the_library_the_stepper_is_unchanged(monkeypatch):
@@ -340,9 +365,12 @@ def table():
     return build_table(wheel_on_rail(n=8), nodes=(9, 9, 5))
 
 
-def test_vector_kernel_agrees_with_the_python_path_on_the_half_space_table(monkeypatch, table):
+@pytest.mark.parametrize("method", ["full", "quasistationary"])
+def test_vector_kernel_agrees_with_the_python_path_on_the_half_space_table(
+    monkeypatch, table, method
+):
     """The same on the creep-force table with spin (table_scalar with phi): the vector
-    step of a railway wheel against RollingBody._lobatto_vector."""
+    step of a railway wheel against RollingBody._lobatto_vector, both methods."""
     counts = _counting(monkeypatch, native.VectorKernel)
     histories = _vector_histories(
         table,
@@ -350,9 +378,10 @@ def test_vector_kernel_agrees_with_the_python_path_on_the_half_space_table(monke
         lambda eta: Body.from_eta(500.0, 0.46, eta, Iz=50.0),
         V0s=(20.0, -5.0),
         steps=10,
+        method=method,
     )
-    _assert_vector_paths_agree(table, histories)
-    assert counts["kernel"] > 0.9 * (counts["kernel"] + counts["python"])
+    completed = _assert_vector_paths_agree(table, histories)
+    assert counts["kernel"] > 0.9 * completed  # as on the thin layer
 
 
 def test_kernel_agrees_to_rounding_on_the_half_space_table(monkeypatch, table):

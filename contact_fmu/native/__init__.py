@@ -63,7 +63,7 @@ class Params(ctypes.Structure):
     ] + [("dyn_vy", ctypes.c_int), ("dyn_spin", ctypes.c_int), ("strips", ctypes.c_void_p)] + [
         ("fd_step", ctypes.c_double), ("line_search_min", ctypes.c_double),
         ("contraction_max", ctypes.c_double), ("contraction_fast", ctypes.c_double),
-        ("newton_iterations", ctypes.c_int),
+        ("newton_iterations", ctypes.c_int), ("algebraic_key", ctypes.c_double),
     ]  # fmt: skip
 
 
@@ -81,7 +81,7 @@ class VState(ctypes.Structure):
         (n, ctypes.c_double) for n in ("Vx", "vx", "Vy", "Oz", "t", "dv", "Tx", "Ty", "Mz")
     ] + [
         ("out_sliding", ctypes.c_int), ("jac_valid", ctypes.c_int), ("jac_h", ctypes.c_double),
-        ("J", ctypes.c_double * 36),
+        ("J", ctypes.c_double * 36), ("sliding", ctypes.c_int),
     ]  # fmt: skip
 
 
@@ -283,12 +283,13 @@ class Kernel:
 
 
 class VectorKernel(Kernel):
-    """The compiled Lobatto IIIC step of the full method with Vy and/or Omega_z as stage
-    unknowns (stepper.c, cf_advance_vector; integrator.RollingBody._lobatto_vector):
-    the same Newton iteration, equal to the Python path's to the stage tolerance."""
+    """The compiled Lobatto IIIC step with Vy and/or Omega_z as stage unknowns, either
+    method (stepper.c, cf_advance_vector; integrator.RollingBody._lobatto_vector and, for
+    the quasistationary method, its algebraic stage and regime): the same Newton
+    iteration, equal to the Python path's to the stage tolerance."""
 
-    def __init__(self, lib: Any, constants: dict[str, float]) -> None:
-        super().__init__(lib, constants, quasistationary=False)
+    def __init__(self, lib: Any, constants: dict[str, float], quasistationary: bool) -> None:
+        super().__init__(lib, constants, quasistationary)
         self._advance = lib.cf_advance_vector
         self._state = VState()
         self._loads = (ctypes.c_double * 4)()
@@ -301,7 +302,7 @@ class VectorKernel(Kernel):
         p.rz = lateral.spin_ratio if lateral.spin_ratio is not None else 0.0
         p.dyn_vy, p.dyn_spin = int(lateral.dynamic_vy), int(lateral.dynamic_spin)
         p.Iz = rb.body.Iz if rb.body.Iz is not None else 0.0
-        p.quasistationary = 0
+        p.quasistationary = self._qs
         strips = getattr(rb.law, "native_strips", None)
         p.strips = None if strips is None else ctypes.addressof(strips())
 
@@ -318,6 +319,7 @@ class VectorKernel(Kernel):
         s.Vx, s.vx, s.Vy, s.Oz = rb.y.tolist()
         s.t, s.dv = rb.t, rb._dv
         s.Tx, s.Ty, s.Mz, s.out_sliding = rb.out.Tx, rb.out.Ty, rb.out.Mz, int(rb.out.sliding)
+        s.sliding = int(rb.sliding)
         s.jac_valid = rb._jac is not None
         if rb._jac is not None:  # the kept Newton matrix (solvers.newton's memo)
             s.jac_h, J = rb._jac
@@ -327,9 +329,10 @@ class VectorKernel(Kernel):
     def read(self, rb: Any) -> None:
         s = self._state
         rb.y = np.array([s.Vx, s.vx, s.Vy, s.Oz])
-        rb.t, rb._dv = s.t, s.dv
+        rb.t, rb._dv, rb.sliding = s.t, s.dv, bool(s.sliding)
         rb.out = type(rb.out)(s.Tx, s.Ty, s.Mz, bool(s.out_sliding))
-        N = 2 * len(rb._idx)
+        # the Lobatto stages' matrix is 2n x 2n, the algebraic stage's n x n
+        N = len(rb._idx) * (1 if s.jac_h == self._params.algebraic_key else 2)
         rb._jac = (s.jac_h, np.array(s.J[: N * N]).reshape(N, N)) if s.jac_valid else None
 
 

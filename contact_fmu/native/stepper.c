@@ -55,6 +55,8 @@ typedef struct {
      * the contractions that keep and renew a Jacobian, the iteration cap */
     double fd_step, line_search_min, contraction_max, contraction_fast;
     int newton_iterations;
+    /* integrator.ALGEBRAIC: the key of a kept Newton matrix of the algebraic stage */
+    double algebraic_key;
 } cf_params;
 
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
@@ -667,21 +669,24 @@ void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double
 }
 
 /* ---- integrator.RollingBody._lobatto_vector: Vy and/or Omega_z as stage unknowns ---- */
-/* The Lobatto IIIC step of the full method with n = 2 or 3 unknowns u = (vx[, Vy][,
- * Omega_z]) and its Newton iteration (solvers.newton with the block Jacobian of
- * _lobatto_vector), for the thin-layer law (spin through the strip march) and the
- * creep-force table. The 2n x 2n Newton systems are solved by Gaussian elimination with
- * partial pivoting (LAPACK's, in numpy, runs its operations in another order): the two
- * paths agree to the stage tolerance, not bit for bit (tests/test_native.py). What this
- * path leaves to Python (CF_FALLBACK, state untouched): a singular Newton matrix or no
- * convergence in newton_iterations (Python then calls scipy's hybrid method), and
+/* The Lobatto IIIC step with n = 2 or 3 unknowns u = (vx[, Vy][, Omega_z]) and its
+ * Newton iteration (solvers.newton with the block Jacobian of _lobatto_vector), for the
+ * thin-layer law (spin through the strip march) and the creep-force table; in the
+ * quasistationary method, while rolling, the algebraic stage T(u2) = F2 (n x n, the
+ * forward-difference Jacobian of solvers.newton) and the regime of RollingBody._step.
+ * The Newton systems are solved by Gaussian elimination with partial pivoting
+ * (LAPACK's, in numpy, runs its operations in another order): the two paths agree to
+ * the stage tolerance, not bit for bit (tests/test_native.py). What this path leaves to
+ * Python (CF_FALLBACK, state untouched): a singular Newton matrix or no convergence in
+ * newton_iterations (Python then calls scipy's hybrid method), and in the full method
  * eta = inf with loads beyond mu P (Python raises). */
 typedef struct {
     double Vx, vx, Vy, Oz, t, dv; /* y, t, _dv of RollingBody */
     double Tx, Ty, Mz;            /* out: ContactOutputs */
     int out_sliding;
     int jac_valid;                /* RollingBody._jac: (jac_h, J) kept, or none */
-    double jac_h, J[36];          /* 2n x 2n, row major */
+    double jac_h, J[36];          /* 2n x 2n (n x n for the algebraic stage), row major */
+    int sliding;                  /* RollingBody.sliding (quasistationary gross sliding) */
 } cf_vstate;
 
 /* the law at state y = (Vx, vx, Vy, Omega_z) and speed V; the thin-layer law as
@@ -721,7 +726,7 @@ static void forces_at(const cf_params *p, const double y[4], double T[3], march_
 
 typedef struct {
     const cf_params *p;
-    int n, act[3];
+    int n, act[3], algebraic; /* algebraic: the quasistationary stage T(u) = F2 */
     double y[4], un[3], F1[3], F2[3], m[3], Vb[2], h;
     march_cache *cache;
 } vstage;
@@ -743,9 +748,15 @@ static void stage_forces(const vstage *s, const double *U, int stage, double *Ta
     for (int i = 0; i < s->n; i++) Ta[i] = T[s->act[i]];
 }
 
-/* _lobatto_vector's residuals at UU = (u1, u2); the stage forces into T1, T2 */
+/* _lobatto_vector's residuals at UU = (u1, u2); the stage forces into T1, T2. The
+ * algebraic stage: UU = u2 alone, R = T(u2) - F2 (T1 untouched). */
 static void vresiduals(const vstage *s, const double *UU, double *R, double *T1, double *T2) {
     const int n = s->n;
+    if (s->algebraic) {
+        stage_forces(s, UU, 1, T2);
+        for (int i = 0; i < n; i++) R[i] = T2[i] - s->F2[i];
+        return;
+    }
     const double *U1 = UU, *U2 = UU + n;
     stage_forces(s, U1, 0, T1);
     stage_forces(s, U2, 1, T2);
@@ -756,10 +767,21 @@ static void vresiduals(const vstage *s, const double *UU, double *R, double *T1,
 }
 
 /* _lobatto_vector's jacobian: the mass terms exactly, T(u_i) by forward differences in
- * stage i's unknowns, J (2n x 2n, row major) */
+ * stage i's unknowns, J (2n x 2n, row major). The algebraic stage: solvers.newton's
+ * forward differences of the residuals R (n x n). */
 static void vjacobian(const vstage *s, const double *UU, const double *du, const double *T1,
-                      const double *T2, double *J) {
+                      const double *T2, const double *R, double *J) {
     const int n = s->n, N = 2 * n;
+    if (s->algebraic) {
+        for (int j = 0; j < n; j++) {
+            double U[3], Tp[3];
+            for (int i = 0; i < n; i++) U[i] = UU[i];
+            U[j] += du[j];
+            stage_forces(s, U, 1, Tp);
+            for (int i = 0; i < n; i++) J[i * n + j] = ((Tp[i] - s->F2[i]) - R[i]) / du[j];
+        }
+        return;
+    }
     for (int k = 0; k < N * N; k++) J[k] = 0.0;
     for (int st = 0; st < 2; st++) {
         const double *T = st == 0 ? T1 : T2;
@@ -823,15 +845,16 @@ static double norm2(int N, const double *r) {
  * CF_FALLBACK where Python goes on with scipy's hybrid method */
 static int vnewton(const vstage *s, const double *scale, double *u, double *Jk, int *kept_in) {
     const cf_params *p = s->p;
-    const int N = 2 * s->n;
-    double r[6], T1[3], T2[3], J[36], step[6], du[6], un[6], rn[6], T1n[3], T2n[3], norm = 0.0;
+    const int N = s->algebraic ? s->n : 2 * s->n;
+    double r[6], T1[3] = {0.0}, T2[3], J[36], step[6], du[6], un[6], rn[6], T1n[3] = {0.0}, T2n[3];
+    double norm = 0.0;
     int have = *kept_in;
     vresiduals(s, u, r, T1, T2);
     for (int it = 0; it < p->newton_iterations; it++) {
         int kept = have;
         if (!kept) {
             for (int i = 0; i < N; i++) du[i] = p->fd_step * (fabs(u[i]) + scale[i]);
-            vjacobian(s, u, du, T1, T2, Jk);
+            vjacobian(s, u, du, T1, T2, r, Jk);
             have = *kept_in = 1;
         }
         for (int k = 0; k < N * N; k++) J[k] = Jk[k]; /* solve_small overwrites */
@@ -866,19 +889,28 @@ static int vnewton(const vstage *s, const double *scale, double *u, double *Jk, 
     return CF_FALLBACK;
 }
 
-/* RollingBody._step of the full method with _lobatto_vector, held loads */
-static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4]) {
+/* Eq. (27) for the vector path (RollingBody._admissible): the demanded (Tx, Ty) inside
+ * the capacity mu P */
+static int vadmissible(const cf_params *p, const double L[4]) {
+    double cap = p->mu * p->P * (1.0 - p->capacity_margin);
+    return hypot(target_x(p, L[0], L[2]), p->dyn_vy ? L[1] : 0.0) < cap;
+}
+
+/* RollingBody._step with _lobatto_vector, held loads L = (Fx_ex, Fy_ex, My_ex, Mz_ex):
+ * the Lobatto stages, or (algebraic) the quasistationary stage T(u2) = F2 with the
+ * masses of the unknowns zero (its Newton matrix kept under p->algebraic_key) */
+static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], int algebraic) {
     const double Fx = L[0], Fy = L[1], My = L[2], Mz = L[3];
     march_cache cache = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
-    vstage s = {p, 0, {0, 0, 0}, {w->Vx, w->vx, w->Vy, w->Oz}, {0}, {0}, {0}, {0}, {0}, h, &cache};
+    vstage s = {p, 0, {0, 0, 0}, algebraic, {w->Vx, w->vx, w->Vy, w->Oz}, {0}, {0}, {0}, {0},
+                {0}, h, &cache};
     double F[3] = {target_x(p, Fx, My), Fy, Mz}, m[3] = {p->m_slip, p->M, p->Iz};
     s.act[s.n++] = 0;
     if (p->dyn_vy) s.act[s.n++] = 1;
     if (p->dyn_spin) s.act[s.n++] = 2;
-    if (p->m_slip == 0.0) { /* _admissible: Python raises beyond the capacity */
-        double cap = p->mu * p->P * (1.0 - p->capacity_margin);
-        if (!(hypot(target_x(p, Fx, My), p->dyn_vy ? Fy : 0.0) < cap)) return CF_FALLBACK;
-    }
+    /* _step: the full method raises without a slip mass beyond the capacity (Python
+     * does); the quasistationary one slides there (cf_qs_step) */
+    if (p->m_slip == 0.0 && !p->quasistationary && !vadmissible(p, L)) return CF_FALLBACK;
     double G = drive(p, Fx, My);
     s.Vb[0] = s.y[0] + 0.5 * h * (G - G) / p->M;
     s.Vb[1] = s.y[0] + 0.5 * h * (G + G) / p->M;
@@ -888,16 +920,19 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4]) 
         int a = s.act[i];
         s.un[i] = s.y[a + 1];
         s.F1[i] = s.F2[i] = F[a];
-        s.m[i] = m[a];
+        s.m[i] = algebraic ? 0.0 : m[a];
         scale[i] = scale[s.n + i] = sc[a];
         u[i] = u[s.n + i] = s.un[i];
     }
-    int kept = w->jac_valid && w->jac_h == h; /* RollingBody._jac for this h */
+    const double key = algebraic ? p->algebraic_key : h;
+    int kept = w->jac_valid && w->jac_h == key; /* RollingBody._jac for this key */
     if (vnewton(&s, scale, u, w->J, &kept)) return CF_FALLBACK;
-    w->jac_valid = 1, w->jac_h = h;
+    w->jac_valid = 1, w->jac_h = key;
     double Y[4], T[3];
-    vstate_at(&s, u + s.n, 1, Y);
+    vstate_at(&s, algebraic ? u : u + s.n, 1, Y);
     forces_at(p, Y, T, &cache);
+    if (algebraic) /* the stage balances the targets: T[act] = F2 */
+        for (int i = 0; i < s.n; i++) T[s.act[i]] = s.F2[i];
     w->dv = (Y[1] - w->vx) / h;
     double cap = p->mu * p->P;
     if (hypot(T[0], T[1]) > cap) {
@@ -911,15 +946,42 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4]) 
     return CF_OK;
 }
 
-/* RollingBody.advance of the full method with Vy and/or Omega_z as unknowns, loads
+/* RollingBody._step of the quasistationary method: gross sliding entered where the loads
+ * are not admissible, the algebraic stage while rolling (else the Lobatto stages with the
+ * masses), then _update_regime */
+static int qs_step(const cf_params *p, cf_vstate *w, double h, const double L[4]) {
+    const int adm = vadmissible(p, L);
+    if (!adm) w->sliding = 1;
+    if (vstep(p, w, h, L, !w->sliding)) return CF_FALLBACK;
+    if (w->sliding) {
+        if (!full_slip(p, w->vx, w->Vy, w->Vx) && adm) w->sliding = 0;
+    } else if (w->out_sliding) {
+        w->sliding = 1;
+    }
+    return CF_OK;
+}
+
+/* RollingBody.advance with Vy and/or Omega_z as unknowns (either method), loads
  * L = (Fx_ex, Fy_ex, My_ex, Mz_ex) held: h (s) in n equal steps. On CF_FALLBACK *y is
  * unchanged. */
 int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
     if (p->law == LAW_LAYER && p->strips == NULL) return CF_FALLBACK; /* no spin grid */
     cf_vstate w = *y;
+    if (p->quasistationary && n > 1 && !w.sliding && vadmissible(p, L)) {
+        /* RollingBody.advance: rolling under held, admissible loads in one step, unless
+         * that step ends in gross sliding */
+        if (qs_step(p, &w, h, L)) return CF_FALLBACK;
+        if (!w.sliding) {
+            w.t = y->t + h;
+            *y = w;
+            return CF_OK;
+        }
+        w = *y;
+    }
     double dt = h / n;
     for (int k = 0; k < n; k++)
-        if (vstep(p, &w, dt, L)) return CF_FALLBACK;
+        if (p->quasistationary ? qs_step(p, &w, dt, L) : vstep(p, &w, dt, L, 0))
+            return CF_FALLBACK;
     w.t = y->t + h;
     *y = w;
     return CF_OK;
