@@ -393,9 +393,18 @@ class RollingBody(BodyState):
         if not np.any(m):  # algebraic: T(u2) = F2; its Jacobian kept under the key ALGEBRAIC
             key = ALGEBRAIC
             memo = {"J": self._jac[1]} if self._jac is not None and self._jac[0] == key else {}
-            u2 = newton(
-                lambda U: self._forces(states(U, 1))[:, self._act] - F2, un, scale, None, memo
-            )
+            u0 = self._algebraic_start(un, Vb[1])
+
+            def balance(U: FloatArray) -> FloatArray:
+                return self._forces(states(U, 1))[:, self._act] - F2
+
+            try:
+                u2 = newton(balance, u0, scale, None, memo)
+            except StageSolveError:
+                # from no slip (the spin kept): where the law is smooth and steep
+                memo = {}
+                u0[[i for i, a in enumerate(self._act) if a < 2]] = 0.0
+                u2 = newton(balance, u0, scale, None, memo)
             self._jac = (key, memo["J"]) if "J" in memo else None
             Y2 = states(u2[None, :], 1)
             T = self._forces(Y2)[0]
@@ -438,6 +447,27 @@ class RollingBody(BodyState):
         self._jac = (h, memo["J"]) if "J" in memo else None
         Y2 = states(UU[None, n:], 1)
         return Y2[0], self._forces(Y2)[0]
+
+    def _algebraic_start(self, un: FloatArray, V: float) -> FloatArray:
+        """Newton's start for the algebraic stage T(u) = F at the speed V: the last
+        state's creepages (u/Vx: the law is a function of them, and Vx may change much in
+        one step of Eq. 28, or reverse), with the slip (vx[, Vy]) pulled back to half
+        the onset of full slip where it is beyond it (the law is flat in the slip's
+        magnitude there, and Newton finds no direction)."""
+        ratio = _signed(V) / _signed(self.y[0])
+        u = un * ratio
+        Y = self.y.copy()
+        Y[0] = V
+        Y[self._idx] = u
+        Y = self._apply_ratios(Y)
+        slip = math.hypot(Y[1], Y[2])
+        onset = self.law.creep_full_slip * max(abs(V), V_SCALE_FLOOR)
+        if slip >= onset and slip > 0.0:
+            k = 0.5 * onset / slip
+            for i, a in enumerate(self._act):
+                if a < 2:  # vx, Vy; not the spin
+                    u[i] *= k
+        return u
 
     # ---- SDIRK2 ------------------------------------------------------------------------
     def _sdirk_scalar(self, h: float, L1: Loads, L2: Loads, algebraic: bool):
@@ -507,6 +537,11 @@ class RollingBody(BodyState):
 def _shift(f_df: tuple[float, float], target: float) -> tuple[float, float]:
     """(f - target, f') for the root finder."""
     return f_df[0] - target, f_df[1]
+
+
+def _signed(V: float) -> float:
+    """V with its magnitude at least V_SCALE_FLOOR (0 taken as positive)."""
+    return max(abs(V), V_SCALE_FLOOR) if V >= 0.0 else -max(abs(V), V_SCALE_FLOOR)
 
 
 def standstill_weight(Vx: FloatArray | float) -> FloatArray | float:

@@ -346,6 +346,44 @@ def test_quasistationary_takes_held_loads_in_one_step(vy_ratio):
         assert a[key] == pytest.approx(b[key], rel=1e-13, abs=1e-300), key
 
 
+@pytest.mark.parametrize("native", [True, False])
+def test_quasistationary_lateral_state_does_not_depend_on_the_slip_before(native):
+    """Section 3c: with the masses of vx, Vy, Omega_z dropped, Eqs. (26), (29), (30) fix
+    the slip from the loads (T = F) and Vx (Eq. 28), whatever it was before the step. From
+    rest, from slip in the other direction, from slip beyond the onset of full slip (a
+    flat law), from slip along the demand, and over a step in which Vx falls from 4.6 m/s
+    through zero (eta = inf: the last state's slip velocities at the new speed are
+    creepages 20 times too large): the same state, to the stage solve's tolerance
+    (SOLVE_RTOL = 1e-13 of u + scale; 1e-12 allowed). The second and third starts of the
+    first case and the second of the second raised StageSolveError when Newton started
+    from the last slip velocities (RollingBody._algebraic_start, the retry from no
+    slip)."""
+    lat = Lateral(vy_ratio=None, spin_ratio=None)
+    cases = [  # (body eta, Vx0, step, loads, previous slips (vx, Vy, Omega_z))
+        (1.0, 5.0, 6.8e-5, Loads(-298.33, -126.33, 0.226, 0.0128),
+         [(0.0, 0.0, 0.0), (0.005, 0.03, 0.0), (0.005, 0.05, 1.5), (-0.001, -0.01, -0.5)]),
+        (math.inf, 4.59658177, 0.0264938, Loads(-185.37, 50.22, 0.173, -0.0317),
+         [(0.0, 0.0, 0.0), (-1.84e-4, 1.096e-2, 0.894)]),
+    ]  # fmt: skip
+    for eta, V, h, L, slips in cases:
+        body = Body.from_eta(1.0, 0.05, eta, Iz=2e-3)
+        ends = []
+        for vx, Vy, Oz in slips:
+            rb = RollingBody(C, body, lat, "quasistationary", Vx0=V, Omega_y0=(V - vx) / 0.05,
+                             Vy0=Vy, Omega_z0=Oz)  # fmt: skip
+            if not native:
+                rb._kernel = None
+            rb.advance(h, L, 1)
+            ends.append(rb.y.copy())
+            assert rb.out.Ty == pytest.approx(L.Fy_ex, rel=1e-12)  # Eq. (29)
+            assert rb.out.Mz == pytest.approx(L.Mz_ex, rel=1e-12)  # Eq. (30), QS
+        v = C.creep_full_slip * abs(ends[0][0])
+        for y in ends[1:]:
+            assert y[0] == ends[0][0]  # Eq. (28): Vx does not depend on the slip
+            for k, unit in ((1, v), (2, v), (3, v / C.a1)):
+                assert abs(y[k] - ends[0][k]) <= 1e-12 * (abs(ends[0][k]) + unit)
+
+
 # ---- state handling ---------------------------------------------------------------------------
 @pytest.mark.parametrize("dynamic", [False, True])
 def test_snapshot_and_restore_are_exact(dynamic):

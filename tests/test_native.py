@@ -282,10 +282,10 @@ def test_vector_kernel_agrees_with_the_python_path_on_the_thin_layer(monkeypatch
     for a, b, args in histories:
         completed += _assert_vector_paths_agree(CONTACT, [(a, b, args)])
         sliding.append(b.sliding)
-    # the kernel took the steps that completed, but for few its Newton left to scipy's
-    # hybrid method. Those that raise (eta = inf with loads beyond mu P in the full
-    # method; in the quasistationary one an Mz_ex the law cannot balance, T(u) = F
-    # without a root) raise on both paths, the kernel leaving them to Python.
+    # the kernel took the steps that completed, but for few its Newton left to Python
+    # (scipy's hybrid method; for the quasistationary stage the retry from no slip).
+    # Those that raise (eta = inf with loads beyond mu P, full method) raise on both
+    # paths, the kernel leaving them to Python.
     assert counts["kernel"] > 0.9 * completed
     if method == "quasistationary":  # both regimes were stepped
         assert 0 < sum(sliding) < len(sliding), sum(sliding)

@@ -673,7 +673,8 @@ void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double
  * Newton iteration (solvers.newton with the block Jacobian of _lobatto_vector), for the
  * thin-layer law (spin through the strip march) and the creep-force table; in the
  * quasistationary method, while rolling, the algebraic stage T(u2) = F2 (n x n, the
- * forward-difference Jacobian of solvers.newton) and the regime of RollingBody._step.
+ * forward-difference Jacobian of solvers.newton, from RollingBody._algebraic_start; its
+ * retry from no slip after a failure is Python's) and the regime of RollingBody._step.
  * The Newton systems are solved by Gaussian elimination with partial pivoting
  * (LAPACK's, in numpy, runs its operations in another order): the two paths agree to
  * the stage tolerance, not bit for bit (tests/test_native.py). What this path leaves to
@@ -889,6 +890,30 @@ static int vnewton(const vstage *s, const double *scale, double *u, double *Jk, 
     return CF_FALLBACK;
 }
 
+/* integrator._signed: V with its magnitude at least v_scale_floor (0 taken as positive) */
+static double signed_floor(const cf_params *p, double V) {
+    return V >= 0.0 ? py_max(fabs(V), p->v_scale_floor) : -py_max(fabs(V), p->v_scale_floor);
+}
+
+/* RollingBody._algebraic_start: the last state's creepages at the stage's speed V, the
+ * slip (vx[, Vy]) pulled back to half the onset of full slip where it is beyond it */
+static void algebraic_start(const vstage *s, double V, double *u) {
+    const cf_params *p = s->p;
+    double ratio = signed_floor(p, V) / signed_floor(p, s->y[0]), Y[4];
+    for (int i = 0; i < 4; i++) Y[i] = s->y[i];
+    Y[0] = V;
+    for (int i = 0; i < s->n; i++) Y[s->act[i] + 1] = u[i] = s->un[i] * ratio;
+    if (!p->dyn_vy) Y[2] = p->ry * Y[0]; /* BodyState._apply_ratios */
+    if (!p->dyn_spin) Y[3] = p->rz * Y[0];
+    double slip = hypot(Y[1], Y[2]);
+    double onset = p->creep_full_slip * py_max(fabs(V), p->v_scale_floor);
+    if (slip >= onset && slip > 0.0) {
+        double k = 0.5 * onset / slip;
+        for (int i = 0; i < s->n; i++)
+            if (s->act[i] < 2) u[i] *= k; /* vx, Vy; not the spin */
+    }
+}
+
 /* Eq. (27) for the vector path (RollingBody._admissible): the demanded (Tx, Ty) inside
  * the capacity mu P */
 static int vadmissible(const cf_params *p, const double L[4]) {
@@ -924,6 +949,7 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], 
         scale[i] = scale[s.n + i] = sc[a];
         u[i] = u[s.n + i] = s.un[i];
     }
+    if (algebraic) algebraic_start(&s, s.Vb[1], u);
     const double key = algebraic ? p->algebraic_key : h;
     int kept = w->jac_valid && w->jac_h == key; /* RollingBody._jac for this key */
     if (vnewton(&s, scale, u, w->J, &kept)) return CF_FALLBACK;
