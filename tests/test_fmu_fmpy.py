@@ -343,25 +343,27 @@ def _lateral_history(kind: str, t: float) -> dict[str, float]:
     }[kind]  # fmt: skip
 
 
+@pytest.mark.parametrize("method", ["full", "quasistationary"])
 @pytest.mark.parametrize("kind", ["beyond", "combined", "yaw", "reversal"])
-def test_full_body_fmu_lateral_extremes(kind):
+def test_full_body_fmu_lateral_extremes(kind, method):
     """The full body FMU (Eqs. 8-11, the law with spin, the compiled vector step) through
-    fmpy at its edges: a lateral force of 1.2 mu P for 2 ms (gross sliding sideways, then
-    rolling again), Tx and Fy_ex each at 0.7 mu P (|T| = 0.99 mu P), yaw-moment steps,
-    and Vx through zero under a lateral force (at 2 ms, a communication point). Every
-    doStep OK, every output finite, |T| <= mu P to rounding (16 eps), and the power of
-    the creep forces on the rigid slip of Eq. (3), Tx vx + Ty vy + Mz Omega_z, never
-    negative beyond the stage tolerance (100 SOLVE_RTOL mu P v_s, as the stiff suite's
-    dissipation check)."""
+    fmpy at its edges, both methods: a lateral force of 1.2 mu P for 2 ms (gross sliding
+    sideways, then rolling again), Tx and Fy_ex each at 0.7 mu P (|T| = 0.99 mu P),
+    yaw-moment steps, and Vx through zero under a lateral force (at 2 ms, a
+    communication point). Every doStep OK, every output finite, |T| <= mu P to rounding
+    (16 eps), and the power of the creep forces on the rigid slip of Eq. (3), Tx vx +
+    Ty vy + Mz Omega_z, never negative beyond the stage tolerance (100 SOLVE_RTOL mu P
+    v_s, as the stiff suite's dissipation check)."""
     from contact_fmu.fmu.config import ModelConfig
     from contact_fmu.solvers import SOLVE_RTOL
 
     path = fmu_build.build(ModelConfig.full("body"), OUT).path
     h = 1e-5
     V0 = 0.3 if kind == "reversal" else ex.speed_unit()
-    starts = {"h_max": h / 4, "Vx0": V0, "Omega_y0": V0 / ex.Rx, "Iy": ex.M * ex.Rx**2 / 2}
+    starts = {"h_max": h / 4, "Vx0": V0, "Omega_y0": V0 / ex.Rx, "Iy": ex.M * ex.Rx**2 / 2,
+              "method": method}  # fmt: skip
     cfs = ex.contact().creep_full_slip
-    with Instance(path, kind, starts) as b:
+    with Instance(path, f"{kind}_{method}", starts) as b:
         b.set("P", ex.P)
         for k in range(400):
             for name, value in _lateral_history(kind, k * h).items():
