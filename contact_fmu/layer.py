@@ -310,18 +310,27 @@ class LayerContact:
         Mz = np.array(np.sign(Vx) * self.mu * self.P * self.a1 * moment_fraction(beta) * ey)
         spinning = phi != 0.0
         if np.any(spinning):
-            # one stacked march for all spinning inputs, with and without their spin
-            v = (vx[spinning], vy[spinning], Vx[spinning])
-            n = v[0].size
-            grid = self._grid(*SPIN_GRID)
-            tau, _ = grid.march(
-                self, *(np.tile(a, 2) for a in v), np.r_[phi[spinning], np.zeros(n)]
+            dTx, dTy, dMz = self.spin_correction(
+                vx[spinning], vy[spinning], phi[spinning], Vx[spinning]
             )
-            dT, dM = (r[:n] - r[n:] for r in grid.resultants(tau, np.tile(np.sign(v[2]), 2)))
-            Tx[spinning] += dT.real
-            Ty[spinning] += dT.imag
-            Mz[spinning] += dM
+            Tx[spinning] += dTx
+            Ty[spinning] += dTy
+            Mz[spinning] += dMz
         return Tx, Ty, Mz
+
+    def spin_correction(
+        self, vx: FloatArray, vy: FloatArray, phi: FloatArray, Vx: FloatArray,
+        grid: tuple[int, int] = SPIN_GRID,
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:  # fmt: skip
+        """What ``forces`` adds to the closed form for spin phi: the strip march's (Tx,
+        Ty, Mz) with the spin less the same march without it, on an nx x ny ``grid``
+        (1-D arrays of one length; one stacked march for both)."""
+        n = len(vx)
+        g = self._grid(*grid)
+        v = (vx, vy, Vx)
+        tau, _ = g.march(self, *(np.tile(a, 2) for a in v), np.r_[phi, np.zeros(n)])
+        dT, dM = (r[:n] - r[n:] for r in g.resultants(tau, np.tile(np.sign(Vx), 2)))
+        return dT.real, dT.imag, dM
 
     def _forces_scalar(self, vx: float, vy: float, Vx: float) -> tuple[float, float, float]:
         """``forces`` without spin for floats, in math instead of numpy (same formulas)."""

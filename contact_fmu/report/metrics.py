@@ -42,7 +42,7 @@ def pairwise_orders(h: ArrayLike, e: ArrayLike) -> FloatArray:
     return out
 
 
-def oscillation(y: ArrayLike, floor: float) -> tuple[float, int]:
+def oscillation(y: ArrayLike, floor: float | ArrayLike) -> tuple[float, int]:
     """Step-to-step oscillation of a sampled output above its own variation.
 
     With the differences d_k = y_k+1 - y_k, a zig-zag at k is three consecutive
@@ -61,23 +61,25 @@ def oscillation(y: ArrayLike, floor: float) -> tuple[float, int]:
     cancels exactly. The returned excess is
     max_k (a_k - s_k - floor), with the index k; <= 0 means no step-to-step
     oscillation above the solution's own variation and the noise ``floor`` (the
-    rounding and solver tolerance of the output, in its units). Without zig-zags it is
-    -floor, index -1.
+    rounding and solver tolerance of the output, in its units; or an array over the
+    differences, floor[k] for the zig-zag centred on difference k). Without zig-zags it
+    is -min(floor), index -1.
     """
     y = np.asarray(y, float)
+    f = np.broadcast_to(np.asarray(floor, float), (max(y.size - 1, 1),))
     if y.size < 5:
-        return -floor, -1
+        return -float(np.min(f)), -1
     d = np.diff(y)
     s = np.sign(d)
     # zig-zag centred on difference k (1 <= k <= n-3): s[k-1] = -s[k] = s[k+1] != 0
     k = np.arange(1, d.size - 1)
     zig = (s[k - 1] != 0) & (s[k - 1] == -s[k]) & (s[k] == -s[k + 1])
     if not np.any(zig):
-        return -floor, -1
+        return -float(np.min(f)), -1
     a = np.minimum(np.minimum(np.abs(d[k - 1]), np.abs(d[k])), np.abs(d[k + 1]))
     # the zig-zag of differences k-1, k, k+1 spans y[k-1] .. y[k+2]; four steps hold it
     lo = np.minimum(k - 1, y.size - 5)
     own = np.abs(y[lo + 4] - y[lo]) / 4.0
-    excess = np.where(zig, a - own - floor, -np.inf)
+    excess = np.where(zig, a - own - f[k], -np.inf)
     i = int(np.argmax(excess))
     return float(excess[i]), int(k[i])
