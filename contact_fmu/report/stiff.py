@@ -13,7 +13,8 @@ Checks (each with its measured quantity; see the constants for the tolerances):
   log2(d1/d2) >= P_MIN, or are at the rounding floor;
 - memory: the number of memory blocks the interpreter holds (``sys.getallocatedblocks``
   after a garbage collection) grows by at most MEM_BLOCKS over the second half of the
-  longest run, and the resident set (``/proc/self/statm``) by at most MEM_RSS_BYTES.
+  longest run, and the resident set (``/proc/self/statm``) by at most MEM_RSS_BYTES
+  (the lateral cases: on their long run only, StiffCase.memory).
 """
 
 from __future__ import annotations
@@ -37,7 +38,8 @@ from numpy.typing import NDArray
 import fmu_build
 
 from ..fmu.config import METHODS, SCHEMES, ModelConfig
-from ..layer import LayerContact
+from ..integrator import V_STANDSTILL, standstill_weight
+from ..layer import SPIN_GRID, LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
 from ..solvers import SOLVE_RTOL
@@ -48,6 +50,10 @@ FloatArray = NDArray[np.float64]
 
 INPUTS = ("P", "Fx_ex", "My_ex")
 OUTPUTS = ("Tx", "vx", "Vx", "regime")
+# The lateral cases (StiffCase.lateral): Vy and Omega_z integrated (Eqs. 10-11), the law
+# with spin; their inputs and outputs besides the above.
+LATERAL_INPUTS = ("Fy_ex", "Mz_ex")
+LATERAL_OUTPUTS = ("Ty", "vy", "Mz", "Omega_z")
 # |Tx| <= mu P to rounding: the stepper rescales an implied force beyond the capacity
 # onto it (a hypot, a quotient, a product: a few units in the last place); 16 of them.
 BOUND_RTOL = 16 * np.finfo(float).eps
@@ -72,15 +78,38 @@ CONV_FLOOR = 1e4 * SOLVE_RTOL
 # objects allocated up to bounded sizes and fill slowly over a run: measured over the
 # second half of 800-step runs, the count moves by tens of blocks (<= 41 for the eta
 # cases). A leak of one object per step adds >= 256 blocks over the measured windows
-# (>= 256 steps). RSS: pymalloc arenas are 1 MiB; a leak of 8 bytes per step over the
-# long run's measured 5e5 steps reaches 4 MiB.
+# (>= 256 steps). The lateral path (the spin march, the adhesion output) fills them for
+# about 1500 steps of a run (+287, +60, +30, +5, +5, +4, +5, +6, -5 blocks per 400
+# steps over 4000 steps of the lateral steps case; +161 and +185 over the second half
+# of its 800-step runs): its cases measure memory on a run of 4000 steps. RSS: pymalloc
+# arenas are 1 MiB; a leak of 8 bytes per step over the long run's measured 5e5 steps
+# reaches 4 MiB.
 MEM_BLOCKS = 128
 MEM_RSS_BYTES = 4 << 20
+# The spin law's grid error is measured against a grid this many times finer each way
+# (``spin_grid_roughness``): 128 x 96 against 64 x 48. The march is first order in the
+# cell size (layer.py), so the difference is about half the 64 x 48 grid's own error:
+# the floor errs on the strict side.
+ROUGHNESS_REFINE = 2
+ROUGHNESS_CHUNK = 64  # states per march: 2 x 64 fields of 128 x 96 complex, 25 MB
 PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
 
-def config() -> ModelConfig:
-    """The FMU of the suite: body mode, straight rolling, both steppers and schemes."""
+def config(lateral: bool = False) -> ModelConfig:
+    """The FMUs of the suite: body mode, both steppers and schemes; straight rolling, or
+    (lateral) Vy and Omega_z from Eqs. (10)-(11)."""
+    if lateral:
+        return ModelConfig(
+            name="stiff_lateral",
+            mode="body",
+            inputs=INPUTS + LATERAL_INPUTS,
+            outputs=("Tx", "Ty", "Mz", "vx", "vy", "Vx", "Omega_z", "regime"),
+            methods=METHODS,
+            schemes=SCHEMES,
+            vy="eq10",
+            spin="eq11",
+            description="Stiff and extreme cases with the lateral degrees of freedom",
+        )
     return ModelConfig(
         name="stiff",
         mode="body",
@@ -113,15 +142,19 @@ def _rss() -> int:
 
 
 def simulate(fmu_dir: Path, case: StiffCase, h: float, steps: int, memory: bool = False) -> Run:
-    """``steps`` communication steps of h through the FMU extracted at ``fmu_dir``."""
+    """``steps`` communication steps of h through the case's FMU, extracted under
+    ``fmu_dir`` (``prepare``)."""
+    inputs = INPUTS + (LATERAL_INPUTS if case.lateral else ())
+    outputs = OUTPUTS[:-1] + (LATERAL_OUTPUTS if case.lateral else ()) + OUTPUTS[-1:]
     t = np.arange(steps + 1) * h
-    u = {n: parse(n, case.inputs[n])(t) for n in INPUTS}
-    vals = {n: np.full(steps, np.nan) for n in OUTPUTS}
+    u = {n: parse(n, case.inputs[n])(t) for n in inputs}
+    vals = {n: np.full(steps, np.nan) for n in outputs}
     run = Run(t[1:], vals)
     t0 = time.perf_counter()
-    with Instance(fmu_dir, f"stiff-{case.name}", case.start_values(h), unzip_dir=fmu_dir) as inst:
-        vin = [inst.vars[n].valueReference for n in INPUTS]
-        vout = [inst.vars[n].valueReference for n in OUTPUTS if n != "regime"]
+    folder = fmu_dir / config(case.lateral).name
+    with Instance(folder, f"stiff-{case.name}", case.start_values(h), unzip_dir=folder) as inst:
+        vin = [inst.vars[n].valueReference for n in inputs]
+        vout = [inst.vars[n].valueReference for n in outputs if n != "regime"]
         vreg = [inst.vars["regime"].valueReference]
         fmu = inst.fmu
         half = steps // 2
@@ -129,14 +162,14 @@ def simulate(fmu_dir: Path, case: StiffCase, h: float, steps: int, memory: bool 
             if memory and k == half:
                 gc.collect()
                 b1, r1 = sys.getallocatedblocks(), _rss()
-            fmu.setReal(vin, [float(u[n][k]) for n in INPUTS])
+            fmu.setReal(vin, [float(u[n][k]) for n in inputs])
             status = inst.step(h)
             if status != OK:
                 msg = inst.messages[-1][1] if inst.messages else ""
                 run.status = f"doStep {k + 1} at t = {t[k]:.6g} s: status {status} {msg}"
                 break
             out = fmu.getReal(vout)
-            for i, n in enumerate(OUTPUTS[:-1]):
+            for i, n in enumerate(outputs[:-1]):
                 vals[n][k] = out[i]
             vals["regime"][k] = fmu.getInteger(vreg)[0]
         if memory and run.status is None:
@@ -161,8 +194,10 @@ class Result:
     case: StiffCase
     checks: list[Check] = field(default_factory=list)
     wall: float = 0.0
-    order_Tx: float = math.nan
-    order_vx: float = math.nan
+    # observed orders of convergence, the lowest of the forces' and of the slips' whose
+    # differences are above CONV_FLOOR (NaN: all at the floor)
+    order_force: float = math.nan
+    order_slip: float = math.nan
 
     @property
     def ok(self) -> bool:
@@ -172,13 +207,57 @@ class Result:
         return next(c for c in self.checks if c.name == name)
 
 
-def _slip_scale(case: StiffCase, Vx: FloatArray) -> FloatArray:
-    """v_s = (creepage at the onset of full slip) x max(|Vx|, 1e-9 m/s) at each point."""
+def _law(case: StiffCase) -> LayerContact:
     p = case.params
-    law = LayerContact(
+    return LayerContact(
         float(case.inputs["P"]), p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"], p["mu"]
     )
-    return law.creep_full_slip * np.maximum(np.abs(Vx), 1e-9)
+
+
+def _slip_scale(case: StiffCase, Vx: FloatArray) -> FloatArray:
+    """v_s = (creepage at the onset of full slip) x max(|Vx|, 1e-9 m/s) at each point."""
+    return _law(case).creep_full_slip * np.maximum(np.abs(Vx), 1e-9)
+
+
+def spin_grid_roughness(case: StiffCase, values: dict[str, FloatArray]) -> FloatArray:
+    """The step-to-step change of the spin law's grid error along a run's states (N),
+    per zig-zag: r_k = max |E_j+1 - E_j| over the differences j = k-1, k, k+1 (those of
+    the zig-zag centred on difference k, metrics.oscillation), for Tx and Ty (2, n - 1);
+    E = the strip march's spin correction on SPIN_GRID less the same on a grid
+    ROUGHNESS_REFINE times finer each way, at the run's (vx, Vy, Omega_z, Vx) (the blend
+    of integrator.forces_at_rest at standstill).
+
+    The forces are the law at the states. With spin the law is a sum over the grid's
+    nodes, piecewise smooth: as the states move, nodes cross the stick-slip boundary and
+    the resultant's error against the law's limit changes unevenly from step to step.
+    Along states free of oscillation the forces' differences are a smooth part plus the
+    differences of that error; where the smooth part is monotone over three differences
+    and the forces still alternate, the error's differences flipped two of them, so
+    their smallest magnitude is at most r_k. A zig-zag of the forces below r_k is the
+    law's resolution, not the stepper's: the floor of the forces' oscillation check in
+    the lateral cases, whose states are checked at NOISE."""
+    law = _law(case)
+    vx, Vy, Oz, Vx = (np.asarray(values[n], float) for n in ("vx", "vy", "Omega_z", "Vx"))
+    fine = (SPIN_GRID[0] * ROUGHNESS_REFINE, SPIN_GRID[1] * ROUGHNESS_REFINE)
+
+    def error(V: FloatArray) -> FloatArray:
+        out = np.empty((2, V.size))
+        for i in range(0, V.size, ROUGHNESS_CHUNK):  # the march keeps whole fields
+            j = slice(i, i + ROUGHNESS_CHUNK)
+            a = law.spin_correction(vx[j], Vy[j], Oz[j], V[j])
+            b = law.spin_correction(vx[j], Vy[j], Oz[j], V[j], fine)
+            out[:, j] = np.array(a[:2]) - np.array(b[:2])
+        return out
+
+    E = error(np.where(np.abs(Vx) < V_STANDSTILL, V_STANDSTILL, Vx))
+    near = np.abs(Vx) < V_STANDSTILL
+    if np.any(near):  # forces_at_rest: the blend of +V_STANDSTILL and -V_STANDSTILL
+        w = standstill_weight(Vx)
+        E = np.where(near, w * E + (1.0 - w) * error(np.full_like(Vx, -V_STANDSTILL)), E)
+    E = np.where(Oz != 0.0, E, 0.0)  # no spin: the closed form alone
+    dE = np.abs(np.diff(E, axis=1))
+    pad = np.pad(dE, ((0, 0), (1, 1)))
+    return np.maximum(np.maximum(pad[:, :-2], pad[:, 1:-1]), pad[:, 2:])
 
 
 def _order(d1: float, d2: float) -> float:
@@ -187,8 +266,9 @@ def _order(d1: float, d2: float) -> float:
     return math.log2(d1 / d2) if d1 > 0.0 else -math.inf
 
 
-def evaluate(case: StiffCase, runs: list[Run], memory_run: Run) -> Result:
-    """The checks of one case from its run at h (first), h/2 and h/4."""
+def evaluate(case: StiffCase, runs: list[Run], memory_run: Run | None) -> Result:
+    """The checks of one case from its run at h (first), h/2 and h/4; the memory check
+    from ``memory_run`` (None: not measured on this case, StiffCase.memory)."""
     res = Result(case)
     main = runs[0]
     failed = [r.status for r in runs if r.status]
@@ -200,32 +280,57 @@ def evaluate(case: StiffCase, runs: list[Run], memory_run: Run) -> Result:
         return res
     muP = case.mu_P
     Tx, vx, Vx = (main.values[n] for n in ("Tx", "vx", "Vx"))
+    zero = np.zeros_like(Tx)
+    Ty, vy, Mz, Oz = (main.values.get(n, zero) for n in LATERAL_OUTPUTS)
     vs = _slip_scale(case, Vx)
-    bound = float(np.max(np.abs(Tx))) / muP
+    bound = float(np.max(np.hypot(Tx, Ty))) / muP
     res.checks.append(Check("bound", bound <= 1.0 + BOUND_RTOL, bound, 1.0 + BOUND_RTOL))
-    power = float(np.min(Tx * vx / (muP * vs)))
+    # the power of the creep forces on the rigid slip of Eq. (3) (straight: Tx vx)
+    power = float(np.min((Tx * vx + Ty * vy + Mz * Oz) / (muP * vs)))
     res.checks.append(Check("dissipation", power >= -DISSIPATION_TOL, power, -DISSIPATION_TOL))
-    vfloor = NOISE * float(np.max(vs + np.abs(vx)))
-    oT, kT = oscillation(Tx, NOISE * muP)
-    ov, kv = oscillation(vx, vfloor)
-    worst = max(oT / muP, ov / float(np.max(vs)))
-    where = f"Tx at step {kT}" if oT / muP >= ov / float(np.max(vs)) else f"vx at step {kv}"
-    res.checks.append(Check("oscillation", oT <= 0.0 and ov <= 0.0, worst, 0.0, where))
+    forces = ("Tx", "Ty") if case.lateral else ("Tx",)
+    slips = ("vx", "vy", "Omega_z") if case.lateral else ("vx",)
+    rough: dict[str, FloatArray] = {}  # the spin law's, measured where a force zig-zags
+    worst, where = -math.inf, ""
+    for var in forces + slips:
+        y = main.values[var]
+        if var in forces:
+            unit, floor = muP, NOISE * muP
+        else:  # the stage solver's scales: v_s, and v_s / a1 for the spin
+            scale = vs / _law(case).a1 if var == "Omega_z" else vs
+            unit, floor = float(np.max(scale)), NOISE * float(np.max(scale + np.abs(y)))
+        o, k = oscillation(y, floor)
+        if o > 0.0 and case.lateral and var in forces:
+            if not rough:
+                rough.update(zip(forces, spin_grid_roughness(case, main.values), strict=True))
+            o, k = oscillation(y, floor + rough[var])
+        if o / unit > worst:
+            worst, where = o / unit, f"{var} at step {k}"
+    res.checks.append(Check("oscillation", worst <= 0.0, worst, 0.0, where))
     # convergence at the communication points of h (the first conv_steps of them)
     m = case.conv_steps or case.steps
     vsmax = float(np.max(vs[:m]))
     orders, ok, note = {}, True, []
-    for var, scale in (("Tx", muP), ("vx", vsmax)):
+    spin_scale = vsmax / _law(case).a1
+    scales = [(f, muP) for f in forces] + [(v, spin_scale if v == "Omega_z" else vsmax)
+                                           for v in slips]  # fmt: skip
+    above = {}  # the orders of the variables whose differences are above the floor
+    for var, scale in scales:
         y = [r.values[var][(2**i) - 1 :: 2**i][:m] for i, r in enumerate(runs)]
         d1 = float(np.max(np.abs(y[0] - y[1]))) / scale
         d2 = float(np.max(np.abs(y[1] - y[2]))) / scale
         orders[var] = _order(d1, d2)
         good = d2 <= CONV_FLOOR or orders[var] >= P_MIN
         ok &= good
+        if d2 > CONV_FLOOR:
+            above[var] = orders[var]
         note.append(f"{var}: d1 {d1:.1e} d2 {d2:.1e}")
-    res.order_Tx, res.order_vx = orders["Tx"], orders["vx"]
+    res.order_force = min((above[v] for v in forces if v in above), default=math.nan)
+    res.order_slip = min((above[v] for v in slips if v in above), default=math.nan)
     low = min(o for o in orders.values() if not math.isnan(o)) if orders else math.nan
     res.checks.append(Check("convergence", ok, low, P_MIN, "; ".join(note)))
+    if memory_run is None:
+        return res
     b1, b2 = memory_run.blocks
     r1, r2 = memory_run.rss
     grow = b2 - b1
@@ -243,30 +348,32 @@ def evaluate(case: StiffCase, runs: list[Run], memory_run: Run) -> Result:
 
 
 def run_case(case: StiffCase, fmu_dir: Path) -> Result:
-    """The case at h, h/2 and h/4; memory measured on the longest run."""
+    """The case at h, h/2 and h/4; memory measured on the longest run (if case.memory)."""
     t0 = time.perf_counter()
     m = case.conv_steps or case.steps
     runs = []
     for i in range(3):
         h = case.h / 2**i
         steps = case.steps * 2**i if m == case.steps else m * 2**i
-        memory = i == 2 and m == case.steps
+        memory = case.memory and i == 2 and m == case.steps
         runs.append(simulate(fmu_dir, case, h, steps, memory=memory))
-    memory_run = runs[2]
+    memory_run = runs[2] if case.memory else None
     if m != case.steps:  # the long run: the full length at h, memory measured there
-        full = simulate(fmu_dir, case, case.h, case.steps, memory=True)
+        full = simulate(fmu_dir, case, case.h, case.steps, memory=case.memory)
         runs[0] = dataclasses.replace(full)
-        memory_run = full
+        memory_run = full if case.memory else None
     res = evaluate(case, runs, memory_run)
     res.wall = time.perf_counter() - t0
     return res
 
 
 def prepare(out_dir: Path) -> Path:
-    """Build (or take from the cache) the suite's FMU and extract it; returns the folder."""
-    built = fmu_build.build(config(), out_dir)
+    """Build (or take from the cache) the suite's FMUs and extract each into a folder of
+    its name under the returned one."""
     tmp = Path(tempfile.mkdtemp(prefix="stiff-"))
-    fmpy.extract(str(built.path), str(tmp))
+    for lateral in (False, True):
+        cfg = config(lateral)
+        fmpy.extract(str(fmu_build.build(cfg, out_dir).path), str(tmp / cfg.name))
     return tmp
 
 
@@ -297,16 +404,23 @@ NOTE = (
     "Each case runs the body-mode FMU through fmpy call by call at its communication "
     "step h, and again at h/2 and h/4 "
     "(same internal steps per communication step). "
-    "Checks: every doStep fmi2OK and every output finite; max |Tx|/(mu P) <= 1 + 16 eps; "
-    "min Tx vx/(mu P v_s) >= -1e-11 (friction power never negative; v_s = creepage at "
-    "full slip x |Vx|); no step-to-step oscillation: a zig-zag (three successive "
-    "differences of alternating sign) must not exceed the solution's own change per step "
-    "over the four steps around it, where a step-to-step alternation cancels (excess <= 0; "
-    "noise floor 1e-11 of the scale); convergence: the differences between the runs at h, "
-    "h/2 and h/4 fall at an observed order >= 0.75 (first order expected: zero-order hold "
-    "of the inputs), or are below 1e-9 of the scale; memory: interpreter memory blocks "
+    "The lateral cases integrate Vy and Omega_z (Eqs. 10-11) with the law with spin. "
+    "Checks: every doStep fmi2OK and every output finite; max |T|/(mu P) <= 1 + 16 eps "
+    "(|T| = hypot(Tx, Ty)); min (Tx vx + Ty vy + Mz Omega_z)/(mu P v_s) >= -1e-11 "
+    "(friction power on the rigid slip never negative; v_s = creepage at full slip x "
+    "|Vx|); no step-to-step oscillation of Tx, vx (lateral: also Ty, vy, Omega_z): a "
+    "zig-zag (three successive differences of alternating sign) must not exceed the "
+    "solution's own change per step over the four steps around it, where a step-to-step "
+    "alternation cancels (excess <= 0; noise floor 1e-11 of the scale; for the lateral "
+    "forces plus the change of the spin law's grid error over the same three steps, "
+    "measured against a grid twice as fine); convergence: the differences between the "
+    "runs at h, h/2 and h/4 fall at an observed order >= 0.75 (first order expected: "
+    "zero-order hold of the inputs), or are below 1e-9 of the scale; memory: interpreter "
+    "memory blocks "
     "grow by <= 128 and the resident set by <= 4 MiB over the second half of the longest "
-    "run."
+    "run (the lateral cases: a run of 4000 steps of their own). Column order T, v: the "
+    "lowest observed order of the forces and of the slips (and the spin rate) whose "
+    "differences are above that floor; -: all at it."
 )
 
 
@@ -324,7 +438,7 @@ def failures(results: list[Result]) -> str:
 def short_markdown(results: list[Result]) -> str:
     """A compact table (README): case, what, result, bound, order, wall time."""
     rows = [
-        "| case | what | result | max abs(Tx)/(mu P) | order Tx, vx | wall (s) |",
+        "| case | what | result | max abs(T)/(mu P) | order T, v | wall (s) |",
         "|---|---|---|---|---|---|",
     ]
     for r in results:
@@ -334,7 +448,7 @@ def short_markdown(results: list[Result]) -> str:
         bound = f"{names['bound'].value:.6f}" if "bound" in names else "-"
         rows.append(
             f"| {r.case.name} | {r.case.what} | {result} | {bound} "
-            f"| {_o(r.order_Tx)}, {_o(r.order_vx)} | {r.wall:.1f} |"
+            f"| {_o(r.order_force)}, {_o(r.order_slip)} | {r.wall:.1f} |"
         )
     return "\n".join(rows) + "\n"
 
@@ -342,8 +456,8 @@ def short_markdown(results: list[Result]) -> str:
 def markdown(results: list[Result]) -> str:
     """The table of the cases: pass/fail and the measured quantities."""
     head = (
-        "| case | group | method, scheme | h (s) x steps (substeps) | result | max abs(Tx)/(mu P) "
-        "| min Tx vx/(mu P v_s) | oscillation excess | order Tx, vx | memory blocks, RSS "
+        "| case | group | method, scheme | h (s) x steps (substeps) | result | max abs(T)/(mu P) "
+        "| min T.v/(mu P v_s) | oscillation excess | order T, v | memory blocks, RSS "
         "| wall (s) |\n|---|---|---|---|---|---|---|---|---|---|---|"
     )
     rows = [head]
@@ -358,13 +472,16 @@ def markdown(results: list[Result]) -> str:
                 f"({c.substeps}) | {result}: {names['finite'].note} | | | | | | {r.wall:.1f} |"
             )
             continue
-        mem = names["memory"]
-        rss = mem.note.split(" over")[0].removeprefix("RSS ")
+        mem = names.get("memory")
+        memory = "-"
+        if mem is not None:
+            rss = mem.note.split(" over")[0].removeprefix("RSS ")
+            memory = f"{mem.value:+.0f}, {rss}"
         rows.append(
             f"| {c.name} | {c.group} | {c.method}, {c.scheme} | {c.h:g} x {c.steps} "
             f"({c.substeps}) | {result} | {names['bound'].value:.15f} "
             f"| {names['dissipation'].value:.1e} | {names['oscillation'].value:.1e} "
-            f"| {_o(r.order_Tx)}, {_o(r.order_vx)} | {mem.value:+.0f}, {rss} | {r.wall:.1f} |"
+            f"| {_o(r.order_force)}, {_o(r.order_slip)} | {memory} | {r.wall:.1f} |"
         )
     return "\n".join(rows) + "\n"
 
