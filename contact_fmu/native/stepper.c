@@ -934,7 +934,7 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], 
     if (p->dyn_vy) s.act[s.n++] = 1;
     if (p->dyn_spin) s.act[s.n++] = 2;
     /* _step: the full method raises without a slip mass beyond the capacity (Python
-     * does); the quasistationary one slides there (cf_qs_step) */
+     * does); the quasistationary one slides there (qs_step) */
     if (p->m_slip == 0.0 && !p->quasistationary && !vadmissible(p, L)) return CF_FALLBACK;
     double G = drive(p, Fx, My);
     s.Vb[0] = s.y[0] + 0.5 * h * (G - G) / p->M;
