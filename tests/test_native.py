@@ -418,9 +418,10 @@ def test_kernel_agrees_to_rounding_on_the_half_space_table(monkeypatch, table):
 
 def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
     """The thin-layer law with spin (LayerContact.forces, Eqs. 35 and 3-5 marched strip by
-    strip): the compiled law and march (cf_layer_forces, cf_strip_march) against numpy on
-    random rolling inputs (both directions) in partial slip and gross sliding, an eighth
-    of them without spin (the closed form of Eqs. 40-43). |tau| in C is sqrt(a^2 +
+    strip): the compiled law and march (cf_layer_forces, its march without spin by the
+    magnitude alone, march_straight; cf_strip_march) against numpy on random rolling
+    inputs (both directions) in partial slip and gross sliding, an eighth of them
+    without spin (the closed form of Eqs. 40-43). |tau| in C is sqrt(a^2 +
     b^2), within two roundings of numpy's complex abs, and the projection on |tau| <=
     mu p does not expand a difference, so along a strip of 64 nodes the tractions differ
     by at most about 128 roundings: 2e-14 of mu p0. The resultants are summed strip by

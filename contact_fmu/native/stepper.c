@@ -593,8 +593,43 @@ typedef struct {
  * rounding, not bit for bit (tests/test_native.py). */
 #define MARCH_LANES 8 /* strips marched together: their chains are independent */
 
+/* march_one without spin, the resultants alone: the increments keep the direction
+ * e = (vx, vy)/|v| on every strip, so tau = m e with the magnitude marched by itself,
+ * m <- min(m + gain dist |v|, cap) (m (min(1, cap/tiny)) below tiny), and R = (e_x S,
+ * e_y S, e_y Sx - e_x Sy) with S, Sx, Sy the sums of w m, w m sx, w m y. The same
+ * resultants as march_one in exact arithmetic, without its square root and division
+ * per node; the two agree to rounding (tests/test_native.py). */
+static void march_straight(const cf_strips *g, double vx, double vy, double Vx, double R[3]) {
+    const int ny = g->ny, nx = g->nx;
+    const double s = Vx > 0.0 ? 1.0 : -1.0, speed = hypot(vx, vy);
+    R[0] = R[1] = R[2] = 0.0;
+    if (!(speed > 0.0)) return; /* no slip: no increment, no traction */
+    const double gain = speed / (fabs(Vx) * g->k);
+    double S = 0.0, Sx = 0.0, Sy = 0.0;
+    for (int i = 0; i < ny; i++) {
+        double m = 0.0, si = 0.0, sx = 0.0;
+        for (int j = 0; j < nx; j++) {
+            const size_t e = (size_t)i * nx + j;
+            const double mag = m + gain * g->dist[e], c = g->cap[e];
+            m = mag >= g->tiny ? (mag < c ? mag : c) : mag * (c < g->tiny ? c / g->tiny : 1.0);
+            si += g->w[e] * m;
+            sx += g->w[e] * m * (-s * g->x[j]);
+        }
+        S += si;
+        Sx += sx;
+        Sy += si * g->y[i];
+    }
+    R[0] = vx / speed * S;
+    R[1] = vy / speed * S;
+    R[2] = vy / speed * Sx - vx / speed * Sy;
+}
+
 static void march_one(const cf_strips *g, double vx, double vy, double Vx, double phi,
                       double *tau, unsigned char *slip, double R[3]) {
+    if (phi == 0.0 && tau == NULL) {
+        march_straight(g, vx, vy, Vx, R);
+        return;
+    }
     const int ny = g->ny, nx = g->nx;
     const double s = Vx > 0.0 ? 1.0 : -1.0;
     const double gain = 1.0 / (fabs(Vx) * g->k);
