@@ -290,6 +290,7 @@ def evaluate(case: StiffCase, runs: list[Run], memory_run: Run | None) -> Result
     res.checks.append(Check("dissipation", power >= -DISSIPATION_TOL, power, -DISSIPATION_TOL))
     forces = ("Tx", "Ty") if case.lateral else ("Tx",)
     slips = ("vx", "vy", "Omega_z") if case.lateral else ("vx",)
+    a1 = _law(case).a1  # the spin's scale is v_s / a1 (the stage solver's)
     rough: dict[str, FloatArray] = {}  # the spin law's, measured where a force zig-zags
     worst, where = -math.inf, ""
     for var in forces + slips:
@@ -297,7 +298,7 @@ def evaluate(case: StiffCase, runs: list[Run], memory_run: Run | None) -> Result
         if var in forces:
             unit, floor = muP, NOISE * muP
         else:  # the stage solver's scales: v_s, and v_s / a1 for the spin
-            scale = vs / _law(case).a1 if var == "Omega_z" else vs
+            scale = vs / a1 if var == "Omega_z" else vs
             unit, floor = float(np.max(scale)), NOISE * float(np.max(scale + np.abs(y)))
         o, k = oscillation(y, floor)
         if o > 0.0 and case.lateral and var in forces:
@@ -311,7 +312,7 @@ def evaluate(case: StiffCase, runs: list[Run], memory_run: Run | None) -> Result
     m = case.conv_steps or case.steps
     vsmax = float(np.max(vs[:m]))
     orders, ok, note = {}, True, []
-    spin_scale = vsmax / _law(case).a1
+    spin_scale = vsmax / a1
     scales = [(f, muP) for f in forces] + [(v, spin_scale if v == "Omega_z" else vsmax)
                                            for v in slips]  # fmt: skip
     above = {}  # the orders of the variables whose differences are above the floor
