@@ -393,18 +393,13 @@ class RollingBody(BodyState):
         if not np.any(m):  # algebraic: T(u2) = F2; its Jacobian kept under the key ALGEBRAIC
             key = ALGEBRAIC
             memo = {"J": self._jac[1]} if self._jac is not None and self._jac[0] == key else {}
-            u0 = self._algebraic_start(un, Vb[1])
+            u0 = self._creep_start(un, Vb[1])
 
             def balance(U: FloatArray) -> FloatArray:
                 return self._forces(states(U, 1))[:, self._act] - F2
 
-            try:
-                u2 = newton(balance, u0, scale, None, memo)
-            except StageSolveError:
-                # from no slip (the spin kept): where the law is smooth and steep
-                memo = {}
-                u0[[i for i, a in enumerate(self._act) if a < 2]] = 0.0
-                u2 = newton(balance, u0, scale, None, memo)
+            starts = (u0, self._no_slip(u0))
+            u2, memo = _newton_from(balance, starts, scale, None, memo)
             self._jac = (key, memo["J"]) if "J" in memo else None
             Y2 = states(u2[None, :], 1)
             T = self._forces(Y2)[0]
@@ -441,19 +436,21 @@ class RollingBody(BodyState):
             return np.block([[D + d1, D], [-D, D + d2]])
 
         memo = {"J": self._jac[1]} if self._jac is not None and self._jac[0] == h else {}
-        UU = newton(
-            residuals, np.concatenate([un, un]), np.concatenate([scale, scale]), jacobian, memo
-        )
+        # from the last state; where that fails (Vx changed much, or reversed, over a long
+        # step), as the algebraic stage does
+        creep = np.concatenate([self._creep_start(un, Vb[0]), self._creep_start(un, Vb[1])])
+        starts = (np.concatenate([un, un]), creep, np.tile(self._no_slip(creep[:n]), 2))
+        UU, memo = _newton_from(residuals, starts, np.concatenate([scale, scale]), jacobian, memo)
         self._jac = (h, memo["J"]) if "J" in memo else None
         Y2 = states(UU[None, n:], 1)
         return Y2[0], self._forces(Y2)[0]
 
-    def _algebraic_start(self, un: FloatArray, V: float) -> FloatArray:
-        """Newton's start for the algebraic stage T(u) = F at the speed V: the last
-        state's creepages (u/Vx: the law is a function of them, and Vx may change much in
-        one step of Eq. 28, or reverse), with the slip (vx[, Vy]) pulled back to half
-        the onset of full slip where it is beyond it (the law is flat in the slip's
-        magnitude there, and Newton finds no direction)."""
+    def _creep_start(self, un: FloatArray, V: float) -> FloatArray:
+        """A start for a stage's unknowns at the speed V: the last state's creepages
+        (u/Vx: the law is a function of them, and Vx may change much in one step of
+        Eq. 28, or reverse), with the slip (vx[, Vy]) pulled back to half the onset of
+        full slip where it is beyond it (the law is flat in the slip's magnitude there,
+        and Newton finds no direction). The algebraic stage's first start."""
         ratio = _signed(V) / _signed(self.y[0])
         u = un * ratio
         Y = self.y.copy()
@@ -463,11 +460,20 @@ class RollingBody(BodyState):
         slip = math.hypot(Y[1], Y[2])
         onset = self.law.creep_full_slip * max(abs(V), V_SCALE_FLOOR)
         if slip >= onset and slip > 0.0:
-            k = 0.5 * onset / slip
-            for i, a in enumerate(self._act):
-                if a < 2:  # vx, Vy; not the spin
-                    u[i] *= k
+            u[self._slip_unknowns] *= 0.5 * onset / slip
         return u
+
+    def _no_slip(self, u: FloatArray) -> FloatArray:
+        """u with the slip (vx[, Vy]) at zero, the spin kept: where the law is smooth and
+        steepest, the last start of a stage solve."""
+        u = u.copy()
+        u[self._slip_unknowns] = 0.0
+        return u
+
+    @property
+    def _slip_unknowns(self) -> list[int]:
+        """Positions of vx and Vy among the stage unknowns (not the spin)."""
+        return [i for i, a in enumerate(self._act) if a < 2]
 
     # ---- SDIRK2 ------------------------------------------------------------------------
     def _sdirk_scalar(self, h: float, L1: Loads, L2: Loads, algebraic: bool):
@@ -537,6 +543,18 @@ class RollingBody(BodyState):
 def _shift(f_df: tuple[float, float], target: float) -> tuple[float, float]:
     """(f - target, f') for the root finder."""
     return f_df[0] - target, f_df[1]
+
+
+def _newton_from(residuals, starts, scale, jacobian, memo) -> tuple[FloatArray, dict]:
+    """solvers.newton from each start in turn until one converges: the first with the
+    kept matrix ``memo``, the others with a new one. Returns u and the memo of the solve
+    that converged; StageSolveError if none does."""
+    for u0 in starts[:-1]:
+        try:
+            return newton(residuals, u0, scale, jacobian, memo), memo
+        except StageSolveError:
+            memo = {}
+    return newton(residuals, starts[-1], scale, jacobian, memo), memo
 
 
 def _signed(V: float) -> float:

@@ -356,8 +356,7 @@ def test_quasistationary_lateral_state_does_not_depend_on_the_slip_before(native
     creepages 20 times too large): the same state, to the stage solve's tolerance
     (SOLVE_RTOL = 1e-13 of u + scale; 1e-12 allowed). The second and third starts of the
     first case and the second of the second raised StageSolveError when Newton started
-    from the last slip velocities (RollingBody._algebraic_start, the retry from no
-    slip)."""
+    from the last slip velocities (RollingBody._creep_start, _no_slip)."""
     lat = Lateral(vy_ratio=None, spin_ratio=None)
     cases = [  # (body eta, Vx0, step, loads, previous slips (vx, Vy, Omega_z))
         (1.0, 5.0, 6.8e-5, Loads(-298.33, -126.33, 0.226, 0.0128),
@@ -382,6 +381,48 @@ def test_quasistationary_lateral_state_does_not_depend_on_the_slip_before(native
             assert y[0] == ends[0][0]  # Eq. (28): Vx does not depend on the slip
             for k, unit in ((1, v), (2, v), (3, v / C.a1)):
                 assert abs(y[k] - ends[0][k]) <= 1e-12 * (abs(ends[0][k]) + unit)
+
+
+def test_long_lobatto_step_that_reverses_vx_converges(monkeypatch):
+    """The full method with Vy and Omega_z as unknowns over one long step (4.6 ms) in
+    which the drive takes Vx from 1e-3 m/s through zero to -0.62 m/s: the Lobatto IIIC
+    stage system is solvable (its stiff limit is the quasistationary state), but Newton
+    from the last slip velocities, hundreds of times too small for the new speed, found
+    no solution (StageSolveError after scipy's hybr; this and one more of 216 random
+    steps of tests/test_native.py). Now the stage is solved from the further starts
+    (RollingBody._creep_start, _no_slip): the step completes with finite outputs,
+    |T| <= mu P and non-negative friction power on the rigid slip (Tx vx + Ty vy + Mz
+    Omega_z), and the first start still fails (so the further ones were needed)."""
+    import contact_fmu.integrator as integrator
+
+    failed = []
+    newton = integrator.newton
+
+    def counted(*args):
+        try:
+            return newton(*args)
+        except StageSolveError:
+            failed.append(1)
+            raise
+
+    monkeypatch.setattr(integrator, "newton", counted)
+    lat = Lateral(vy_ratio=None, spin_ratio=None)
+    cases = [(1.0, 0.004625494463879148, Loads(-268.736, -97.556, -0.00536, 0.0543))]
+    for eta, h, L in cases:  # (eta, step, loads)
+        body = Body.from_eta(1.0, 0.05, eta, Iz=2e-3)
+        rb = RollingBody(C, body, lat, Vx0=1e-3, Omega_y0=1e-3 / 0.05 * 0.999, Vy0=1e-5,
+                         Omega_z0=3e-4)  # fmt: skip
+        rb._kernel = None  # the compiled step leaves a failed stage solve to this path
+        n = len(failed)
+        rb.advance(h, L, 1)
+        assert len(failed) > n
+        o = rb.out
+        assert all(math.isfinite(v) for v in (*rb.y, o.Tx, o.Ty, o.Mz))
+        # Eq. (8): Vx moves with the drive A1 (Fx_ex + My_ex/Rx), hundreds of times its start
+        assert abs(rb.y[0]) > 0.5 and np.sign(rb.y[0]) == np.sign(L.Fx_ex + L.My_ex / 0.05)
+        assert math.hypot(o.Tx, o.Ty) <= MU_P * (1 + 16 * np.finfo(float).eps)
+        power = o.Tx * rb.y[1] + o.Ty * rb.y[2] + o.Mz * rb.y[3]
+        assert power >= -1e-11 * MU_P * C.creep_full_slip * abs(rb.y[0])
 
 
 # ---- state handling ---------------------------------------------------------------------------

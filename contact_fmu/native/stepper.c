@@ -708,8 +708,8 @@ void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double
  * Newton iteration (solvers.newton with the block Jacobian of _lobatto_vector), for the
  * thin-layer law (spin through the strip march) and the creep-force table; in the
  * quasistationary method, while rolling, the algebraic stage T(u2) = F2 (n x n, the
- * forward-difference Jacobian of solvers.newton, from RollingBody._algebraic_start; its
- * retry from no slip after a failure is Python's) and the regime of RollingBody._step.
+ * forward-difference Jacobian of solvers.newton, from RollingBody._creep_start; the
+ * further starts after a failure are Python's) and the regime of RollingBody._step.
  * The Newton systems are solved by Gaussian elimination with partial pivoting
  * (LAPACK's, in numpy, runs its operations in another order): the two paths agree to
  * the stage tolerance, not bit for bit (tests/test_native.py). What this path leaves to
@@ -930,7 +930,7 @@ static double signed_floor(const cf_params *p, double V) {
     return V >= 0.0 ? py_max(fabs(V), p->v_scale_floor) : -py_max(fabs(V), p->v_scale_floor);
 }
 
-/* RollingBody._algebraic_start: the last state's creepages at the stage's speed V, the
+/* RollingBody._creep_start: the last state's creepages at the stage's speed V, the
  * slip (vx[, Vy]) pulled back to half the onset of full slip where it is beyond it */
 static void algebraic_start(const vstage *s, double V, double *u) {
     const cf_params *p = s->p;
