@@ -547,11 +547,13 @@ def _shift(f_df: tuple[float, float], target: float) -> tuple[float, float]:
 
 def _newton_from(residuals, starts, scale, jacobian, memo) -> tuple[FloatArray, dict]:
     """solvers.newton from each start in turn until one converges: the first with the
-    kept matrix ``memo``, the others with a new one. Returns u and the memo of the solve
-    that converged; StageSolveError if none does."""
+    kept matrix ``memo``, the others with a new one; scipy's hybrid method only from the
+    last (the compiled step tries the same Newton starts before it leaves a step to
+    this code). Returns u and the memo of the solve that converged; StageSolveError if
+    none does."""
     for u0 in starts[:-1]:
         try:
-            return newton(residuals, u0, scale, jacobian, memo), memo
+            return newton(residuals, u0, scale, jacobian, memo, hybrid=False), memo
         except StageSolveError:
             memo = {}
     return newton(residuals, starts[-1], scale, jacobian, memo), memo

@@ -108,6 +108,7 @@ def newton(
     scale: FloatArray,
     jacobian: Callable[[FloatArray, FloatArray], FloatArray] | None = None,
     memo: dict[str, FloatArray] | None = None,
+    hybrid: bool = True,
 ) -> FloatArray:
     """Solve residuals(u) = 0, u of shape (n,).
 
@@ -115,7 +116,8 @@ def newton(
     forward-difference Jacobian costs one call. ``jacobian(u, du)``, if given, returns
     that Jacobian (n, n) for the steps du instead (a caller that knows which residuals
     an unknown moves evaluates fewer). Newton with backtracking on |r|; scipy's hybrid
-    method if that stalls.
+    method if that stalls (``hybrid``; else StageSolveError, for a caller that tries
+    another start first).
 
     ``memo``: a Jacobian kept from an earlier solve (memo["J"]) and the one this solve
     forms last, written back. A kept Jacobian (and the last fresh one, in later
@@ -159,6 +161,8 @@ def newton(
             return u
         if memo is None or (kept and norm > CONTRACTION_FAST * norm0):
             J = None  # Newton; or a kept Jacobian that converges slowly, renewed
+    if not hybrid:
+        raise StageSolveError(f"stage solve: no convergence in {NEWTON_ITERATIONS} Newton steps")
     sol = root(lambda v: residuals(v[None, :])[0], u, method="hybr", options={"xtol": SOLVE_RTOL})
     if not sol.success:
         raise StageSolveError(f"stage solve failed after Newton and hybr: {sol.message}")

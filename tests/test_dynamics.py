@@ -398,9 +398,9 @@ def test_long_lobatto_step_that_reverses_vx_converges(monkeypatch):
     failed = []
     newton = integrator.newton
 
-    def counted(*args):
+    def counted(*args, **kw):
         try:
-            return newton(*args)
+            return newton(*args, **kw)
         except StageSolveError:
             failed.append(1)
             raise

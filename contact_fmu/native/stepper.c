@@ -708,14 +708,14 @@ void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double
  * Newton iteration (solvers.newton with the block Jacobian of _lobatto_vector), for the
  * thin-layer law (spin through the strip march) and the creep-force table; in the
  * quasistationary method, while rolling, the algebraic stage T(u2) = F2 (n x n, the
- * forward-difference Jacobian of solvers.newton, from RollingBody._creep_start; the
- * further starts after a failure are Python's) and the regime of RollingBody._step.
+ * forward-difference Jacobian of solvers.newton) and the regime of RollingBody._step;
+ * for both, the Newton starts of integrator._newton_from.
  * The Newton systems are solved by Gaussian elimination with partial pivoting
  * (LAPACK's, in numpy, runs its operations in another order): the two paths agree to
  * the stage tolerance, not bit for bit (tests/test_native.py). What this path leaves to
  * Python (CF_FALLBACK, state untouched): a singular Newton matrix or no convergence in
- * newton_iterations (Python then calls scipy's hybrid method), and in the full method
- * eta = inf with loads beyond mu P (Python raises). */
+ * newton_iterations from every start (Python then calls scipy's hybrid method), and in
+ * the full method eta = inf with loads beyond mu P (Python raises). */
 typedef struct {
     double Vx, vx, Vy, Oz, t, dv; /* y, t, _dv of RollingBody */
     double Tx, Ty, Mz;            /* out: ContactOutputs */
@@ -932,7 +932,7 @@ static double signed_floor(const cf_params *p, double V) {
 
 /* RollingBody._creep_start: the last state's creepages at the stage's speed V, the
  * slip (vx[, Vy]) pulled back to half the onset of full slip where it is beyond it */
-static void algebraic_start(const vstage *s, double V, double *u) {
+static void creep_start(const vstage *s, double V, double *u) {
     const cf_params *p = s->p;
     double ratio = signed_floor(p, V) / signed_floor(p, s->y[0]), Y[4];
     for (int i = 0; i < 4; i++) Y[i] = s->y[i];
@@ -982,12 +982,35 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], 
         s.F1[i] = s.F2[i] = F[a];
         s.m[i] = algebraic ? 0.0 : m[a];
         scale[i] = scale[s.n + i] = sc[a];
-        u[i] = u[s.n + i] = s.un[i];
     }
-    if (algebraic) algebraic_start(&s, s.Vb[1], u);
+    /* the starts of _newton_from: the algebraic stage from the creepage start, then no
+     * slip (_no_slip); the Lobatto stages from the last state, from the creepage start at
+     * each stage's speed, then no slip; Python's hybrid method after the last is left
+     * to Python */
+    const int n = s.n, N = algebraic ? n : 2 * n;
+    double starts[3][6], c0[3], c1[3];
+    creep_start(&s, s.Vb[0], c0);
+    creep_start(&s, s.Vb[1], c1);
+    for (int i = 0; i < n; i++) {
+        const int slip_unknown = s.act[i] < 2; /* vx, Vy; not the spin */
+        if (algebraic) {
+            starts[0][i] = c1[i];
+            starts[1][i] = slip_unknown ? 0.0 : c1[i];
+        } else {
+            starts[0][i] = starts[0][n + i] = s.un[i];
+            starts[1][i] = c0[i], starts[1][n + i] = c1[i];
+            starts[2][i] = starts[2][n + i] = slip_unknown ? 0.0 : c0[i];
+        }
+    }
+    const int nstarts = algebraic ? 2 : 3;
     const double key = algebraic ? p->algebraic_key : h;
     int kept = w->jac_valid && w->jac_h == key; /* RollingBody._jac for this key */
-    if (vnewton(&s, scale, u, w->J, &kept)) return CF_FALLBACK;
+    int k = 0;
+    for (; k < nstarts; k++, kept = 0) { /* after the first, a new matrix */
+        for (int i = 0; i < N; i++) u[i] = starts[k][i];
+        if (!vnewton(&s, scale, u, w->J, &kept)) break;
+    }
+    if (k == nstarts) return CF_FALLBACK;
     w->jac_valid = 1, w->jac_h = key;
     double Y[4], T[3];
     vstate_at(&s, algebraic ? u : u + s.n, 1, Y);
