@@ -985,7 +985,7 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], 
     }
     /* the starts of _newton_from: the algebraic stage from the creepage start, then no
      * slip (_no_slip); the Lobatto stages from the last state, from the creepage start at
-     * each stage's speed, then no slip; Python's hybrid method after the last is left
+     * each stage's speed, then no slip; scipy's hybrid method after the last is left
      * to Python */
     const int n = s.n, N = algebraic ? n : 2 * n;
     double starts[3][6], c0[3], c1[3];
