@@ -398,7 +398,7 @@ class RollingBody(BodyState):
             def balance(U: FloatArray) -> FloatArray:
                 return self._forces(states(U, 1))[:, self._act] - F2
 
-            starts = (u0, self._no_slip(u0))
+            starts = (lambda: u0, lambda: self._no_slip(u0))
             u2, memo = _newton_from(balance, starts, scale, None, memo)
             self._jac = (key, memo["J"]) if "J" in memo else None
             Y2 = states(u2[None, :], 1)
@@ -438,8 +438,11 @@ class RollingBody(BodyState):
         memo = {"J": self._jac[1]} if self._jac is not None and self._jac[0] == h else {}
         # from the last state; where that fails (Vx changed much, or reversed, over a long
         # step), as the algebraic stage does
-        creep = np.concatenate([self._creep_start(un, Vb[0]), self._creep_start(un, Vb[1])])
-        starts = (np.concatenate([un, un]), creep, np.tile(self._no_slip(creep[:n]), 2))
+        starts = (
+            lambda: np.concatenate([un, un]),
+            lambda: np.concatenate([self._creep_start(un, Vb[0]), self._creep_start(un, Vb[1])]),
+            lambda: np.tile(self._no_slip(self._creep_start(un, Vb[0])), 2),
+        )
         UU, memo = _newton_from(residuals, starts, np.concatenate([scale, scale]), jacobian, memo)
         self._jac = (h, memo["J"]) if "J" in memo else None
         Y2 = states(UU[None, n:], 1)
@@ -546,17 +549,17 @@ def _shift(f_df: tuple[float, float], target: float) -> tuple[float, float]:
 
 
 def _newton_from(residuals, starts, scale, jacobian, memo) -> tuple[FloatArray, dict]:
-    """solvers.newton from each start in turn until one converges: the first with the
-    kept matrix ``memo``, the others with a new one; scipy's hybrid method only from the
-    last (the compiled step tries the same Newton starts before it leaves a step to
-    this code). Returns u and the memo of the solve that converged; StageSolveError if
-    none does."""
-    for u0 in starts[:-1]:
+    """solvers.newton from each start (a function forming it, called only when the one
+    before has failed) in turn until one converges: the first with the kept matrix
+    ``memo``, the others with a new one; scipy's hybrid method only from the last (the
+    compiled step tries the same Newton starts before it leaves a step to this code).
+    Returns u and the memo of the solve that converged; StageSolveError if none does."""
+    for start in starts[:-1]:
         try:
-            return newton(residuals, u0, scale, jacobian, memo, hybrid=False), memo
+            return newton(residuals, start(), scale, jacobian, memo, hybrid=False), memo
         except StageSolveError:
             memo = {}
-    return newton(residuals, starts[-1], scale, jacobian, memo), memo
+    return newton(residuals, starts[-1](), scale, jacobian, memo), memo
 
 
 def _signed(V: float) -> float:
