@@ -27,13 +27,20 @@ projects it on their unknowns; the restriction is its transpose.
 Smoother: symmetric Gauss-Seidel over the grid rows, lines along the rolling direction
 (forward in y, then backward), each row's block banded to |column offset| <= LINE_BAND
 and solved by banded LU. The coupling of the rows already relaxed to the others runs
-through the whole nonlocal kernel (a lagged or truncated coupling loses the bound, see
-docs/halfspace.md): it is added by divide and conquer over the rows. Along x the
-fields are kept transformed (each row once, when it is relaxed); the first half of a
-window of rows then acts on the second by one FFT convolution along y, or by direct
-sums over the row pairs for windows of at most DIRECT_ROWS rows. A sweep costs
-O(N log^2 N). One V-cycle (one smoothing before and after the coarse correction, dense
-LU on the coarsest level) is the preconditioner of GMRES (krylov.fgmres).
+through the whole nonlocal kernel (with a lagged or truncated coupling the count grows
+much faster, docs/halfspace.md), carried in bands of row distance: the rows s..2 s - 1
+apart (s = 1, 2, 4, ...) act on each other once a block of s rows aligned to s is
+relaxed (``_Band``). The bands s <= DIRECT_ROWS act by direct sums over the row pairs, on the
+rows transformed along x once each; the others by one FFT convolution in y and x over
+the block's rows, on nodes w columns apart, w dx <= s dy / FAR_RATIO (piecewise-linear
+anterpolation of the sources, the kernel at the nodes' offsets, interpolation of the
+result: the kernel between rows s or more apart is smooth on the scale s dy; w = 1,
+full resolution, where that bound is below two columns). So each band costs O(N) plus
+its transforms on N/w nodes, and a sweep O(N log N) (log2(ny) bands); with FAR_RATIO =
+None every band keeps full resolution (exact, O(N log^2 N)). One V-cycle (one
+smoothing before and after the coarse correction, dense LU on the coarsest level) is
+the preconditioner of GMRES (krylov.fgmres): 1-3 iterations per Newton step on 16..512
+per side, though its contraction grows slowly with the grid (docs/halfspace.md).
 """
 
 from __future__ import annotations
@@ -69,10 +76,15 @@ MIN_SIDE = 4
 # coarsened) is refused: its LU would cost more than the solve (the caller then takes
 # the block preconditioner).
 COARSEST_MAX = 2000
-# Windows of the smoother's divide and conquer up to DIRECT_ROWS rows sum over their
-# row pairs directly instead of transforming along y: measured 2-5 % faster with 8 than
-# with 2 or 4 on 32..256 per side (16 the same as 8).
-DIRECT_ROWS = 8
+# Bands of the sweep up to DIRECT_ROWS rows sum over their row pairs directly (at full
+# resolution along x): a forward and backward sweep measured 0-6 % faster with 4 than
+# with 2, 8 or 16 on 64..256 per side (`bench_halfspace.py --sweep`'s system).
+DIRECT_ROWS = 4
+# The far bands' node spacing: w dx <= s dy / FAR_RATIO for rows s..2 s - 1 apart.
+# Measured on the railway cases (docs/halfspace.md): FAR_RATIO = 2 and 4 give the exact
+# sweep's Newton / GMRES counts on 16..256 per side; 4 keeps the sweep within 0.3-0.5 %
+# of the exact one (relative, on 32..512). None: every band at full resolution (exact).
+FAR_RATIO: float | None = 4.0
 
 
 @dataclass(frozen=True)
@@ -81,10 +93,11 @@ class KernelLevel:
 
     shape (ny, nx); table (2, 2, 2 Ry + 1, 2 Rx + 1): A at row/column offsets -Ry..Ry,
     -Rx..Rx (offset (0, 0) at [Ry, Rx]), field minus source, the local layer term
-    included; Ry >= ny - 1 and Rx >= nx - 1."""
+    included; Ry >= ny - 1 and Rx >= nx - 1; aspect: the element's dx/dy."""
 
     shape: tuple[int, int]
     table: FloatArray
+    aspect: float = 1.0
 
     @property
     def R(self) -> tuple[int, int]:
@@ -125,31 +138,101 @@ class KernelLevel:
     def Lx(self) -> int:
         return sfft.next_fast_len(2 * self.shape[1] - 1, real=True)
 
-    def symbols(self, h: int) -> NDArray[np.complex128]:
-        """Symbols of A on a window of h rows (row offsets |dr| <= h - 1, all columns),
-        zero-padded so that the linear convolution is exact: (2, 2, Lh, Lx // 2 + 1)."""
-        cache = self.__dict__.setdefault("_symbols", {})
-        if h not in cache:
-            ny, nx = self.shape
-            Ry, Rx = self.R
-            h = min(h, ny)
-            Lh = sfft.next_fast_len(2 * h - 1, real=True)
-            torus = np.zeros((2, 2, Lh, self.Lx))
-            rows = np.arange(-(h - 1), h)
-            cols = np.arange(-(nx - 1), nx)
-            sub = self.table[:, :, rows[:, None] + Ry, cols[None, :] + Rx]
-            torus[:, :, (rows % Lh)[:, None], (cols % self.Lx)[None, :]] = sub
-            cache[h] = sfft.rfft2(torus, axes=(-2, -1))
-        return cache[min(h, self.shape[0])]
+    @cached_property
+    def symbol(self) -> NDArray[np.complex128]:
+        """A's symbol on the level, zero-padded so that the circular convolution is the
+        linear one: (2, 2, Ly, Lx // 2 + 1)."""
+        ny, nx = self.shape
+        Ry, Rx = self.R
+        Ly = sfft.next_fast_len(2 * ny - 1, real=True)
+        torus = np.zeros((2, 2, Ly, self.Lx))
+        rows = np.arange(-(ny - 1), ny)
+        cols = np.arange(-(nx - 1), nx)
+        sub = self.table[:, :, rows[:, None] + Ry, cols[None, :] + Rx]
+        torus[:, :, (rows % Ly)[:, None], (cols % self.Lx)[None, :]] = sub
+        return sfft.rfft2(torus, axes=(-2, -1))
+
+    def bands(self, forward: bool, ratio: float | None, direct_rows: int) -> list[_Band]:
+        """The sweep's row-distance bands s = 1, 2, 4, ... < ny (module docstring), in the
+        sweep's direction (forward: the field rows after the source rows)."""
+        key = (forward, ratio, direct_rows)
+        cache = self.__dict__.setdefault("_bands", {})
+        if key not in cache:
+            ny = self.shape[0]
+            out, s = [], 1
+            while s < ny:
+                w = 1 if ratio is None else max(1, int(s / (ratio * self.aspect)))
+                out.append(_Band(self, s, w, 1 if forward else -1, s <= direct_rows))
+                s *= 2
+            cache[key] = out
+        return cache[key]
 
     def convolve(self, q: FloatArray) -> FloatArray:
         """A * q for a field q (2, ny, nx) on the whole level."""
         ny, nx = self.shape
-        S = self.symbols(ny)
+        S = self.symbol
         shape = (S.shape[2], self.Lx)
         fq = sfft.rfft2(q, s=shape, axes=(-2, -1))
         out = np.stack([S[a, 0] * fq[0] + S[a, 1] * fq[1] for a in range(2)])
         return sfft.irfft2(out, s=shape, axes=(-2, -1))[:, :ny, :nx]
+
+
+class _Band:
+    """The coupling of a block of s relaxed rows [j0, j0 + s) to the rows s..2 s - 1
+    after each of them in the sweep's order (sign: +1 forward, -1 backward), i.e. to the
+    field rows [j0 + s, j0 + 3 s - 1). Near (w = 1, direct): sums over the row pairs of
+    A's rows transformed along x. Otherwise: on nodes w columns apart (module docstring)
+    by an FFT convolution over the block's s rows and the nodes."""
+
+    def __init__(self, kern: KernelLevel, s: int, w: int, sign: int, direct: bool) -> None:
+        ny, nx = kern.shape
+        self.s, self.w = s, w
+        self.direct = direct and w == 1
+        lag_range = (s, min(2 * s, ny))  # the row distances of this band
+        if self.direct:
+            # (field row t0 + a, source row j0 + b): distance s + a - b
+            dist = s + np.arange(2 * s - 1)[:, None] - np.arange(s)[None, :]
+            inside = (dist >= lag_range[0]) & (dist < lag_range[1])
+            idx = np.clip(sign * dist, -(ny - 1), ny - 1) + ny - 1
+            self.sym = kern.row_symbols[idx] * inside[..., None, None, None]
+            return
+        self.nodes = -(-(nx - 1) // w) + 1  # columns 0, w, ..., >= nx - 1
+        self.Ly = sfft.next_fast_len(2 * s - 1, real=False)
+        self.Lx = sfft.next_fast_len(2 * self.nodes - 1, real=True)
+        dist = np.arange(*lag_range)
+        C = np.arange(-(self.nodes - 1), self.nodes)
+        torus = np.zeros((2, 2, self.Ly, self.Lx))
+        dr = np.broadcast_to(sign * dist[:, None], (dist.size, C.size))
+        dc = np.broadcast_to(C[None, :] * w, (dist.size, C.size))
+        torus[:, :, (dist - s)[:, None], (C % self.Lx)[None, :]] = kern.at(dr, dc)
+        self.sym = sfft.rfft2(torus, axes=(-2, -1))
+        self.t = np.arange(w) / w  # a column's position between its two nodes
+
+    def near(self, F: NDArray[np.complex128], rows: int) -> NDArray[np.complex128]:
+        """The coupling (transformed along x) on the first ``rows`` field rows from the
+        block's rows transformed along x, F (s, 2, Lx // 2 + 1)."""
+        return np.einsum("dsabk,sbk->dak", self.sym[:rows], F)
+
+    def far(self, g: FloatArray, rows: int) -> FloatArray:
+        """The coupling on the first ``rows`` field rows from the block's rows g (s, 2, nx)."""
+        s, w, nx = self.s, self.w, g.shape[-1]
+        if w > 1:  # anterpolation: column c w + t gives 1 - t/w to node c, t/w to c + 1
+            pad = np.zeros((s, 2, self.nodes * w))
+            pad[..., :nx] = g
+            blocks = pad.reshape(s, 2, self.nodes, w)
+            g = blocks @ (1.0 - self.t)
+            g[..., 1:] += (blocks @ self.t)[..., :-1]
+        shape = (self.Ly, self.Lx)
+        fg = sfft.rfft2(g, s=shape, axes=(0, -1))
+        S = self.sym
+        prod = np.stack([S[a, 0] * fg[:, 0] + S[a, 1] * fg[:, 1] for a in range(2)], axis=1)
+        u = sfft.irfft2(prod, s=shape, axes=(0, -1))[:rows, :, : self.nodes]
+        if w == 1:
+            return u[..., :nx]
+        # interpolation, the transpose of the anterpolation
+        nxt = np.concatenate([u[..., 1:], np.zeros((*u.shape[:2], 1))], axis=-1)
+        fine = u[..., None] * (1.0 - self.t) + nxt[..., None] * self.t
+        return fine.reshape(*u.shape[:2], self.nodes * w)[..., :nx]
 
 
 Kernel = Callable[[FloatArray, FloatArray], tuple]
@@ -165,7 +248,7 @@ def fine_kernel(
     table = np.array(kernel(X, Y), dtype=float)
     for a in range(2):
         table[a, a, Ry, Rx] += local
-    return KernelLevel(tuple(shape), table)
+    return KernelLevel(tuple(shape), table, dx / dy)
 
 
 def _coarsen_table(fine: KernelLevel, shape: tuple[int, int], R: tuple[int, int]) -> KernelLevel:
@@ -178,7 +261,7 @@ def _coarsen_table(fine: KernelLevel, shape: tuple[int, int], R: tuple[int, int]
         c = 2 * dC + t - 1
         for s, wgt in ((-1, 1.0), (0, 2.0), (1, 1.0)):
             acc = acc + wgt * fine.at(np.broadcast_to(2 * dR + s, (dR.size, dC.size)), c + 0 * dR)
-    return KernelLevel(tuple(shape), acc / 16.0)
+    return KernelLevel(tuple(shape), acc / 16.0, fine.aspect)
 
 
 def kernel_levels(
@@ -329,66 +412,47 @@ class Level:
 
     # ---- smoother ------------------------------------------------------------------------
     def _sweep(self, r: FloatArray, forward: bool) -> FloatArray:
-        """delta with (B + L) delta = r (forward; L: rows below) or (B + U) delta = r."""
+        """delta with (B + L) delta = r (forward; L: rows below) or (B + U) delta = r, the
+        far rows' part of L (U) on the nodes of the bands (module docstring; FAR_RATIO
+        None: exact)."""
         ny, nx = self.kern.shape
         Lx = self.kern.Lx
         delta = np.zeros(self.n)
-        # Along x everything is kept transformed (each row once, when it is relaxed);
-        # the windows then convolve along y only. Row-major (row, component, frequency).
-        acc = np.zeros((ny, 2, Lx // 2 + 1), complex)  # A * (D M Q delta) so far
-        F = np.zeros((ny, 2, Lx // 2 + 1), complex)  # D M Q delta of the relaxed rows
-        S1 = self.kern.row_symbols
+        # Row-major in the sweep's order (row, component, column or frequency):
+        near = np.zeros((ny, 2, Lx // 2 + 1), complex)  # coupling received, along x transformed
+        far = np.zeros((ny, 2, nx))  # ... and in space
+        g = np.zeros((ny, 2, nx))  # D M Q delta of the relaxed rows
+        F = np.zeros((ny, 2, Lx // 2 + 1), complex)  # the same, transformed along x
+        bands = self.kern.bands(forward, FAR_RATIO, DIRECT_ROWS)
         rp = self.rowptr
-        top = 1 << max(0, (ny - 1).bit_length())
         mq = self._unit[1]
-
-        def leaf(i: int) -> None:
+        relaxed = np.zeros(ny + 1, np.int_)  # rows with unknowns among the first p
+        for p, i in enumerate(range(ny) if forward else range(ny - 1, -1, -1)):
             a, b = rp[i], rp[i + 1]
-            if a == b:
-                return
-            cols, m = self.uc[a:b], mq[:, a:b]
-            coup = sfft.irfft(acc[i], Lx, axis=-1)
-            rhs = r[a:b] - (m[0] * coup[0, cols] + m[1] * coup[1, cols])
-            d = self.solve_row(i, rhs)
-            delta[a:b] = d
-            # D M Q delta on this row (Q^T M = (M Q)^T: the same vectors both ways)
-            f = np.stack([np.bincount(cols, weights=m[c] * d, minlength=nx) for c in range(2)])
-            F[i] = sfft.rfft(difference(f), Lx, axis=-1)
-
-        def couple(src: tuple[int, int], dst: tuple[int, int], h: int) -> None:
-            s0, s1 = src[0], min(src[1], ny)
-            d0, d1 = dst[0], min(dst[1], ny)
-            if s0 >= s1 or d0 >= d1 or rp[s1] == rp[s0] or rp[d1] == rp[d0]:
-                return
-            if h <= DIRECT_ROWS:  # a few rows: the sum over the row pairs directly
-                dr = np.arange(d0, d1)[:, None] - np.arange(s0, s1)[None, :] + ny - 1
-                acc[d0:d1] += np.einsum("dsabk,sbk->dak", S1[dr], F[s0:s1])
-                return
-            # the window's rows: their y-transform against A's symbol on h rows
-            S = self.kern.symbols(h)
-            Lh = S.shape[2]
-            fy = sfft.fft(F[s0:s1], Lh, axis=0)
-            out = np.empty_like(fy)
-            for a in range(2):
-                out[:, a] = S[a, 0] * fy[:, 0] + S[a, 1] * fy[:, 1]
-            u = sfft.ifft(out, axis=0)
-            # row d sits at d - s0 of the circular transform (negative: wrapped; Lh >=
-            # 2 h - 1 keeps the linear convolution free of aliasing on the window)
-            acc[d0:d1] += u[(np.arange(d0, d1) - s0) % Lh]
-
-        def rec(a: int, b: int) -> None:
-            if a >= ny:
-                return
-            if b - a == 1:
-                leaf(a)
-                return
-            mid = (a + b) // 2
-            first, second = ((a, mid), (mid, b)) if forward else ((mid, b), (a, mid))
-            rec(*first)
-            couple(first, second, b - a)
-            rec(*second)
-
-        rec(0, top)
+            relaxed[p + 1] = relaxed[p] + (a < b)
+            if a < b:
+                cols, m = self.uc[a:b], mq[:, a:b]
+                coup = sfft.irfft(near[p], Lx, axis=-1)[:, :nx] + far[p]
+                rhs = r[a:b] - (m[0] * coup[0, cols] + m[1] * coup[1, cols])
+                d = self.solve_row(i, rhs)
+                delta[a:b] = d
+                # D M Q delta on this row (Q^T M = (M Q)^T: the same vectors both ways)
+                f = np.stack([np.bincount(cols, weights=m[c] * d, minlength=nx) for c in range(2)])
+                g[p] = difference(f)
+                F[p] = sfft.rfft(g[p], Lx, axis=-1)
+            if p + 1 >= ny:
+                break
+            for band in bands:  # the blocks that end with this row act on the rows after
+                s = band.s
+                if (p + 1) % s:
+                    continue
+                j0, rows = p + 1 - s, min(2 * s - 1, ny - p - 1)
+                if relaxed[p + 1] == relaxed[j0]:
+                    continue  # no unknowns in the block (beyond the contact's ends)
+                if band.direct:
+                    near[p + 1 : p + 1 + rows] += band.near(F[j0 : p + 1], rows)
+                else:
+                    far[p + 1 : p + 1 + rows] += band.far(g[j0 : p + 1], rows)
         return delta
 
     def smooth(self, v: FloatArray, x: FloatArray | None) -> FloatArray:
