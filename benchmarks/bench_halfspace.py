@@ -42,12 +42,14 @@ import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
 import statistics  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from contact_fmu.halfspace import rolling  # noqa: E402
+from contact_fmu.halfspace import multigrid, rolling  # noqa: E402
+from contact_fmu.halfspace.krylov import fgmres  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
 
@@ -324,6 +326,85 @@ def table_report(n: int, nodes: tuple[int, int, int], points: int, seed: int = 1
     }
 
 
+def _fine_newton_systems(n: int, case: str) -> tuple:
+    """The railway contact on n x n and the fine-grid Newton systems (multigrid.Level) of
+    its multigrid solve of ``case``, recorded as rolling.py builds them."""
+    contact = wheel_on_rail(n=n)
+    xref = contact.mu * contact.P / (contact.elastic.G * contact.c**2)
+    w = CASES[case]
+    patch = replace(contact.patch, preconditioner="multigrid")
+    made, build = [], multigrid.newton_level
+    multigrid.newton_level = lambda *a: made.append(build(*a)) or made[-1]
+    try:
+        solve_rolling(patch, w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
+    finally:
+        multigrid.newton_level = build
+    return patch, [lev for lev in made if lev.kern.shape == (n, n)]
+
+
+def sweep_report(grids: list[int], repeat: int) -> dict:
+    """The multigrid smoother's sweep (multigrid.Level._sweep, forward and backward) on
+    the third fine-grid Newton system of the longitudinal case: the far bands on their
+    nodes (FAR_RATIO) against every band at full resolution (FAR_RATIO None, exact),
+    timed alternately; and the V-cycle's contraction on that system and the combined
+    case's (the residual's reduction per stationary cycle, geometric mean of cycles
+    2-5; GMRES iterations with one cycle per iteration to 1e-2 and 1e-6)."""
+    out = {}
+    ratio = multigrid.FAR_RATIO
+    for n in grids:
+        row = {}
+        for case in CASES:
+            patch, systems = _fine_newton_systems(n, case)
+            lev = systems[min(2, len(systems) - 1)]
+            b = np.random.default_rng(5).standard_normal(lev.n)
+            cycle = multigrid.VCycle(lev, patch.mg_kernels)
+            x, res = np.zeros_like(b), []
+            for _ in range(6):
+                x = x + cycle(b - lev.apply(x))
+                res.append(float(np.linalg.norm(b - lev.apply(x))))
+            row[case] = {
+                "unknowns": lev.n,
+                "contraction": (res[-1] / res[1]) ** 0.25,
+                "gmres_1e-2": fgmres(lev.apply, b, cycle, 1e-2, 40)[1],
+                "gmres_1e-6": fgmres(lev.apply, b, cycle, 1e-6, 40)[1],
+            }
+            if case != "longitudinal":
+                continue
+
+            def sweeps(r=ratio, lv=lev, v=b):
+                multigrid.FAR_RATIO = r
+                try:
+                    return lv._sweep(v, True), lv._sweep(v, False)
+                finally:
+                    multigrid.FAR_RATIO = ratio
+
+            sweeps(None), sweeps()  # the bands' symbols built outside the timing
+            (t_exact, d0), (t_far, d1) = _time_interleaved([lambda: sweeps(None), sweeps], repeat)
+            N = n * n
+            row["sweep"] = {
+                "exact_ms": 1e3 * t_exact,
+                "far_ms": 1e3 * t_far,
+                "far_ns_per_N_log2N": 1e9 * t_far / (N * math.log2(N)),
+                "exact_ns_per_N_log2N": 1e9 * t_exact / (N * math.log2(N)),
+                "rel_diff": max(
+                    float(np.abs(a - c).max() / np.abs(a).max())
+                    for a, c in zip(d0, d1, strict=True)
+                ),
+            }
+        out[n] = row
+        sw, lo, co = row["sweep"], row["longitudinal"], row["combined+spin"]
+        print(
+            f"n={n:4d} unknowns {lo['unknowns']:7d}  sweep pair: exact {sw['exact_ms']:8.1f} ms "
+            f"far bands {sw['far_ms']:8.1f} ms ({sw['far_ms'] / sw['exact_ms']:.2f}), "
+            f"per N log2 N {sw['exact_ns_per_N_log2N']:.1f} / {sw['far_ns_per_N_log2N']:.1f} ns, "
+            f"difference {sw['rel_diff']:.1e}  V-cycle contraction {lo['contraction']:.3f} / "
+            f"{co['contraction']:.3f}, GMRES to 1e-2 {lo['gmres_1e-2']} / {co['gmres_1e-2']}, "
+            f"to 1e-6 {lo['gmres_1e-6']} / {co['gmres_1e-6']}",
+            flush=True,
+        )
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -342,7 +423,20 @@ def main(argv: list[str] | None = None) -> None:
         "and report its cost and interpolation error",
     )
     ap.add_argument("--points", type=int, default=60, help="random points for --table")
+    ap.add_argument(
+        "--sweep",
+        action="store_true",
+        help="instead: time the multigrid smoother's sweep and measure the V-cycle's "
+        "contraction on the grids (default 32 64 128 256 512)",
+    )
     args = ap.parse_args(argv)
+    if args.sweep:
+        grids = args.grids if "--grids" in (argv or sys.argv) else [32, 64, 128, 256, 512]
+        rep = sweep_report(grids, args.repeat)
+        if args.json:
+            with open(args.json, "w") as f:
+                json.dump(rep, f, indent=1)
+        return
     if args.table:
         rep = table_report(args.table[0], tuple(args.table[1:]), args.points)
         print(json.dumps(rep, indent=1))
