@@ -81,9 +81,10 @@ COARSEST_MAX = 2000
 # with 2, 8 or 16 on 64..256 per side (`bench_halfspace.py --sweep`'s system).
 DIRECT_ROWS = 4
 # The far bands' node spacing: w dx <= s dy / FAR_RATIO for rows s..2 s - 1 apart.
-# Measured on the railway cases (docs/halfspace.md): FAR_RATIO = 2 and 4 give the exact
-# sweep's Newton / GMRES counts on 16..256 per side; 4 keeps the sweep within 0.3-0.5 %
-# of the exact one (relative, on 32..512). None: every band at full resolution (exact).
+# Measured on the railway cases (docs/halfspace.md): 4 gives the exact sweep's Newton /
+# GMRES counts on 16..256 per side (nodes s/2 columns apart too, on 16..128) and keeps
+# the sweep within 0.04-0.3 % of the exact one (relative, 32..512). None: every band at
+# full resolution (exact).
 FAR_RATIO: float | None = 4.0
 
 
