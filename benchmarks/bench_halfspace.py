@@ -2,6 +2,8 @@
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace.py [--grids 16 32 64 128]
         [--repeat 3] [--dense-limit-mb 1500] [--json out.json]
+    ... bench_halfspace.py --sweep [--grids 32 64 128 256 512]   (``sweep_report``)
+    ... bench_halfspace.py --table N N1 N2 N3 [--points 60]       (``table_report``)
 
 Steady rolling of the railway wheel on rail (contact_fmu.halfspace.railway, Hertz,
 steel, nu = 0.28) on n x n elements, two cases: longitudinal creepage in partial slip
@@ -42,7 +44,6 @@ import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
 import statistics  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 
@@ -409,7 +410,9 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    ap.add_argument("--grids", type=int, nargs="+", default=[16, 32, 64, 128])
+    ap.add_argument(
+        "--grids", type=int, nargs="+", default=None, help="default 16 32 64 128 (--sweep: to 512)"
+    )
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dense-limit-mb", type=float, default=1500.0)
     ap.add_argument("--json", type=str, default=None)
@@ -431,8 +434,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     args = ap.parse_args(argv)
     if args.sweep:
-        grids = args.grids if "--grids" in (argv or sys.argv) else [32, 64, 128, 256, 512]
-        rep = sweep_report(grids, args.repeat)
+        rep = sweep_report(args.grids or [32, 64, 128, 256, 512], args.repeat)
         if args.json:
             with open(args.json, "w") as f:
                 json.dump(rep, f, indent=1)
@@ -444,7 +446,7 @@ def main(argv: list[str] | None = None) -> None:
             with open(args.json, "w") as f:
                 json.dump(rep, f, indent=1)
         return
-    res = run(args.grids, args.repeat, args.dense_limit_mb)
+    res = run(args.grids or [16, 32, 64, 128], args.repeat, args.dense_limit_mb)
     print(markdown(res))
     print("\nCONTACT (published, 2016 hardware, one thread):", CONTACT_PUBLISHED)
     if args.json:
