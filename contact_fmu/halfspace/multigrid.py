@@ -30,9 +30,9 @@ and solved by banded LU. The coupling of the rows already relaxed to the others 
 through the whole nonlocal kernel (with a lagged or truncated coupling the count grows
 much faster, docs/halfspace.md), carried in bands of row distance: the rows s..2 s - 1
 apart (s = 1, 2, 4, ...) act on each other once a block of s rows aligned to s is
-relaxed (``_Band``). The bands s <= DIRECT_ROWS act by direct sums over the row pairs, on the
-rows transformed along x once each; the others by one FFT convolution in y and x over
-the block's rows, on nodes w columns apart, w dx <= s dy / FAR_RATIO (piecewise-linear
+relaxed (``_Band``). The bands s <= DIRECT_ROWS act by direct sums over the row pairs,
+on the rows transformed along x once each; the others by one FFT convolution in y and x
+over the block's rows, on nodes w columns apart, w dx <= s dy / FAR_RATIO (piecewise-linear
 anterpolation of the sources, the kernel at the nodes' offsets, interpolation of the
 result: the kernel between rows s or more apart is smooth on the scale s dy; w = 1,
 full resolution, where that bound is below two columns). So each band costs O(N) plus
