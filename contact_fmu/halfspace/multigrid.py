@@ -24,23 +24,34 @@ eigenvectors of M_c whose eigenvalue exceeds AGGREGATE_MIN times the number of f
 elements per aggregate. The prolongation copies a coarse field to the children and
 projects it on their unknowns; the restriction is its transpose.
 
-Smoother: symmetric Gauss-Seidel over the grid rows, lines along the rolling direction
-(forward in y, then backward), each row's block banded to |column offset| <= LINE_BAND
-and solved by banded LU. The coupling of the rows already relaxed to the others runs
-through the whole nonlocal kernel (with a lagged or truncated coupling the count grows
-much faster, docs/halfspace.md), carried in bands of row distance: the rows s..2 s - 1
-apart (s = 1, 2, 4, ...) act on each other once a block of s rows aligned to s is
-relaxed (``_Band``). The bands s <= DIRECT_ROWS act by direct sums over the row pairs,
-on the rows transformed along x once each; the others by one FFT convolution in y and x
-over the block's rows, on nodes w columns apart, w dx <= s dy / FAR_RATIO (piecewise-linear
-anterpolation of the sources, the kernel at the nodes' offsets, interpolation of the
-result: the kernel between rows s or more apart is smooth on the scale s dy; w = 1,
-full resolution, where that bound is below two columns). So each band costs O(N) plus
-its transforms on N/w nodes, and a sweep O(N log N) (log2(ny) bands); with FAR_RATIO =
-None every band keeps full resolution (exact, O(N log^2 N)). One V-cycle (one
-smoothing before and after the coarse correction, dense LU on the coarsest level) is
-the preconditioner of GMRES (krylov.fgmres): 1-3 iterations per Newton step on 16..512
-per side, though its contraction grows slowly with the grid (docs/halfspace.md).
+Smoother: symmetric distributive Gauss-Seidel over the grid rows, lines along the
+rolling direction (forward in y, then backward), each row's block banded to |column
+offset| <= LINE_BAND and solved by banded LU. Distributive (Brandt's distributive
+relaxation; Venner & Lubrecht's for the 1/r kernel of dry contact): the sweep relaxes
+J C z = r and corrects x by C z, where C spreads a row's correction to the rows before
+and after it with weight -SPREAD wherever both elements are in full adhesion (on a
+coarse level: every child). Why: in adhesion D A is first-kind across the rows (for
+fields smooth along x, A couples the rows like a logarithm of their distance), so the
+plain sweep hardly damps fields alternating over a few rows, and the V-cycle's
+contraction grew with the grid (0.07 -> 0.33 from 32 to 512 per side); C's symbol
+1 - 2 SPREAD cos(theta_y) lifts those frequencies against the smooth ones (an
+opposite-order factor of the first-kind coupling), and the contraction stays at
+0.02-0.04 (docs/halfspace.md). The coupling of the rows already relaxed to the others
+runs through the whole nonlocal kernel (with a lagged or truncated coupling the count
+grows much faster, docs/halfspace.md): the rows 0 and 1 apart directly, the others in
+bands of row distance: a row is final one row late (once the next row's spread has
+reached it), and the final rows d + 1 apart, d in [s, 2 s) (s = 1, 2, 4, ...), act on
+each other once a block of s final rows aligned to s is complete (``_Band``). The bands
+s <= DIRECT_ROWS act by direct sums over the row pairs, on the rows transformed along x
+once each; the others by one FFT convolution in y and x over the block's rows, on nodes
+w columns apart, w dx <= s dy / FAR_RATIO (piecewise-linear anterpolation of the
+sources, the kernel at the nodes' offsets, interpolation of the result: the kernel
+between rows s or more apart is smooth on the scale s dy; w = 1, full resolution, where
+that bound is below two columns). So each band costs O(N) plus its transforms on N/w
+nodes, and a sweep O(N log N) (log2(ny) bands); with FAR_RATIO = None every band keeps
+full resolution (exact, O(N log^2 N)). One V-cycle (one smoothing before and after the
+coarse correction, dense LU on the coarsest level) is the preconditioner of GMRES
+(krylov.fgmres): 3-4 iterations to 1e-6 on 32..256 per side.
 """
 
 from __future__ import annotations
@@ -86,6 +97,13 @@ DIRECT_ROWS = 4
 # the sweep within 0.04-0.3 % of the exact one (relative, 32..512). None: every band at
 # full resolution (exact).
 FAR_RATIO: float | None = 4.0
+# Distributive relaxation (module docstring): a row's correction is spread to the rows
+# before and after it with weight -SPREAD, where both elements are in full adhesion.
+# Measured (railway cases, docs/halfspace.md): 0.2-0.3 keep the V-cycle's contraction
+# at 0.02-0.04 on 32..256 per side; 0.4 and 0.5 lose it (two-grid factors 0.12 and 0.86
+# on 32 x 32; not by the row blocks' conditioning, which falls only 1.2-2 times from 0
+# to 0.5); 0: the plain Gauss-Seidel sweep.
+SPREAD = 0.25
 
 
 @dataclass(frozen=True)
@@ -154,14 +172,14 @@ class KernelLevel:
         return sfft.rfft2(torus, axes=(-2, -1))
 
     def bands(self, forward: bool, ratio: float | None, direct_rows: int) -> list[_Band]:
-        """The sweep's row-distance bands s = 1, 2, 4, ... < ny (module docstring), in the
-        sweep's direction (forward: the field rows after the source rows)."""
+        """The sweep's row-distance bands s = 1, 2, 4, ... < ny - 1 (module docstring), in
+        the sweep's direction (forward: the field rows after the source rows)."""
         key = (forward, ratio, direct_rows)
         cache = self.__dict__.setdefault("_bands", {})
         if key not in cache:
             ny = self.shape[0]
             out, s = [], 1
-            while s < ny:
+            while s < ny - 1:
                 w = 1 if ratio is None else max(1, int(s / (ratio * self.aspect)))
                 out.append(_Band(self, s, w, 1 if forward else -1, s <= direct_rows))
                 s *= 2
@@ -179,22 +197,24 @@ class KernelLevel:
 
 
 class _Band:
-    """The coupling of a block of s relaxed rows [j0, j0 + s) to the rows s..2 s - 1
-    after each of them in the sweep's order (sign: +1 forward, -1 backward), i.e. to the
-    field rows [j0 + s, j0 + 3 s - 1). Near (w = 1, direct): sums over the row pairs of
-    A's rows transformed along x. Otherwise: on nodes w columns apart (module docstring)
-    by an FFT convolution over the block's s rows and the nodes."""
+    """The coupling of a block of s final rows [j0, j0 + s) to the rows s + 1..2 s after
+    each of them in the sweep's order (sign: +1 forward, -1 backward), i.e. to the field
+    rows [j0 + s + 1, j0 + 3 s): row distances d + 1 for d in [s, 2 s) (a row is final
+    one row late, once the spread of the next row's correction has reached it; distances
+    0 and 1 are the sweep's own). Near (w = 1, direct): sums over the row pairs of A's
+    rows transformed along x. Otherwise: on nodes w columns apart (module docstring) by an
+    FFT convolution over the block's s rows and the nodes."""
 
     def __init__(self, kern: KernelLevel, s: int, w: int, sign: int, direct: bool) -> None:
         ny, nx = kern.shape
         self.s, self.w = s, w
         self.direct = direct and w == 1
-        lag_range = (s, min(2 * s, ny))  # the row distances of this band
+        lag_range = (s, min(2 * s, ny - 1))  # d: the row distances of this band, less 1
         if self.direct:
-            # (field row t0 + a, source row j0 + b): distance s + a - b
+            # (field row t0 + a, source row j0 + b): d = s + a - b
             dist = s + np.arange(2 * s - 1)[:, None] - np.arange(s)[None, :]
             inside = (dist >= lag_range[0]) & (dist < lag_range[1])
-            idx = np.clip(sign * dist, -(ny - 1), ny - 1) + ny - 1
+            idx = np.clip(sign * (dist + 1), -(ny - 1), ny - 1) + ny - 1
             self.sym = kern.row_symbols[idx] * inside[..., None, None, None]
             return
         self.nodes = -(-(nx - 1) // w) + 1  # columns 0, w, ..., >= nx - 1
@@ -203,7 +223,7 @@ class _Band:
         dist = np.arange(*lag_range)
         C = np.arange(-(self.nodes - 1), self.nodes)
         torus = np.zeros((2, 2, self.Ly, self.Lx))
-        dr = np.broadcast_to(sign * dist[:, None], (dist.size, C.size))
+        dr = np.broadcast_to(sign * (dist[:, None] + 1), (dist.size, C.size))
         dc = np.broadcast_to(C[None, :] * w, (dist.size, C.size))
         torus[:, :, (dist - s)[:, None], (C % self.Lx)[None, :]] = kern.at(dr, dc)
         self.sym = sfft.rfft2(torus, axes=(-2, -1))
@@ -286,7 +306,8 @@ def kernel_levels(
 class Level:
     """One level of the Newton system: kernel, per-element M, Lam (2, 2, ny, nx), kx
     (ny, nx), basis q (2 directions, 2 components, ny, nx) with ``active`` (2, ny, nx);
-    the unknowns are the active (row, column, direction) in row-major order."""
+    the unknowns are the active (row, column, direction) in row-major order. children:
+    the fine elements per element (M sums their projections)."""
 
     def __init__(
         self,
@@ -296,8 +317,10 @@ class Level:
         kx: FloatArray,
         q: FloatArray,
         active: BoolArray,
+        children: int = 1,
     ) -> None:
         self.kern, self.M, self.Lam, self.kx, self.q = kern, M, Lam, kx, q
+        self.children = children
         ny = kern.shape[0]
         r, c, d = np.nonzero(np.moveaxis(active, 0, -1))
         self.ur, self.uc, self.ud = r, c, d
@@ -377,11 +400,24 @@ class Level:
         return 2 * LINE_BAND + 1
 
     @cached_property
+    def spread(self) -> tuple[BoolArray, BoolArray]:
+        """The elements (ny, nx) in full adhesion (every child: M = children I) whose
+        neighbour in the next row (row + 1), resp. the previous row, is too: there a row's
+        correction is spread to the neighbour with weight -SPREAD (module docstring)."""
+        full = self.M[0, 0] + self.M[1, 1] > 2 * self.children - 0.5  # traces are integers
+        nxt = np.zeros_like(full)
+        nxt[:-1] = full[:-1] & full[1:]
+        prv = np.zeros_like(full)
+        prv[1:] = full[1:] & full[:-1]
+        return nxt, prv
+
+    @cached_property
     def row_factors(self) -> list:
-        """Banded LU of each row's block (|column offset| <= LINE_BAND): (lu, ipiv) or None."""
+        """Banded LU of each row's block of J C (|column offset| <= LINE_BAND; C the
+        spread, module docstring): (lu, ipiv) or None."""
         kl = self.band
         out = []
-        ny = self.kern.shape[0]
+        ny, nx = self.kern.shape
         # all pairs of unknowns in one row within the band
         us, vs = [], []
         for off in range(-kl, kl + 1):
@@ -393,6 +429,17 @@ class Level:
         u = np.concatenate(us)
         v = np.concatenate(vs)
         val = self.entries(u, v)
+        # C's column of v: -SPREAD times v's field (children q_v) on the neighbour, in its
+        # unknowns (q_nb . q_v each: the neighbour's q is orthonormal, full adhesion)
+        index = -np.ones((2, ny, nx), np.int_)
+        index[self.ud, self.ur, self.uc] = np.arange(self.n)
+        for mask, dr in zip(self.spread, (1, -1), strict=True):
+            has = np.flatnonzero(mask[self.ur[v], self.uc[v]] & (SPREAD != 0))
+            rn, cn = self.ur[v[has]] + dr, self.uc[v[has]]
+            for k in range(2):
+                nb = index[k, rn, cn]
+                wgt = np.einsum("an,an->n", self.q[k][:, rn, cn], self._unit[0][:, v[has]])
+                val[has] -= SPREAD * wgt * self.entries(u[has], nb)
         ab = np.zeros((3 * kl + 1, self.n))
         ab[2 * kl + u - v, v] = val  # LAPACK band storage with room for the fill-in
         for i in range(ny):
@@ -413,48 +460,78 @@ class Level:
 
     # ---- smoother ------------------------------------------------------------------------
     def _sweep(self, r: FloatArray, forward: bool) -> FloatArray:
-        """delta with (B + L) delta = r (forward; L: rows below) or (B + U) delta = r, the
+        """C z with (B + L) z = r for J C (forward; L: rows below) or (B + U) z = r, the
         far rows' part of L (U) on the nodes of the bands (module docstring; FAR_RATIO
         None: exact)."""
         ny, nx = self.kern.shape
         Lx = self.kern.Lx
-        delta = np.zeros(self.n)
+        z = np.zeros(self.n)
         # Row-major in the sweep's order (row, component, column or frequency):
+        h = np.zeros((ny + 1, 2, nx))  # M Q C z located on the rows (row ny: none)
+        spill = np.zeros((ny + 1, 2, nx))  # ... its part spread from the neighbours
         near = np.zeros((ny, 2, Lx // 2 + 1), complex)  # coupling received, along x transformed
         far = np.zeros((ny, 2, nx))  # ... and in space
-        g = np.zeros((ny, 2, nx))  # D M Q delta of the relaxed rows
+        g = np.zeros((ny, 2, nx))  # D h of the final rows
         F = np.zeros((ny, 2, Lx // 2 + 1), complex)  # the same, transformed along x
         bands = self.kern.bands(forward, FAR_RATIO, DIRECT_ROWS)
+        # A's rows 0 and 1 apart in the sweep's direction (transformed along x)
+        sym01 = self.kern.row_symbols[[ny - 1, ny - 1 + (1 if forward else -1)]]
+        spilled = np.zeros(ny + 1, bool)  # rows that received a spread
+        ahead, behind = self.spread if forward else self.spread[::-1]
         rp = self.rowptr
         mq = self._unit[1]
         relaxed = np.zeros(ny + 1, np.int_)  # rows with unknowns among the first p
         for p, i in enumerate(range(ny) if forward else range(ny - 1, -1, -1)):
             a, b = rp[i], rp[i + 1]
             relaxed[p + 1] = relaxed[p] + (a < b)
+            X = None  # row p - 1 transformed along x, while it stands unchanged
             if a < b:
+                # received: the bands (final rows up to p - 2), row p - 1 as far as relaxed
+                # (row distance 1), and what the previous row spread onto this one (0)
+                here = difference(h[p : p + 1]) if spilled[p] else np.zeros((0, 2, nx))
+                if p:
+                    here = np.concatenate([here, difference(h[p - 1 : p])])
+                X = sfft.rfft(here, Lx, axis=-1)
+                use = sym01 if spilled[p] else sym01[1:]
+                hat = near[p] + np.einsum("tabk,tbk->ak", use[: len(X)], X)
+                coup = sfft.irfft(hat, Lx, axis=-1)[:, :nx] + far[p]
+                if spilled[p]:
+                    coup += self.kx[i] * here[0]
                 cols, m = self.uc[a:b], mq[:, a:b]
-                coup = sfft.irfft(near[p], Lx, axis=-1)[:, :nx] + far[p]
                 rhs = r[a:b] - (m[0] * coup[0, cols] + m[1] * coup[1, cols])
                 d = self.solve_row(i, rhs)
-                delta[a:b] = d
-                # D M Q delta on this row (Q^T M = (M Q)^T: the same vectors both ways)
+                z[a:b] = d
+                # M Q z on this row (Q^T M = (M Q)^T: the same vectors both ways)
                 f = np.stack([np.bincount(cols, weights=m[c] * d, minlength=nx) for c in range(2)])
-                g[p] = difference(f)
-                F[p] = sfft.rfft(g[p], Lx, axis=-1)
-            if p + 1 >= ny:
-                break
-            for band in bands:  # the blocks that end with this row act on the rows after
+                h[p] += f
+                if SPREAD and ahead[i].any():
+                    spilled[p + 1] = True
+                    spill[p + 1] -= SPREAD * ahead[i] * f
+                    h[p + 1] -= SPREAD * ahead[i] * f
+                if SPREAD and p and behind[i].any():
+                    spilled[p - 1] = True
+                    spill[p - 1] -= SPREAD * behind[i] * f
+                    h[p - 1] -= SPREAD * behind[i] * f
+                    X = None  # row p - 1 changed since its transform above
+            if p == 0:
+                continue
+            g[p - 1] = difference(h[p - 1])  # row p - 1 final now
+            F[p - 1] = sfft.rfft(g[p - 1], Lx, axis=-1) if X is None else X[-1]
+            for band in bands:  # the blocks that end with row p - 1 act on the rows after p
                 s = band.s
-                if (p + 1) % s:
+                if p % s:
                     continue
-                j0, rows = p + 1 - s, min(2 * s - 1, ny - p - 1)
-                if relaxed[p + 1] == relaxed[j0]:
-                    continue  # no unknowns in the block (beyond the contact's ends)
+                j0, rows = p - s, min(2 * s - 1, ny - p - 1)
+                if rows <= 0 or relaxed[p] == relaxed[j0]:
+                    continue  # no rows left, or no unknowns in the block
                 if band.direct:
-                    near[p + 1 : p + 1 + rows] += band.near(F[j0 : p + 1], rows)
+                    near[p + 1 : p + 1 + rows] += band.near(F[j0:p], rows)
                 else:
-                    far[p + 1 : p + 1 + rows] += band.far(g[j0 : p + 1], rows)
-        return delta
+                    far[p + 1 : p + 1 + rows] += band.far(g[j0:p], rows)
+        if not SPREAD:
+            return z
+        spill = spill[:ny] if forward else spill[ny - 1 :: -1]
+        return z + self.from_field(np.moveaxis(spill, 0, 1)) / self.children
 
     def smooth(self, v: FloatArray, x: FloatArray | None) -> FloatArray:
         """One symmetric Gauss-Seidel step from x (None: zero) for J x = v."""
@@ -481,7 +558,7 @@ class Level:
         w, V = np.linalg.eigh(np.moveaxis(Mc, (0, 1), (-2, -1)))  # (nyc, nxc, 2), (.., 2, 2)
         active = np.moveaxis(w > AGGREGATE_MIN * children, -1, 0)
         q = np.moveaxis(V, (-1, -2), (0, 1))  # q[k, a] = V[a, k]
-        return Level(kern, Mc, Lc, kxc, q, active)
+        return Level(kern, Mc, Lc, kxc, q, active, children)
 
     def prolong(self, coarse: Level, e: FloatArray) -> FloatArray:
         d = coarse.to_field(e)
