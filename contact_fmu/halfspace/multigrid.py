@@ -51,7 +51,7 @@ that bound is below two columns). So each band costs O(N) plus its transforms on
 nodes, and a sweep O(N log N) (log2(ny) bands); with FAR_RATIO = None every band keeps
 full resolution (exact, O(N log^2 N)). One V-cycle (one smoothing before and after the
 coarse correction, dense LU on the coarsest level) is the preconditioner of GMRES
-(krylov.fgmres): 3-4 iterations to 1e-6 on 32..256 per side.
+(krylov.fgmres): 3-4 iterations to 1e-6 on 32..512 per side.
 """
 
 from __future__ import annotations
@@ -437,9 +437,10 @@ class Level:
             has = np.flatnonzero(mask[self.ur[v], self.uc[v]] & (SPREAD != 0))
             rn, cn = self.ur[v[has]] + dr, self.uc[v[has]]
             for k in range(2):
-                nb = index[k, rn, cn]
                 wgt = np.einsum("an,an->n", self.q[k][:, rn, cn], self._unit[0][:, v[has]])
-                val[has] -= SPREAD * wgt * self.entries(u[has], nb)
+                on = np.flatnonzero(wgt)  # (the bases are the identity on the fine level)
+                nb = index[k, rn[on], cn[on]]
+                val[has[on]] -= SPREAD * wgt[on] * self.entries(u[has[on]], nb)
         ab = np.zeros((3 * kl + 1, self.n))
         ab[2 * kl + u - v, v] = val  # LAPACK band storage with room for the fill-in
         for i in range(ny):

@@ -46,8 +46,9 @@ tractions. For the thin layer this preconditioner is the exact inverse (the marc
 LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
 |F| globalises the iteration. ``RollingPatch(preconditioner="multigrid")`` replaces the
 block preconditioner by a multigrid V-cycle (multigrid.py) with GMRES on the right
-(krylov.py): 1-2 GMRES iterations per Newton step on 16..256 per side, at 1.7-3.8 times
-the time (docs/halfspace.md, "Iteration counts").
+(krylov.py): 1-2 GMRES iterations per Newton step on 16..256 per side, a V-cycle
+contraction below 0.05 on 32..512, at 1.7-5.9 times the time (docs/halfspace.md,
+"Iteration counts").
 
 Nested iteration: a patch from ellipse_patch carries its coarse levels (n/2, n/4, ...
 elements per side over the same ellipse, down to NESTED_MIN_N); solve_rolling solves the
@@ -177,7 +178,7 @@ class RollingPatch:
     (pressure coupling, 0: quasi-identical bodies); backend "fft" or "dense" (the same
     solver with an explicit influence matrix, for benchmarks); preconditioner of the
     Newton systems: "block" (default) or "multigrid" (multigrid.py: 1-2 GMRES iterations
-    per Newton step on 16..256 per side, 1.7-3.8 times slower there, coarse levels
+    per Newton step on 16..256 per side, 1.7-5.9 times slower there, coarse levels
     included); coarsen: builds the same problem on a grid of about half the
     elements per side over the same potential contact area, for the backend given
     (nested iteration, ``solve_rolling``; None: none, as for the coarsest level).
