@@ -115,11 +115,14 @@ def test_exact_sweep_is_the_block_triangular_solve(forward, direct_rows, spread,
     (B + L) z = r for J C, which the dense matrices give directly: equal to 1e-10
     relative. Both paths of a band: direct sums over the row pairs, and (direct_rows 0)
     the FFT convolution over the block's rows; with the spread and without (the plain
-    Gauss-Seidel sweep)."""
+    Gauss-Seidel sweep); a leading-edge layer term kx (zero in the railway patch) of
+    the size of K's diagonal, which acts on a row's spread onto the next."""
     monkeypatch.setattr(mg, "FAR_RATIO", None)
     monkeypatch.setattr(mg, "DIRECT_ROWS", direct_rows)
     monkeypatch.setattr(mg, "SPREAD", spread)
-    _, lev, H, *_ = _newton_like(16, seed=3)
+    patch, _, H, Sl, that, cS = _newton_like(16, seed=3)
+    kx = np.random.default_rng(6).uniform(0, 1, H.shape) * float(patch.diag[0].max())
+    lev = mg.newton_level(patch.mg_kernels[0], H, Sl, that, cS, kx)
     r = np.random.default_rng(4).standard_normal(lev.n)
     ref = _triangular_solve(lev, H, r, forward)
     d = lev._sweep(r, forward)

@@ -36,7 +36,7 @@ plain sweep hardly damps fields alternating over a few rows, and the V-cycle's
 contraction grew with the grid (0.07 -> 0.33 from 32 to 512 per side); C's symbol
 1 - 2 SPREAD cos(theta_y) lifts those frequencies against the smooth ones (an
 opposite-order factor of the first-kind coupling), and the contraction stays at
-0.02-0.04 (docs/halfspace.md). The coupling of the rows already relaxed to the others
+0.02-0.045 on 32..512 (docs/halfspace.md). The coupling of the rows already relaxed to the others
 runs through the whole nonlocal kernel (with a lagged or truncated coupling the count
 grows much faster, docs/halfspace.md): the rows 0 and 1 apart directly, the others in
 bands of row distance: a row is final one row late (once the next row's spread has
@@ -535,7 +535,7 @@ class Level:
         return z + self.from_field(np.moveaxis(spill, 0, 1)) / self.children
 
     def smooth(self, v: FloatArray, x: FloatArray | None) -> FloatArray:
-        """One symmetric Gauss-Seidel step from x (None: zero) for J x = v."""
+        """One symmetric distributive Gauss-Seidel step from x (None: zero) for J x = v."""
         x = self._sweep(v, True) if x is None else x + self._sweep(v - self.apply(x), True)
         return x + self._sweep(v - self.apply(x), False)
 
