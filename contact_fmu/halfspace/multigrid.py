@@ -433,8 +433,8 @@ class Level:
         # unknowns (q_nb . q_v each: the neighbour's q is orthonormal, full adhesion)
         index = -np.ones((2, ny, nx), np.int_)
         index[self.ud, self.ur, self.uc] = np.arange(self.n)
-        for mask, dr in zip(self.spread, (1, -1), strict=True):
-            has = np.flatnonzero(mask[self.ur[v], self.uc[v]] & (SPREAD != 0))
+        for mask, dr in zip(self.spread, (1, -1), strict=True) if SPREAD else ():
+            has = np.flatnonzero(mask[self.ur[v], self.uc[v]])
             rn, cn = self.ur[v[has]] + dr, self.uc[v[has]]
             for k in range(2):
                 wgt = np.einsum("an,an->n", self.q[k][:, rn, cn], self._unit[0][:, v[has]])
@@ -469,7 +469,6 @@ class Level:
         z = np.zeros(self.n)
         # Row-major in the sweep's order (row, component, column or frequency):
         h = np.zeros((ny + 1, 2, nx))  # M Q C z located on the rows (row ny: none)
-        spill = np.zeros((ny + 1, 2, nx))  # ... its part spread from the neighbours
         near = np.zeros((ny, 2, Lx // 2 + 1), complex)  # coupling received, along x transformed
         far = np.zeros((ny, 2, nx))  # ... and in space
         g = np.zeros((ny, 2, nx))  # D h of the final rows
@@ -477,7 +476,7 @@ class Level:
         bands = self.kern.bands(forward, FAR_RATIO, DIRECT_ROWS)
         # A's rows 0 and 1 apart in the sweep's direction (transformed along x)
         sym01 = self.kern.row_symbols[[ny - 1, ny - 1 + (1 if forward else -1)]]
-        spilled = np.zeros(ny + 1, bool)  # rows that received a spread
+        spilled = np.zeros(ny + 1, bool)  # rows the previous row spread onto
         ahead, behind = self.spread if forward else self.spread[::-1]
         rp = self.rowptr
         mq = self._unit[1]
@@ -489,15 +488,15 @@ class Level:
             if a < b:
                 # received: the bands (final rows up to p - 2), row p - 1 as far as relaxed
                 # (row distance 1), and what the previous row spread onto this one (0)
-                here = difference(h[p : p + 1]) if spilled[p] else np.zeros((0, 2, nx))
-                if p:
-                    here = np.concatenate([here, difference(h[p - 1 : p])])
-                X = sfft.rfft(here, Lx, axis=-1)
-                use = sym01 if spilled[p] else sym01[1:]
-                hat = near[p] + np.einsum("tabk,tbk->ak", use[: len(X)], X)
+                src = ([p] if spilled[p] else []) + ([p - 1] if p else [])
+                hat = near[p]
+                if src:
+                    Dh = difference(h[src])
+                    X = sfft.rfft(Dh, Lx, axis=-1)
+                    hat = hat + np.einsum("tabk,tbk->ak", sym01[[p - j for j in src]], X)
                 coup = sfft.irfft(hat, Lx, axis=-1)[:, :nx] + far[p]
                 if spilled[p]:
-                    coup += self.kx[i] * here[0]
+                    coup += self.kx[i] * Dh[0]
                 cols, m = self.uc[a:b], mq[:, a:b]
                 rhs = r[a:b] - (m[0] * coup[0, cols] + m[1] * coup[1, cols])
                 d = self.solve_row(i, rhs)
@@ -507,11 +506,8 @@ class Level:
                 h[p] += f
                 if SPREAD and ahead[i].any():
                     spilled[p + 1] = True
-                    spill[p + 1] -= SPREAD * ahead[i] * f
                     h[p + 1] -= SPREAD * ahead[i] * f
                 if SPREAD and p and behind[i].any():
-                    spilled[p - 1] = True
-                    spill[p - 1] -= SPREAD * behind[i] * f
                     h[p - 1] -= SPREAD * behind[i] * f
                     X = None  # row p - 1 changed since its transform above
             if p == 0:
@@ -529,10 +525,19 @@ class Level:
                     near[p + 1 : p + 1 + rows] += band.near(F[j0:p], rows)
                 else:
                     far[p + 1 : p + 1 + rows] += band.far(g[j0:p], rows)
+        return self._spread_correction(z)
+
+    def _spread_correction(self, z: FloatArray) -> FloatArray:
+        """C z: z plus, on the neighbours of each element in full adhesion, -SPREAD times
+        its field M Q z in their unknowns (Q^T / children there: M = children I)."""
         if not SPREAD:
             return z
-        spill = spill[:ny] if forward else spill[ny - 1 :: -1]
-        return z + self.from_field(np.moveaxis(spill, 0, 1)) / self.children
+        f = self.mfield(self.to_field(z))
+        nxt, prv = self.spread
+        spill = np.zeros_like(f)
+        spill[:, 1:] -= SPREAD * nxt[:-1] * f[:, :-1]
+        spill[:, :-1] -= SPREAD * prv[1:] * f[:, 1:]
+        return z + self.from_field(spill) / self.children
 
     def smooth(self, v: FloatArray, x: FloatArray | None) -> FloatArray:
         """One symmetric distributive Gauss-Seidel step from x (None: zero) for J x = v."""
