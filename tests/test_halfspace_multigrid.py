@@ -201,9 +201,10 @@ def test_vcycle_contraction_is_bounded_on_refinement(monkeypatch):
     """Issue 4, the bounded iteration: the V-cycle's contraction per cycle stays below
     0.05 on 32, 64 and 128 elements per side (measured 0.020, 0.026, 0.026; 0.037 on
     256, docs/halfspace.md), so the iterations to a given tolerance do not grow with the
-    grid. The distributive sweep is what bounds it: the plain Gauss-Seidel sweep
-    (SPREAD 0) contracts by 0.072, 0.125, 0.185 on the same systems, and fails the bound
-    from 32 on."""
+    grid. The distributive sweep is what bounds it: with the plain Gauss-Seidel sweep
+    (SPREAD 0) the contraction is 0.072, 0.125, 0.185 (the benchmark's `--sweep`, on
+    these systems), so it fails the bound from 32 on (here on the system of its own
+    solve: 0.072)."""
     rho = {}
     for n in (32, 64, 128):
         patch, lev = _third_newton_system(n)
