@@ -344,24 +344,11 @@ def _fine_newton_systems(n: int, case: str) -> tuple:
 
 
 def _vcycle(patch, lev, spread: float):
-    """The V-cycle on ``lev`` with the smoother's SPREAD = spread (the row blocks of J C
-    factorised afresh; a smoother call after this one runs with multigrid.SPREAD)."""
-    default = multigrid.SPREAD
-    multigrid.SPREAD = spread
+    """The V-cycle on ``lev`` with the smoother's weight ``spread`` (multigrid.Level:
+    its row blocks of J C factorised afresh; the coarse levels inherit the weight)."""
+    lev.weight = spread
     lev.__dict__.pop("row_factors", None)
-    try:
-        cycle = multigrid.VCycle(lev, patch.mg_kernels)
-    finally:
-        multigrid.SPREAD = default
-
-    def run(v, c=cycle):
-        multigrid.SPREAD = spread
-        try:
-            return c(v)
-        finally:
-            multigrid.SPREAD = default
-
-    return run
+    return multigrid.VCycle(lev, patch.mg_kernels)
 
 
 def sweep_report(grids: list[int], repeat: int) -> dict:
@@ -392,7 +379,8 @@ def sweep_report(grids: list[int], repeat: int) -> dict:
                     prefix + "gmres_1e-2": fgmres(lev.apply, b, cycle, 1e-2, 40)[1],
                     prefix + "gmres_1e-6": fgmres(lev.apply, b, cycle, 1e-6, 40)[1],
                 }
-            lev.__dict__.pop("row_factors", None)  # back to the default spread's blocks
+            lev.weight = multigrid.SPREAD  # the sweeps timed below: the default weight
+            lev.__dict__.pop("row_factors", None)
             if case != "longitudinal":
                 continue
 

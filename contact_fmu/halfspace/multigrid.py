@@ -36,9 +36,9 @@ plain sweep hardly damps fields alternating over a few rows, and the V-cycle's
 contraction grew with the grid (0.07 -> 0.33 from 32 to 512 per side); C's symbol
 1 - 2 SPREAD cos(theta_y) lifts those frequencies against the smooth ones (an
 opposite-order factor of the first-kind coupling), and the contraction stays at
-0.02-0.045 on 32..512 (docs/halfspace.md). The coupling of the rows already relaxed to the others
-runs through the whole nonlocal kernel (with a lagged or truncated coupling the count
-grows much faster, docs/halfspace.md): the rows 0 and 1 apart directly, the others in
+0.02-0.045 on 32..512 (docs/halfspace.md). The coupling of the rows already relaxed to
+the others runs through the whole nonlocal kernel (with a lagged or truncated coupling
+the count grows much faster, docs/halfspace.md): the rows 0 and 1 apart directly, the others in
 bands of row distance: a row is final one row late (once the next row's spread has
 reached it), and the final rows d + 1 apart, d in [s, 2 s) (s = 1, 2, 4, ...), act on
 each other once a block of s final rows aligned to s is complete (``_Band``). The bands
@@ -91,7 +91,7 @@ COARSEST_MAX = 2000
 # resolution along x): a forward and backward sweep measured 0-6 % faster with 4 than
 # with 2, 8 or 16 on 64..256 per side (`bench_halfspace.py --sweep`'s system).
 DIRECT_ROWS = 4
-# The far bands' node spacing: w dx <= s dy / FAR_RATIO for rows s..2 s - 1 apart.
+# The far bands' node spacing: w dx <= s dy / FAR_RATIO for rows s + 1..2 s apart.
 # Measured on the railway cases (docs/halfspace.md): 4 gives the exact sweep's Newton /
 # GMRES counts on 16..256 per side (nodes s/2 columns apart too, on 16..128) and keeps
 # the sweep within 0.04-0.3 % of the exact one (relative, 32..512). None: every band at
@@ -307,7 +307,9 @@ class Level:
     """One level of the Newton system: kernel, per-element M, Lam (2, 2, ny, nx), kx
     (ny, nx), basis q (2 directions, 2 components, ny, nx) with ``active`` (2, ny, nx);
     the unknowns are the active (row, column, direction) in row-major order. children:
-    the fine elements per element (M sums their projections)."""
+    the fine elements per element (M sums their projections); weight: the smoother's
+    spread (None: SPREAD when the level is made; its coarser levels inherit it, and the
+    row factors and the sweeps all read this one value)."""
 
     def __init__(
         self,
@@ -318,9 +320,11 @@ class Level:
         q: FloatArray,
         active: BoolArray,
         children: int = 1,
+        weight: float | None = None,
     ) -> None:
         self.kern, self.M, self.Lam, self.kx, self.q = kern, M, Lam, kx, q
         self.children = children
+        self.weight = SPREAD if weight is None else weight
         ny = kern.shape[0]
         r, c, d = np.nonzero(np.moveaxis(active, 0, -1))
         self.ur, self.uc, self.ud = r, c, d
@@ -403,7 +407,7 @@ class Level:
     def spread(self) -> tuple[BoolArray, BoolArray]:
         """The elements (ny, nx) in full adhesion (every child: M = children I) whose
         neighbour in the next row (row + 1), resp. the previous row, is too: there a row's
-        correction is spread to the neighbour with weight -SPREAD (module docstring)."""
+        correction is spread to the neighbour with weight -self.weight (module docstring)."""
         full = self.M[0, 0] + self.M[1, 1] > 2 * self.children - 0.5  # traces are integers
         nxt = np.zeros_like(full)
         nxt[:-1] = full[:-1] & full[1:]
@@ -429,18 +433,18 @@ class Level:
         u = np.concatenate(us)
         v = np.concatenate(vs)
         val = self.entries(u, v)
-        # C's column of v: -SPREAD times v's field (children q_v) on the neighbour, in its
+        # C's column of v: -weight times v's field (children q_v) on the neighbour, in its
         # unknowns (q_nb . q_v each: the neighbour's q is orthonormal, full adhesion)
         index = -np.ones((2, ny, nx), np.int_)
         index[self.ud, self.ur, self.uc] = np.arange(self.n)
-        for mask, dr in zip(self.spread, (1, -1), strict=True) if SPREAD else ():
+        for mask, dr in zip(self.spread, (1, -1), strict=True) if self.weight else ():
             has = np.flatnonzero(mask[self.ur[v], self.uc[v]])
             rn, cn = self.ur[v[has]] + dr, self.uc[v[has]]
             for k in range(2):
                 wgt = np.einsum("an,an->n", self.q[k][:, rn, cn], self._unit[0][:, v[has]])
                 on = np.flatnonzero(wgt)  # (the bases are the identity on the fine level)
                 nb = index[k, rn[on], cn[on]]
-                val[has[on]] -= SPREAD * wgt[on] * self.entries(u[has[on]], nb)
+                val[has[on]] -= self.weight * wgt[on] * self.entries(u[has[on]], nb)
         ab = np.zeros((3 * kl + 1, self.n))
         ab[2 * kl + u - v, v] = val  # LAPACK band storage with room for the fill-in
         for i in range(ny):
@@ -504,11 +508,11 @@ class Level:
                 # M Q z on this row (Q^T M = (M Q)^T: the same vectors both ways)
                 f = np.stack([np.bincount(cols, weights=m[c] * d, minlength=nx) for c in range(2)])
                 h[p] += f
-                if SPREAD and ahead[i].any():
+                if self.weight and ahead[i].any():
                     spilled[p + 1] = True
-                    h[p + 1] -= SPREAD * ahead[i] * f
-                if SPREAD and p and behind[i].any():
-                    h[p - 1] -= SPREAD * behind[i] * f
+                    h[p + 1] -= self.weight * ahead[i] * f
+                if self.weight and p and behind[i].any():
+                    h[p - 1] -= self.weight * behind[i] * f
                     X = None  # row p - 1 changed since its transform above
             if p == 0:
                 continue
@@ -528,15 +532,15 @@ class Level:
         return self._spread_correction(z)
 
     def _spread_correction(self, z: FloatArray) -> FloatArray:
-        """C z: z plus, on the neighbours of each element in full adhesion, -SPREAD times
+        """C z: z plus, on the neighbours of each element in full adhesion, -weight times
         its field M Q z in their unknowns (Q^T / children there: M = children I)."""
-        if not SPREAD:
+        if not self.weight:
             return z
         f = self.mfield(self.to_field(z))
         nxt, prv = self.spread
         spill = np.zeros_like(f)
-        spill[:, 1:] -= SPREAD * nxt[:-1] * f[:, :-1]
-        spill[:, :-1] -= SPREAD * prv[1:] * f[:, 1:]
+        spill[:, 1:] -= self.weight * nxt[:-1] * f[:, :-1]
+        spill[:, :-1] -= self.weight * prv[1:] * f[:, 1:]
         return z + self.from_field(spill) / self.children
 
     def smooth(self, v: FloatArray, x: FloatArray | None) -> FloatArray:
@@ -564,7 +568,7 @@ class Level:
         w, V = np.linalg.eigh(np.moveaxis(Mc, (0, 1), (-2, -1)))  # (nyc, nxc, 2), (.., 2, 2)
         active = np.moveaxis(w > AGGREGATE_MIN * children, -1, 0)
         q = np.moveaxis(V, (-1, -2), (0, 1))  # q[k, a] = V[a, k]
-        return Level(kern, Mc, Lc, kxc, q, active, children)
+        return Level(kern, Mc, Lc, kxc, q, active, children, self.weight)
 
     def prolong(self, coarse: Level, e: FloatArray) -> FloatArray:
         d = coarse.to_field(e)
