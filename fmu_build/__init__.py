@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 
+import fmpy
+
 from contact_fmu import native
 from contact_fmu.fmu.config import ModelConfig
 
@@ -38,6 +40,17 @@ DEFAULT_OUT = Path("out") / "fmu"
 # Bump when the layout of built FMUs changes without a change of the sources.
 FORMAT = "contact_fmu-fmu-1"
 HERE = Path(__file__).resolve().parent
+# The FMU's Linux binary in front of pythonfmu's (FMI statuses, FMU states: see its
+# header); pythonfmu's own goes to resources/ + INNER, where the shim loads it from.
+SHIM = Path(native.__file__).resolve().parents[1] / "fmu" / "pythonfmu_shim.c"
+INNER = "pythonfmu/linux64/libpythonfmu-export.so"
+SHIM_FLAGS = (
+    "-O2",
+    "-fPIC",
+    "-shared",
+    "-fvisibility=hidden",
+    f"-I{Path(fmpy.__file__).parent / 'c-code'}",  # the FMI 2.0 headers
+)
 
 
 class BuildError(RuntimeError):
@@ -76,7 +89,7 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
     for rel in cfg.generated_files:  # the generated data's content key (no build needed)
         h.update(rel.encode() + b"\0" + tables.key(cfg).encode() + b"\0")
-    for own in sorted(p for p in HERE.glob("*.py") if p.name != "__main__.py"):
+    for own in sorted(p for p in HERE.glob("*.py") if p.name != "__main__.py") + [SHIM]:
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
     return h.hexdigest(), modules
 
@@ -162,15 +175,29 @@ def build(
                 f"{proc.stdout}\n{proc.stderr}"
             )
         final = work / "final.fmu"
-        _finish(raw, final, cfg)
+        _finish(raw, final, cfg, _compile_shim(work))
         os.replace(final, target)  # atomic: concurrent builds of one key are harmless
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return Built(target, key, module, class_name, package, tuple(modules), cached=False)
 
 
-def _finish(raw: Path, final: Path, cfg: ModelConfig) -> None:
-    """Copy pythonfmu's FMU with the completed model description, compressed."""
+def _compile_shim(work: Path) -> bytes | None:
+    """The shim's Linux binary, or None (no C compiler: the FMU keeps pythonfmu's
+    binary alone, whose statuses are OK, Discard from doStep and Fatal)."""
+    try:
+        return native.compile_to(work / "shim.so", SHIM, SHIM_FLAGS).read_bytes()
+    except (OSError, subprocess.CalledProcessError) as e:
+        print(
+            f"fmu_build: FMI status shim left out ({e}): errors answer fmi2Fatal",
+            file=sys.stderr,
+        )
+        return None
+
+
+def _finish(raw: Path, final: Path, cfg: ModelConfig, shim: bytes | None) -> None:
+    """Copy pythonfmu's FMU with the completed model description, compressed; with the
+    shim as the Linux binary and pythonfmu's under resources/."""
     with zipfile.ZipFile(raw) as zin, zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as zout:
         for item in zin.infolist():
             data = zin.read(item.filename)
@@ -178,4 +205,7 @@ def _finish(raw: Path, final: Path, cfg: ModelConfig) -> None:
                 data = model_description.patch(data, cfg)
             if "__pycache__" in item.filename:
                 continue
+            if shim is not None and item.filename.startswith("binaries/linux64/"):
+                zout.writestr(f"resources/{INNER}", data)
+                data = shim
             zout.writestr(item.filename, data)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 
 import fmu_build
 from contact_fmu import examples as ex
@@ -132,10 +133,10 @@ def test_serialized_state_in_contact_mode(fmus):
 
 
 def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(fmus):
-    """Bytes that are not a state of this FMU (garbage, truncated, another FMU's state)
-    are refused at setFMUstate with a logged error naming the reason (pythonfmu would
-    turn an exception in deserialisation into fmi2Fatal): the state is unchanged, doStep
-    answers fmi2Discard with the reason until a valid state is set, then steps on."""
+    """Bytes that are not a state of this FMU (garbage, truncated, one byte changed,
+    another FMU's state) are refused at fmi2DeSerializeFMUstate with fmi2Error and a
+    message naming the reason (the binary's envelope: magic, format, GUID, length,
+    CRC-32); the instance is unchanged and steps on."""
     with Instance(fmus["railway"], "other") as other:
         assert other.step(1e-4) == OK
         foreign = other.serialize_state(other.get_state())
@@ -143,17 +144,45 @@ def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(fmus)
         assert b.step(1.75e-4) == OK
         state = b.get_state()
         good = b.serialize_state(state)
-        expected = ("not a serialized contact_fmu FMU state", "cannot be read", "of the FMU")
-        for data, reason in zip((b"garbage", good[:-20], foreign), expected, strict=True):
+        flipped = bytearray(good)
+        flipped[len(good) // 2] ^= 0x08  # e.g. the key 'mu' read as 'iu'
+        cases = {
+            b"garbage": "not a serialized contact_fmu FMU state",
+            good[:-20]: "truncated",
+            good + b"x": "truncated or extended",
+            bytes(flipped): "damaged (its checksum differs)",
+            foreign: "another FMU",
+        }
+        for data, reason in cases.items():
             before = b.outputs()
-            b.set_state(b.deserialize_state(data, b.time))
+            with pytest.raises(FMICallException) as e:
+                b.deserialize_state(data, b.time)
+            assert e.value.status == ERROR
             status, text = b.messages[-1]
             assert status == ERROR and reason in text, b.messages[-1:]
-            assert b.step(1.75e-4) == DISCARD and reason in b.messages[-1][1]
             assert b.outputs() == before
+            assert b.step(1.75e-4) == OK
         b.set_state(b.deserialize_state(good, state[1]))
         assert b.step(1.75e-4) == OK
         assert all(s < FATAL for s, _ in b.messages)
+
+
+def test_freed_or_foreign_fmu_state_pointers_are_refused(fmus):
+    """fmi2FreeFMUstate twice, or fmi2SetFMUstate with a freed state, would make
+    pythonfmu read freed memory: the binary knows its live states and refuses others."""
+    from ctypes import byref
+
+    with body(fmus) as b:
+        assert b.step(1.75e-4) == OK
+        state = b.fmu.getFMUstate()
+        copy = type(state)(state.value)  # what a C master keeps: the pointer's value
+        b.fmu.freeFMUstate(state)
+        for call in ("fmi2FreeFMUstate", "fmi2SetFMUstate"):
+            arg = byref(copy) if call == "fmi2FreeFMUstate" else copy
+            status = getattr(b.fmu.dll, call)(b.fmu.component, arg)
+            assert status == ERROR
+            assert "is not an FMU state of this instance" in b.messages[-1][1]
+        assert b.step(1.75e-4) == OK
 
 
 @pytest.mark.parametrize(
@@ -166,10 +195,14 @@ def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(fmus)
     ],
 )
 def test_bad_input_gives_discard_a_named_message_and_recovery(fmus, name, value, requirement):
+    """fmi2SetReal of an inadmissible value answers fmi2Error naming it; while it is
+    held every doStep answers fmi2Discard, the state untouched."""
     with body(fmus) as b:
         assert b.step(1.75e-4) == OK
         good, before = b.get(name), b.outputs()
-        b.set(name, value)
+        with pytest.raises(FMICallException) as e:
+            b.set(name, value)
+        assert e.value.status == ERROR
         assert b.step(1.75e-4) == DISCARD
         text = f"{name} = {value!r} is invalid: must be {requirement}"
         assert any(text in m for s, m in b.messages if s == DISCARD), b.messages
@@ -188,13 +221,37 @@ def test_zero_or_negative_step_gives_discard(fmus, h):
         assert b.step(1.75e-4) == OK
 
 
-def test_bad_parameter_gives_discard_until_corrected(fmus):
-    with body(fmus, mu=-0.3) as b:
-        assert b.step(1.75e-4) == DISCARD
-        assert any("mu = -0.3 is invalid: must be > 0" in m for _, m in b.messages)
+def test_model_that_cannot_start_answers_error_at_initialisation(fmus):
+    """A bad start value is an fmi2Error at setReal and again at
+    exitInitializationMode (so that fmpy raises and its command line exits non-zero);
+    doStep before a successful initialisation answers fmi2Error; corrected, the model
+    starts."""
+    with Instance(fmus["fig13"], "bad", initialise=False) as b:
+        with pytest.raises(FMICallException) as e:
+            b.set("mu", -0.3)
+        assert e.value.status == ERROR
+        with pytest.raises(FMICallException) as e:
+            b.initialise()
+        assert e.value.status == ERROR
+        assert "the model cannot start: mu = -0.3 is invalid: must be > 0" in b.messages[-1][1]
+        assert b.step(1.75e-4) == ERROR
+        assert "before the model is initialised" in b.messages[-1][1]
         b.set("mu", 0.3)
+        b.initialise()
         assert b.step(1.75e-4) == OK
         assert abs(b.get("Tx")) <= MU_P
+
+
+def test_fmpy_simulate_fails_loudly_for_a_model_that_cannot_start(fmus):
+    """fmpy's simulate_fmu (and `fmpy simulate`) raises instead of returning a
+    two-row result (they took fmi2OK at initialisation before)."""
+    import fmpy
+
+    with pytest.raises(FMICallException):
+        fmpy.simulate_fmu(
+            str(fmus["fig13"]), start_values={"Rx": 5e-324, "Ry": 2.97e9, "Iy": 0.0},
+            stop_time=1e-3, output_interval=1e-4,
+        )  # fmt: skip
 
 
 @pytest.mark.parametrize("h", [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0])
@@ -298,10 +355,12 @@ def test_full_body_fmu_lateral_dynamics_and_method_parameter():
                 assert out["Tx"] == pytest.approx(A2 * 0.2 * MU_P, rel=1e-12)
                 assert out["Ty"] == pytest.approx(0.2 * MU_P, rel=1e-12)
                 assert out["Mz"] == pytest.approx(0.0, abs=1e-9)
-    with Instance(path, "bad", {"method": "euler"}) as b:
+    with Instance(path, "bad", {"method": "euler"}, initialise=False) as b:
+        with pytest.raises(FMICallException):
+            b.initialise()
         assert any("method = 'euler' is invalid" in m for _, m in b.messages), b.messages
-        assert b.step(1e-4) == DISCARD
         b.set("method", "full")  # not initialised: a parameter may still be corrected
+        b.initialise()
         assert b.step(1e-4) == OK
 
 

@@ -1,13 +1,17 @@
 """The adapter class in-process (no FMU binary): state, bad input, error handling.
 
 pythonfmu answers fmi2Discard when do_step returns False and fmi2Fatal when anything
-raises, so every check here is that do_step returns False (never raises), that the log
-names the variable and the value, that the state is untouched and that the instance
-steps normally, bit for bit like a fresh one, once the input is corrected.
+raises; the FMU's binary (pythonfmu_shim.c) answers the worst status the adapter wrote
+into its cell. ``Slave`` hands the adapter a cell as the shim does, so every check here
+is that nothing raises, that the call's status (``status``: the cell) is the one the
+binary would answer, that the log names the variable and the value, that the state is
+untouched and that the instance steps normally, bit for bit like a fresh one, once the
+input is corrected.
 """
 
 from __future__ import annotations
 
+import ctypes
 import math
 
 import numpy as np
@@ -17,7 +21,7 @@ from contact_fmu import examples as ex
 from contact_fmu import native
 from contact_fmu.fmu.body_model import MAX_SUBSTEPS, substeps
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.fmu.slave import ContactSlave
+from contact_fmu.fmu.slave import CELL_VR, ContactSlave
 from contact_fmu.kinematics import rigid_slip
 
 F = ex.force_unit()
@@ -36,6 +40,7 @@ CONTACT = ModelConfig(
 )  # fmt: skip
 RIGID = ModelConfig(name="rigid", mode="rigid_body", inputs=("Tx", "Fx_ex", "My_ex"),
                     outputs=("Vx", "Omega_y"))  # fmt: skip
+OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3  # fmi2Status
 
 
 class Slave:
@@ -44,15 +49,29 @@ class Slave:
     def __init__(self, cfg: ModelConfig, **params: float) -> None:
         cls = type("Model", (ContactSlave,), {"CONFIG": cfg.to_dict()})
         self.s = cls(instance_name="test")
+        self.cell = ctypes.c_int(0)  # the shim's status cell (pythonfmu_shim.c)
+        self.s.set_string([CELL_VR], [f"status cell {hex(ctypes.addressof(self.cell))}"])
         self.vr = {v.name: k for k, v in self.s.vars.items()}
         self.t = 0.0
         self.s.setup_experiment(0.0)
         self.s.enter_initialization_mode()
         for k, v in params.items():
             self.set(k, v)
+        self.init_status = self.initialise()
+
+    def initialise(self) -> int:
+        """fmi2ExitInitializationMode; the status the FMU's binary answers."""
+        self.cell.value = OK
         self.s.exit_initialization_mode()
+        return self.cell.value
+
+    @property
+    def status(self) -> int:
+        """The worst status logged since the last set, step or initialise."""
+        return self.cell.value
 
     def set(self, name: str, value: float) -> None:
+        self.cell.value = OK
         self.s.set_real([self.vr[name]], [value])
 
     def get(self, name: str) -> float:
@@ -65,6 +84,7 @@ class Slave:
         return {n: self.get(n) for n in self.s.cfg.outputs}
 
     def step(self, h: float = H) -> bool:
+        self.cell.value = OK
         ok = self.s.do_step(self.t, h)
         if ok:
             self.t += h
@@ -188,13 +208,17 @@ def test_step_not_starting_at_the_fmu_time_is_discarded():
         ("M", math.inf, ex.M, "M = inf is invalid: must be finite"),
     ],
 )
-def test_bad_parameter_blocks_stepping_until_corrected(name, value, good, fragment):
+def test_bad_parameter_fails_initialisation_with_error_until_corrected(name, value, good, fragment):
+    """A model that cannot start answers fmi2Error at exitInitializationMode, and every
+    doStep before a successful one answers fmi2Error too, naming the reason."""
     b = loaded_body(**{name: value})
+    assert b.init_status == ERROR
     assert any(fragment in m for m in b.messages), b.messages
-    assert b.step() is False
-    assert any(fragment in m for m in b.messages[-2:])
+    assert b.step() is False and b.status == ERROR
+    assert "before the model is initialised" in b.messages[-1] and fragment in b.messages[-1]
     assert all(math.isfinite(v) for v in b.outputs().values())
     b.set(name, good)  # the model is not set up: the parameter may still change
+    assert b.status == OK and b.initialise() == OK
     assert b.step()
     fresh = loaded_body()
     assert fresh.step() and b.outputs() == fresh.outputs()
@@ -203,11 +227,35 @@ def test_bad_parameter_blocks_stepping_until_corrected(name, value, good, fragme
 def test_parameter_combination_refused_by_the_model_is_named():
     """k1 = k2 = 0 passes each range but leaves no normal compliance (Eq. 32)."""
     b = loaded_body(k1=0.0, k2=0.0)
+    assert b.init_status == ERROR
     assert any("k1 + k2 = 0.0 is invalid" in m for m in b.messages), b.messages
-    assert b.step() is False
+    assert b.step() is False and b.status == ERROR
     b.set("k1", ex.k1)
     b.set("k2", ex.k2)
+    assert b.initialise() == OK and b.step()
+
+
+def test_inertia_that_underflows_fails_initialisation_with_a_named_error():
+    """Rx = 5e-324 with Iy = 0 passes each range, but M Rx^2 + Iy (the denominator of
+    A1, A2, Eq. 23) underflows to 0: an error naming it, not a division by zero."""
+    b = loaded_body(Rx=5e-324, Ry=2.97e9, Iy=0.0)
+    assert b.init_status == ERROR
+    assert any("M Rx^2 + Iy = 0.0 is invalid" in m for m in b.messages), b.messages
+    assert b.step() is False and b.status == ERROR
+
+
+def test_doStep_before_initialisation_or_after_terminate_is_an_error():
+    cls = type("Model", (ContactSlave,), {"CONFIG": BODY.to_dict()})
+    s = cls(instance_name="test")
+    cell = ctypes.c_int(0)
+    s.set_string([CELL_VR], [f"status cell {hex(ctypes.addressof(cell))}"])
+    assert s.do_step(0.0, H) is False and cell.value == ERROR
+    assert "fmi2ExitInitializationMode not called" in s.log_queue[-1].msg
+    b = loaded_body()
     assert b.step()
+    b.s.terminate()
+    assert b.step() is False and b.status == ERROR
+    assert "after fmi2Terminate" in b.messages[-1]
 
 
 def test_fixed_parameter_change_after_initialisation_is_ignored_and_logged():
@@ -252,15 +300,40 @@ def test_contact_outputs_follow_the_inputs_before_any_step():
         assert c.get("vx") == vx
 
 
-def test_contact_bad_input_keeps_the_last_outputs():
+def test_contact_outputs_of_a_bad_input_are_an_error_never_stale_ok():
+    """Feedthrough outputs that cannot be had for the current inputs answer fmi2Error
+    at getReal (the values kept are the last good inputs', not to be used)."""
     c = Slave(CONTACT)
     c.set("Omega_y", ex.speed_unit() / ex.Rx * 0.999)
     before = c.outputs()
     c.set("Vx", math.nan)
-    assert c.outputs() == before
+    assert c.status == ERROR
+    c.cell.value = OK
+    assert c.outputs() == before and c.status == ERROR
+    assert "no outputs for the current inputs: Vx = nan is invalid" in c.messages[-1]
     assert c.step() is False
     c.set("Vx", ex.speed_unit())
-    assert c.step() and c.outputs() == before
+    c.cell.value = OK
+    assert c.step() and c.outputs() == before and c.status == OK
+
+
+def test_momentum_balance_is_kept_or_the_loads_refused():
+    """Eqs. 8-9 in gross sliding: M dVx = (Fx_ex - Tx) h with abs(Tx) <= mu P. Loads
+    beyond LOAD_LIMIT mu P (where the eliminated form loses the balance to rounding:
+    Vx went from 5.6 to 0 in one step with My_ex = 1e20) are refused with Discard."""
+    for My in (-1e9, 1e9 * ex.mu * ex.P * ex.Rx):  # within the limit: the balance holds
+        b = loaded_body()
+        b.set("Fx_ex", 0.0)
+        b.set("My_ex", My)
+        V0 = b.get("Vx")
+        assert b.step()
+        slack = ex.mu * ex.P * H / ex.M
+        assert abs(b.get("Vx") - V0) <= slack * (1 + 1e-5)
+    b.set("My_ex", 1e20)
+    before = b.outputs()
+    assert b.step() is False and b.status == DISCARD
+    assert "My_ex = 1e+20 is invalid" in b.messages[-1]
+    assert b.outputs() == before
 
 
 def test_rigid_body_integrates_eqs_8_and_9_exactly_for_held_force():

@@ -39,6 +39,11 @@ class ContactElement:
         out.update(contact_quantities(law, Vx, vx, vy, Omega_z))
         self.law, self._out = law, out
 
+    @property
+    def P(self) -> float:
+        """The normal load (N) of the current outputs."""
+        return self.law.P
+
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
         self.evaluate(inputs)
         return None

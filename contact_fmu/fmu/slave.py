@@ -38,6 +38,7 @@ handed over (``_fast_pull``/``_fast_push``) and the same results.
 from __future__ import annotations
 
 import copy
+import ctypes
 import importlib
 import math
 from functools import partial
@@ -57,13 +58,18 @@ from pythonfmu import (
 )
 from pythonfmu.enums import Fmi2Status
 
+from .. import native
 from . import state_bytes
 from . import variables as fv
 from .config import ModelConfig
 
-# Relative tolerance between doStep's currentCommunicationPoint and the FMU's time
-# (masters convert integer nanoseconds or accumulate steps: rounding only).
-TIME_RTOL = 1e-9
+# Relative tolerance between doStep's currentCommunicationPoint and the FMU's time: a
+# master that accumulates steps, multiplies or converts integer nanoseconds differs
+# from t + h by a few units in the last place of t, never by more (64 ulp).
+TIME_RTOL = 64 * 2.0**-52
+# The value reference through which the FMU's binary (pythonfmu_shim.c, CF_CELL_VR)
+# hands over the address of its status cell; no variable has it.
+CELL_VR = 2147483647
 _INF = math.inf
 
 # the FMI calls a compiled binding takes over (native/fmi.c)
@@ -78,6 +84,8 @@ _TYPES = {"Real": Real, "Integer": Integer, "String": String}
 _PACKAGE = __name__.split(".")[0]
 # the entry of _bad that a refused FMU state holds (no variable has this name)
 _STATE = "FMU state"
+# the fields of an FMU state (_get_fmu_state)
+_STATE_FIELDS = frozenset({"time", "values", "bad", "out", "dirty", "model"})
 
 
 class ContactSlave(Fmi2Slave):
@@ -88,6 +96,8 @@ class ContactSlave(Fmi2Slave):
     license = "MIT"
 
     def __init__(self, **kwargs: Any) -> None:
+        # the shim's status cell (set through CELL_VR); None under pythonfmu's binary alone
+        self._cell: Any = None
         super().__init__(**kwargs)
         cfg = ModelConfig.from_dict(self.CONFIG)
         self.cfg = cfg
@@ -125,6 +135,9 @@ class ContactSlave(Fmi2Slave):
         self._getters: dict[str, Any] = {}  # the Python getters of the Real outputs
         self._time = 0.0
         self._dirty = True  # inputs changed since the outputs were computed
+        self._init_problem: str | None = None  # why exitInitializationMode failed
+        self._terminated = False
+        self._undo: Any = None  # this model's snapshot while a state is being set
         for v in self._vars.values():
             self.register_variable(self._fmi_variable(v))
         # value reference -> (name, min, max, open min) of the Real inputs that set_real
@@ -170,6 +183,60 @@ class ContactSlave(Fmi2Slave):
             getter=getter,
             setter=setter,
         )
+
+    # ---- statuses --------------------------------------------------------------------------
+    def log(
+        self,
+        msg: str,
+        status: Fmi2Status = Fmi2Status.ok,
+        category: str | None = None,
+        debug: Any = None,
+    ) -> None:
+        """pythonfmu's log, and the call's status raised to the message's in the shim's
+        cell: the FMI call answers the worst status it logged (fmi2Error for an error)."""
+        super().log(msg, status, category)
+        cell = self._cell
+        if cell is not None and status.value > cell.value:
+            cell.value = status.value
+
+    def _refuse(self, msg: str) -> None:
+        """An error the current call must answer: fmi2Error through the shim; under
+        pythonfmu's binary alone (no shim: Windows, or built without a C compiler) an
+        exception, which pythonfmu answers with fmi2Fatal. Never fmi2OK."""
+        self._error(msg)
+        if self._cell is None:
+            raise RuntimeError(msg)
+
+    def _guarded(self, call: str, method: Any, vrs: list[int], *args: Any) -> Any:
+        """A getter or setter of pythonfmu for value references that may not be of this
+        FMU or of that type: an error naming them instead of pythonfmu's fmi2Fatal."""
+        try:
+            return method(vrs, *args)
+        except (KeyError, TypeError) as e:
+            self._refuse(f"{call}: value references {list(vrs)}: {_describe(e)}")
+            return [0] * len(vrs) if call.startswith("get") else None
+
+    def set_string(self, vrs: list[int], values: list[str]) -> None:
+        if len(vrs) == 1 and vrs[0] == CELL_VR:  # the shim's cell (pythonfmu_shim.c)
+            self._cell = ctypes.c_int.from_address(int(values[0].rsplit(" ", 1)[1], 16))
+            return
+        self._guarded("setString", super().set_string, vrs, values)
+
+    def set_integer(self, vrs: list[int], values: list[int]) -> None:
+        self._guarded("setInteger", super().set_integer, vrs, values)
+
+    def set_boolean(self, vrs: list[int], values: list[bool]) -> None:
+        self._guarded("setBoolean", super().set_boolean, vrs, values)
+
+    def get_integer(self, vrs: list[int]) -> list[int]:
+        return self._guarded("getInteger", super().get_integer, vrs)
+
+    def get_boolean(self, vrs: list[int]) -> list[bool]:
+        return self._guarded("getBoolean", super().get_boolean, vrs)
+
+    def get_string(self, vrs: list[int]) -> list[str]:
+        out = self._guarded("getString", super().get_string, vrs)
+        return [str(v) for v in out]
 
     # ---- get/set -------------------------------------------------------------------------
     def _real_output(self, name: str) -> float:
@@ -230,7 +297,7 @@ class ContactSlave(Fmi2Slave):
         for vr, value in zip(vrs, values, strict=True):
             slot = slots.get(vr)
             if slot is None:
-                super().set_real([vr], [value])
+                self._guarded("setReal", super().set_real, [vr], [value])
                 continue
             name, lo, hi, open_lo = slot
             if not (
@@ -258,7 +325,7 @@ class ContactSlave(Fmi2Slave):
                 read = self._fast_reads[key] = itemgetter(*(self._fast_vr[vr] for vr in key))
             if read is not None:
                 return list(read(self._fast_out)) if len(key) > 1 else [read(self._fast_out)]
-        return super().get_real(vrs)
+        return self._guarded("getReal", super().get_real, vrs)
 
     def _inputs(self) -> dict[str, float]:
         return dict(self._in)
@@ -377,8 +444,12 @@ class ContactSlave(Fmi2Slave):
         return out
 
     def _refresh(self) -> None:
-        """Direct feedthrough: outputs for the current inputs (kept while inputs are bad)."""
-        if any(self._causality.get(n) == fv.INPUT for n in self._bad):
+        """Direct feedthrough: outputs for the current inputs. Where they cannot be had
+        (an input held invalid, a failing evaluation) the call answers fmi2Error: the
+        outputs kept are those of the last good inputs, never served as fmi2OK."""
+        bad = [m for n, m in self._bad.items() if self._causality.get(n) == fv.INPUT]
+        if bad:
+            self._refuse("no outputs for the current inputs: " + "; ".join(bad))
             return
         snap = self._model.snapshot()
         try:
@@ -387,7 +458,7 @@ class ContactSlave(Fmi2Slave):
             self._dirty = False
         except Exception as e:
             self._model.restore(snap)
-            self._error(f"outputs not updated for the new inputs: {_describe(e)}")
+            self._refuse(f"no outputs for the current inputs: {_describe(e)}")
 
     # ---- FMI calls --------------------------------------------------------------------------
     def setup_experiment(
@@ -400,7 +471,22 @@ class ContactSlave(Fmi2Slave):
             self._error(f"startTime = {start_time!r} is invalid: must be finite; using 0")
 
     def exit_initialization_mode(self) -> None:
-        self._build()
+        """The model set up from the parameters and inputs; a model that cannot start
+        answers fmi2Error (with the reasons logged) so that the importer stops."""
+        self._init_problem = None
+        for problem in native.PROBLEMS:
+            self.log(problem, Fmi2Status.warning)
+        if not self._build():
+            self._init_problem = "; ".join(self._bad.values()) or "see the messages above"
+            self._refuse(f"exitInitializationMode: the model cannot start: {self._init_problem}")
+
+    def terminate(self) -> None:
+        """No step after this: the compiled step's calls give way to the Python ones,
+        which refuse it."""
+        self._terminated = True
+        self._fast_step = None
+        for name in _FMI_CALLS:
+            self.__dict__.pop(name, None)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         step = self._fast_step
@@ -408,7 +494,7 @@ class ContactSlave(Fmi2Slave):
             t, h = current_time, step_size
             if (
                 0.0 < h < _INF
-                and abs(t - self._time) <= TIME_RTOL * max(1.0, abs(t), h)
+                and abs(t - self._time) <= TIME_RTOL * max(abs(t), abs(self._time))
                 and step(h) == 0
             ):
                 self._time, self._dirty, self._out_stale = t + h, False, True
@@ -422,17 +508,25 @@ class ContactSlave(Fmi2Slave):
             return self._discard(f"doStep discarded: {_describe(e)}")
 
     def _do_step(self, t: float, h: float) -> bool:
+        if self._terminated or self._model is None:
+            why = (
+                "after fmi2Terminate"
+                if self._terminated
+                else "before the model is initialised (fmi2ExitInitializationMode "
+                + ("failed: " + self._init_problem if self._init_problem else "not called")
+                + ")"
+            )
+            self._error(f"doStep at t = {t!r} refused: called {why}")
+            return False
         if not (math.isfinite(h) and h > 0.0):
             return self._discard(
                 f"communicationStepSize = {h!r} is invalid: must be > 0 and finite"
             )
-        if not math.isfinite(t) or abs(t - self._time) > TIME_RTOL * max(1.0, abs(t), h):
+        if not math.isfinite(t) or abs(t - self._time) > TIME_RTOL * max(abs(t), abs(self._time)):
             return self._discard(
                 f"currentCommunicationPoint = {t!r} is invalid: must be the FMU's time "
                 f"{self._time!r}"
             )
-        if self._model is None and not self._build():
-            return self._discard(f"doStep at t = {t!r} discarded: the model is not initialised")
         if self._bad:
             return self._discard(
                 f"doStep at t = {t!r} discarded, state unchanged: " + "; ".join(self._bad.values())
@@ -474,28 +568,108 @@ class ContactSlave(Fmi2Slave):
         )
 
     def _set_fmu_state(self, state: dict[str, Any] | state_bytes.Unreadable) -> None:
-        if isinstance(state, state_bytes.Unreadable):
-            msg = f"the FMU state given to setFMUstate is refused: {state.reason}"
-            self._fast_pull()  # the state stays; doSteps are refused until a valid one
-            self._bad[_STATE] = msg
-            self._error(msg + " (state unchanged; doStep refused until a valid state is set)")
+        """All or nothing: the state is checked whole (its fields, every value against
+        its declaration, the model rebuilt and restored, the outputs finite and within
+        Coulomb's bound) before any part of it is applied; a state refused answers
+        fmi2Error and leaves the instance as it was."""
+        self._fast_pull()
+        try:
+            problem = self._apply_state(state)
+        except Exception as e:  # whatever a damaged state makes fail: refused, not Fatal
+            problem = _describe(e)
+        if problem is None:
+            self._bad.pop(_STATE, None)
             return
-        s = copy.deepcopy(state)
-        self._time, self._values, self._bad = s["time"], s["values"], s["bad"]
+        msg = f"the FMU state given to setFMUstate is refused: {problem}"
+        if self._cell is None:  # no fmi2Error to answer with: refuse the steps instead
+            self._bad[_STATE] = msg
+            msg += " (doStep refused until a valid state is set)"
+        self._error(msg + "; the instance's state is unchanged")
+
+    def _apply_state(self, state: Any) -> str | None:
+        """Apply ``state`` if it is a whole, admissible state of this FMU; else the
+        reason, with nothing applied."""
+        if isinstance(state, state_bytes.Unreadable):
+            return state.reason
+        if not isinstance(state, dict) or set(state) != _STATE_FIELDS:
+            return "not a state of this FMU (its fields differ)"
+        t, values, out, dirty = state["time"], state["values"], state["out"], state["dirty"]
+        if type(t) is not float or not math.isfinite(t):
+            return f"its time {t!r} is not a finite float"
+        if type(dirty) is not bool:
+            return f"its flag {dirty!r} is not a bool"
+        if not isinstance(values, dict) or set(values) != set(self._values):
+            return "its variables differ from this FMU's"
+        bad = {}
+        for n, v in values.items():
+            string = self._vars[n].type == "String"
+            if isinstance(v, str) != string or isinstance(v, bool):
+                return f"its value of {n}, {v!r}, is not a {'string' if string else 'number'}"
+            if (problem := self.cfg.check(n, v)) is not None:
+                bad[n] = f"{n} = {v!r} is invalid: must be {problem}"
+        recorded = state["bad"]
+        if not isinstance(recorded, dict) or set(recorded) - {_STATE} != set(bad):
+            return "its record of invalid values does not match its values"
+        if not isinstance(out, dict) or set(out) != set(self._out):
+            return "its outputs differ from this FMU's"
+        for n, v in out.items():
+            if type(v) is not float or not math.isfinite(v):
+                return f"its output {n} = {v!r} is not a finite float"
+        model, params = None, None
+        if state["model"] is not None:
+            model, params = self._state_model(state["model"], values, bad, t)
+            if isinstance(model, str):
+                return model
+            bound = _coulomb_excess(out, values.get("mu"), getattr(model, "P", None))
+            if bound is not None:
+                self._restore_own(model)
+                return bound
+        # checked: apply
+        self._time, self._values, self._bad = t, copy.deepcopy(values), bad
         self._in = self._input_values()
-        if s["model"] is None:
-            self._model = self._model_params = None
-        else:
-            params, snap = s["model"]
-            if self._model is None or params != self._model_params:
-                module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
-                self._model = module.build(
-                    self.cfg, params, self._inputs(), self._time, self._data_dir()
-                )
-                self._model_params = params
-            self._model.restore(snap)
-        self._out, self._dirty = s["out"], s["dirty"]
+        self._model, self._model_params = model, params
+        self._out, self._dirty = dict(out), dirty
         self._fast_enable()
+        return None
+
+    def _state_model(
+        self, saved: Any, values: dict[str, Any], bad: dict[str, str], t: float
+    ) -> tuple[Any, Any]:
+        """(model at the saved snapshot, its parameters), without touching this
+        instance's model unless it is the one to restore (then undone on failure); or
+        (reason, None)."""
+        if not isinstance(saved, tuple | list) or len(saved) != 2:
+            return "its model part is not (parameters, snapshot)", None
+        params, snap = saved
+        own = {n: v for n, v in values.items() if self._causality[n] == fv.PARAMETER}
+        if params != own or any(n in bad for n in own):
+            return "its model's parameters differ from its values or are invalid", None
+        if self._model is not None and params == self._model_params:
+            model = self._model
+            self._undo = model.snapshot()
+        else:  # built at start values where the state holds an invalid input
+            inputs = {
+                n: (self.cfg.start(self._vars[n]) if n in bad else v)
+                for n, v in values.items()
+                if self._causality[n] == fv.INPUT
+            }
+            module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
+            model = module.build(self.cfg, dict(params), inputs, t, self._data_dir())
+            self._undo = None
+        try:
+            model.restore(copy.deepcopy(snap))
+            self._collect(model.outputs())
+        except Exception as e:
+            self._restore_own(model)
+            return f"its model state cannot be restored ({_describe(e)})", None
+        return model, dict(params)
+
+    def _restore_own(self, model: Any) -> None:
+        """Undo a refused state's restore into this instance's own model."""
+        if model is self._model and self._undo is not None:
+            model.restore(self._undo)
+            if self._fast is not None:
+                self._fast_push()
 
     @staticmethod
     def _fmu_state_to_bytes(state: dict[str, Any]) -> bytes:
@@ -504,6 +678,16 @@ class ContactSlave(Fmi2Slave):
     @staticmethod
     def _fmu_state_from_bytes(data: bytes) -> dict[str, Any] | state_bytes.Unreadable:
         return state_bytes.loads(data, _PACKAGE)
+
+
+def _coulomb_excess(out: dict[str, float], mu: Any, P: Any) -> str | None:
+    """Why outputs break Coulomb's bound abs(T) <= mu P (rounding allowed), or None."""
+    if "Tx" not in out or not isinstance(P, float) or not isinstance(mu, float):
+        return None
+    T = math.hypot(out["Tx"], out.get("Ty", 0.0))
+    if T <= mu * P * (1.0 + 1e-12):
+        return None
+    return f"its outputs break Coulomb's bound: abs(T) = {T!r} N > mu P = {mu * P!r} N"
 
 
 def _describe(e: Exception) -> str:

@@ -127,6 +127,13 @@ def fmi_name() -> str:
     return f"_fmi_{key}{sysconfig.get_config_var('EXT_SUFFIX')}"
 
 
+# Why a compiled part that was there could not be used (a file that does not load: a
+# damaged copy, or one needing a newer C library than the host's); the FMU adapter logs
+# them as warnings. Without its C source (an FMU that does not carry it) a part is
+# simply absent: that is no problem to report.
+PROBLEMS: list[str] = []
+
+
 def compile_to(target: Path, source: Path = SOURCE, flags: tuple[str, ...] = CFLAGS) -> Path:
     """Compile ``source`` into ``target`` (atomically); CalledProcessError/OSError on
     failure."""
@@ -159,10 +166,14 @@ VENDORED = __name__.split(".")[0] != "contact_fmu"
 _LOADED: dict[str, Any] = {}
 
 
-def _find(name: str, compile_fn: Any) -> Path | None:
-    """The file ``name`` next to this one or in the cache, else compiled into the cache;
-    None when disabled, not on Linux, or not to be had."""
+def _find(name_fn: Any, compile_fn: Any) -> Path | None:
+    """The file ``name_fn()`` next to this one or in the cache, else compiled into the
+    cache; None when disabled, not on Linux, or not to be had."""
     if os.environ.get("CONTACT_FMU_NATIVE", "1") == "0" or not sys.platform.startswith("linux"):
+        return None
+    try:
+        name = name_fn()
+    except OSError:  # its C source is not there (not carried by this FMU)
         return None
     places = (Path(__file__).with_name(name),) + (() if VENDORED else (_cache_dir() / name,))
     for path in places:
@@ -180,8 +191,8 @@ def library() -> Any:
     """The loaded kernel, or None (disabled, not on Linux, or no compiler)."""
     if "stepper" in _LOADED:
         return _LOADED["stepper"]
-    path = _find(library_name(), compile_to)
-    lib = _LOADED["stepper"] = None if path is None else ctypes.CDLL(str(path))
+    path = _find(library_name, compile_to)
+    lib = _LOADED["stepper"] = None if path is None else _load(path, ctypes.CDLL)
     if lib is None:
         return None
     lib.cf_advance.argtypes = [
@@ -209,19 +220,26 @@ def library() -> Any:
 def fmi_module() -> Any:
     """The loaded fmi.c extension, or None (as ``library``, or no Python headers)."""
     if "fmi" not in _LOADED:
-        path = _find(fmi_name(), compile_fmi_to)
-        module = None
-        if path is not None:
-            try:
-                spec = spec_from_file_location(
-                    FMI_MODULE, path, loader=ExtensionFileLoader(FMI_MODULE, str(path))
-                )
-                module = module_from_spec(spec)
-                spec.loader.exec_module(module)
-            except (ImportError, OSError):
-                module = None
-        _LOADED["fmi"] = module
+        path = _find(fmi_name, compile_fmi_to)
+        _LOADED["fmi"] = None if path is None else _load(path, _import_extension)
     return _LOADED["fmi"]
+
+
+def _import_extension(path: str) -> Any:
+    spec = spec_from_file_location(FMI_MODULE, path, loader=ExtensionFileLoader(FMI_MODULE, path))
+    module = module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _load(path: Path, loader: Any) -> Any:
+    """``loader(path)``, or None with the reason in PROBLEMS: a file that is there but
+    does not load leaves that part to Python (same results, slower)."""
+    try:
+        return loader(str(path))
+    except (ImportError, OSError) as e:
+        PROBLEMS.append(f"{path.name} cannot be loaded ({e}): that part runs in Python")
+        return None
 
 
 class Kernel:

@@ -7,7 +7,7 @@
  * common path and hands everything else to the adapter's own method, unchanged:
  *
  *   do_step(t, h)        no input held bad, 0 < h < inf, t the FMU's time (relative
- *                        tolerance rtol), cf_body_step OK: the FMU's time advanced,
+ *                        tolerance rtol of max(|t|, time)), cf_body_step OK: the FMU's time advanced,
  *                        outputs marked stale, True. Otherwise the Python step.
  *   set_real(vrs, vals)  a float, finite and in the declared range of a Real input:
  *                        stored in the adapter's _values and _in, cleared from _bad,
@@ -107,7 +107,7 @@ static PyObject *do_step(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
     double time = PyFloat_AsDouble(now);
     Py_DECREF(now);
     if (time == -1.0 && PyErr_Occurred()) return NULL;
-    double scale = fmax(1.0, fmax(fabs(t), h));
+    double scale = fmax(fabs(t), fabs(time)); /* slave.TIME_RTOL: ulps of t */
     if (bad == 0 && 0.0 < h && h < INFINITY && fabs(t - time) <= b->rtol * scale &&
         b->step(b->params, b->state, b->io, h) == 0) {
         PyObject *next = PyFloat_FromDouble(t + h);

@@ -36,7 +36,10 @@ class Instance:
         start_values: dict[str, Any] | None = None,
         start_time: float = 0.0,
         unzip_dir: str | Path | None = None,
+        initialise: bool = True,
     ) -> None:
+        """Instantiated, start values set in initialisation mode, and (``initialise``)
+        initialised; otherwise ``initialise()`` ends initialisation mode."""
         self._own_dir = unzip_dir is None
         self.dir = Path(unzip_dir or tempfile.mkdtemp(prefix="fmu-"))
         if self._own_dir:
@@ -66,6 +69,11 @@ class Instance:
         self.fmu.enterInitializationMode()
         for k, v in (start_values or {}).items():
             self.set(k, v)
+        if initialise:
+            self.initialise()
+
+    def initialise(self) -> None:
+        """fmi2ExitInitializationMode (fmpy raises FMICallException above Warning)."""
         self.fmu.exitInitializationMode()
 
     def _log(self, env, instance, status, category, message) -> None:
