@@ -54,6 +54,16 @@ class Body:
         nonnegative("Iy", self.Iy)
         if self.Iz is not None:
             positive("Iz", self.Iz)
+        # A1, A2 (Eq. 23) divide by M Rx^2 + Iy: it must neither underflow to 0 nor
+        # overflow (each value alone admissible, e.g. Rx = 5e-324 with Iy = 0)
+        inertia = self.M * self.Rx**2 + self.Iy
+        if not (0.0 < self.M * self.Rx**2 < math.inf and inertia < math.inf):
+            raise InputError(
+                "M Rx^2 + Iy",
+                inertia,
+                f"positive and finite with M Rx^2 > 0 (M = {self.M!r}, Rx = {self.Rx!r}, "
+                f"Iy = {self.Iy!r})",
+            )
 
     @classmethod
     def from_eta(cls, M: float, Rx: float, eta: float, Iz: float | None = None) -> Body:

@@ -553,12 +553,17 @@ void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
     o[O_REGIME] = saturated(p, Vx, vx) ? 1.0 : 0.0;
 }
 
+#define CF_LOAD_LIMIT 1e9 /* integrator.LOAD_LIMIT */
+
 /* BodyModel.step (inputs held, h > 0 checked by the caller) and the outputs, all
  * finite; CF_FALLBACK with *y and b->out unchanged for whatever Python must do: a new
  * load P (the law's ellipse, Eq. 34), the cap on internal steps (a note to log), a path
  * cf_advance leaves out, a non-finite output (the discard and its message). */
 int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
     if (b->P != p->P) return CF_FALLBACK;
+    /* integrator.LOAD_LIMIT (and NaN): Python refuses the loads with a message */
+    double cap = CF_LOAD_LIMIT * p->mu * p->P;
+    if (!(fabs(b->Fx_ex) <= cap && fabs(b->My_ex) <= cap * p->Rx)) return CF_FALLBACK;
     double q = ceil(h / b->h_max * (1.0 - b->substep_slack));
     if (!(q < b->max_substeps)) return CF_FALLBACK; /* at the cap (or NaN): BodyModel */
     int n = q < 1.0 ? 1 : (int)q;
