@@ -503,3 +503,185 @@ def test_both_libraries_build_where_a_compiler_and_python_headers_are():
         pytest.skip("no C compiler or Python headers")
     assert native.library() is not None
     assert native.fmi_module() is not None
+
+
+# ---- every exported function of stepper.c on extreme doubles ------------------------------
+EXTREME = (6e306, 1.2e308, -1.7e308, math.inf, -math.inf, math.nan, 0.0, 5e-324)
+
+
+def _raw():
+    """A second handle on the stepper: the same code, with cf_layer_forces and
+    cf_strip_march answering their status (the package's handle ignores it)."""
+    import ctypes
+
+    lib = ctypes.CDLL(native.library()._name)
+    for name in ("cf_layer_forces", "cf_strip_march"):
+        getattr(lib, name).argtypes = getattr(native.library(), name).argtypes
+        getattr(lib, name).restype = ctypes.c_int
+    for name in ("cf_advance", "cf_body_step", "cf_advance_vector"):
+        getattr(lib, name).argtypes = getattr(native.library(), name).argtypes
+        getattr(lib, name).restype = ctypes.c_int
+    return lib
+
+
+def _scalar_kernel(method):
+    a, _ = _pair(method, 3.0, 5.0)
+    a._kernel.write(a)
+    return a
+
+
+def test_compiled_step_answers_not_ok_for_extreme_loads_and_steps():
+    """A load or step beyond what a double step can hold (My_ex = 6e306 made the drive
+    2 A1 My_ex/Rx overflow; with the state at inf the zero spin 0 * Vx became NaN and the
+    scalar path marched a spin grid it does not have: a segfault) or a non-finite one:
+    cf_advance answers CF_FALLBACK with the state untouched, or OK with a finite state."""
+    import ctypes
+
+    lib = _raw()
+    for method in ("full", "quasistationary"):
+        a = _scalar_kernel(method)
+        k = a._kernel
+        before = bytes(k._state)
+        for Fx, My, h in itertools.product(EXTREME, EXTREME, (*EXTREME, -1e-4, 1e-4)):
+            for n in (0, -3, 1, 4):
+                rc = lib.cf_advance(ctypes.byref(k._params), ctypes.byref(k._state), h, Fx, My, n)
+                s = k._state
+                if rc == native.OK:
+                    assert all(math.isfinite(v) for v in (s.Vx, s.vx, s.t, s.dv, s.Tx, s.Ty, s.Mz))
+                    assert h > 0 and n >= 1
+                else:
+                    assert rc == 1 and bytes(s) == before
+                ctypes.memmove(ctypes.byref(s), before, len(before))
+
+
+def test_compiled_body_step_answers_not_ok_for_extreme_inputs_and_states():
+    """cf_body_step (the pythonfmu FMU's doStep in C) with every input of the body FMU
+    and every state double extreme: CF_FALLBACK and nothing changed, or OK and finite
+    outputs."""
+    import ctypes
+
+    lib = _raw()
+    model = BodyModelFor(_scalar_kernel("full"))
+    fb = model.fast()
+    fb.push()
+    ptrs = fb._pointers
+    state, io = fb._kernel._state, fb.io
+    io.P, io.Fx_ex, io.My_ex = CONTACT.P, 0.2 * F, 0.0
+    assert lib.cf_body_step(*ptrs, 1e-4) == native.OK  # the covered path
+    saved = bytes(state), bytes(io)
+    fields = [(io, n) for n in ("P", "Fx_ex", "My_ex", "h_max")] + [
+        (state, n) for n in ("Vx", "vx", "t", "dv", "Tx")
+    ]
+    for (obj, name), x, h in itertools.product(fields, EXTREME, (1e-4, 0.0, -1e-4, math.nan)):
+        setattr(obj, name, x)
+        mid = bytes(state), bytes(io)
+        rc = lib.cf_body_step(*ptrs, h)
+        if rc == native.OK:
+            assert all(math.isfinite(v) for v in io.out)
+        else:
+            assert rc == 1 and (bytes(state), bytes(io)) == mid
+        ctypes.memmove(ctypes.byref(state), saved[0], len(saved[0]))
+        ctypes.memmove(ctypes.byref(io), saved[1], len(saved[1]))
+    assert lib.cf_body_step(*ptrs, 1e-4) == native.OK  # usable after all that
+
+
+def BodyModelFor(rb):
+    from contact_fmu.fmu.body_model import BodyModel
+
+    return BodyModel(rb, 2.5e-5, rb.law.P)
+
+
+@pytest.mark.parametrize("lateral", VECTOR_PATHS)
+def test_compiled_vector_step_answers_not_ok_for_extreme_loads(lateral):
+    """cf_advance_vector (Vy and/or Omega_z as unknowns, the spin law's march) with
+    extreme loads, steps and states: CF_FALLBACK with the state untouched, or OK and
+    finite."""
+    import ctypes
+
+    lib = _raw()
+    body = Body.from_eta(1.0, 0.05, 3.0, Iz=2e-3)
+    rb = RollingBody(CONTACT, body, lateral, "full", Vx0=5.0, Omega_y0=5.0 / 0.05 * 0.999)
+    k = rb._kernel
+    k.write(rb)
+    before = bytes(k._state)
+    L = (ctypes.c_double * 4)()
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        L[:] = [float(rng.choice(EXTREME)) if rng.uniform() < 0.5 else 0.1 * F for _ in range(4)]
+        field = str(rng.choice(["Vx", "vx", "Vy", "Oz", "dv"]))
+        setattr(k._state, field, float(rng.choice(EXTREME)))
+        mid = bytes(k._state)
+        h = float(rng.choice((*EXTREME, 1e-4)))
+        rc = lib.cf_advance_vector(ctypes.byref(k._params), ctypes.byref(k._state), h, L, 2)
+        s = k._state
+        if rc == native.OK:
+            assert all(math.isfinite(v) for v in (s.Vx, s.vx, s.Vy, s.Oz, s.Tx, s.Ty, s.Mz))
+        else:
+            assert rc == 1 and bytes(s) == mid
+        ctypes.memmove(ctypes.byref(s), before, len(before))
+
+
+def test_compiled_layer_law_and_march_answer_not_ok_for_extreme_inputs():
+    """cf_layer_forces and cf_strip_march (spin included) on every combination of
+    extreme inputs: no crash, and either finite results or CF_FALLBACK."""
+    from contact_fmu.layer import SPIN_GRID
+
+    lib = _raw()
+    law = ex.contact()
+    law.forces(np.array([1e-3]), np.array([0.0]), np.array([0.5]), np.array([5.0]))  # params
+    strips = law.native_strips()
+    grid = law._grid(*SPIN_GRID)
+    field = grid.y.size * grid.x.size
+    vals = (*EXTREME, 1e-3, -2.0)
+    combos = np.array(list(itertools.product(vals, repeat=4)))
+    vx, vy, phi, Vx = (np.ascontiguousarray(combos[:, i]) for i in range(4))
+    n = vx.size
+    out = np.empty((n, 3))
+    rc = lib.cf_layer_forces(
+        law._native_params, strips, n, *(a.ctypes.data for a in (vx, vy, phi, Vx)), out.ctypes.data
+    )
+    good = np.isfinite(combos).all(axis=1) & (Vx != 0.0)
+    assert rc == 1  # some inputs are not finite
+    assert np.isnan(out[~good]).all()
+    # finite inputs: finite forces (|T| <= mu P), or NaN where a march overflowed; with
+    # subnormal slips the direction v/|v| rounds off the unit circle (in Python's
+    # _forces_scalar alike): the bound only for zero or normal inputs
+    normal = ((combos == 0.0) | (np.abs(combos) >= 2.2250738585072014e-308)).all(axis=1)
+    ok = good & normal & np.isfinite(out).all(axis=1)
+    assert np.all(np.hypot(out[ok, 0], out[ok, 1]) <= F * (1 + 1e-12))
+    for row in range(0, n, 97):  # the march field by field, a sample of the combinations
+        one = [np.ascontiguousarray(a[row : row + 1]) for a in (vx, vy, Vx, phi)]
+        tau = np.empty(2 * field)
+        slip = np.empty(field, np.uint8)
+        rc = lib.cf_strip_march(strips, 1, *(a.ctypes.data for a in one), tau.ctypes.data,
+                                slip.ctypes.data)  # fmt: skip
+        assert rc == 1 or np.isfinite(tau).all()
+        assert rc in (0, 1)
+
+
+def glibc_needed(path) -> tuple[int, ...]:
+    """The newest GLIBC_x.y symbol version the shared library at ``path`` needs
+    (``objdump -T``), as a tuple; () if none."""
+    import re
+    import subprocess
+
+    text = subprocess.run(["objdump", "-T", str(path)], capture_output=True, text=True, check=True)
+    found = {tuple(map(int, v.split("."))) for v in re.findall(r"GLIBC_([0-9.]+)\)", text.stdout)}
+    return max(found, default=())
+
+
+# manylinux2014's floor (CentOS 7); RHEL/Rocky 8 have 2.28, 9 has 2.34
+GLIBC_FLOOR = (2, 17)
+
+
+@pytest.mark.skipif(shutil.which("objdump") is None, reason="no objdump")
+def test_shipped_libraries_need_no_c_library_newer_than_2_17():
+    """The stepper and the FMI calls' extension (both shipped in every pythonfmu FMU)
+    load on hosts with glibc 2.17: hypot and pow are bound to their old symbol versions
+    (stepper.c), which compute the same values."""
+    paths = [native.library()._name]
+    if native.fmi_module() is not None:
+        paths.append(native.fmi_module().__file__)
+    for path in paths:
+        need = glibc_needed(path)
+        assert (2, 2) <= need <= GLIBC_FLOOR, (path, need)

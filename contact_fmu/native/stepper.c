@@ -24,8 +24,28 @@
 #include <math.h>
 #include <stddef.h>
 
+/* The C library's oldest versions of the symbols whose default version is newer than
+ * the floor of manylinux2014 (glibc 2.17): hypot (2.35) and pow (2.29) were re-versioned
+ * when their errno handling changed, not their values (the compat entries wrap the same
+ * __ieee754_hypot and __pow), so the binaries load on RHEL/Rocky 8-9 and older
+ * (tests/test_native.py reads the versions they need). */
+#if defined(__GLIBC__) && defined(__x86_64__)
+__asm__(".symver hypot,hypot@GLIBC_2.2.5");
+__asm__(".symver pow,pow@GLIBC_2.2.5");
+#elif defined(__GLIBC__) && defined(__aarch64__)
+__asm__(".symver hypot,hypot@GLIBC_2.17");
+__asm__(".symver pow,pow@GLIBC_2.17");
+#endif
+
 #define CF_OK 0
 #define CF_FALLBACK 1
+
+/* all n doubles finite */
+static int finite_all(const double *x, int n) {
+    for (int i = 0; i < n; i++)
+        if (!isfinite(x[i])) return 0;
+    return 1;
+}
 
 typedef struct {
     /* body: M (kg), Rx (m), A1, A2 (Eq. 23), m_slip = M A2 (kg) */
@@ -477,21 +497,33 @@ static int step(const cf_params *p, cf_state *y, double h, double Fx, double My)
 /* RollingBody.advance with held loads: h (s) in n equal steps; the quasistationary
  * method takes one step for the interval unless it ends in gross sliding. On
  * CF_FALLBACK *y is unchanged. */
+static int state_finite(const cf_state *y) {
+    const double v[7] = {y->Vx, y->vx, y->t, y->dv, y->Tx, y->Ty, y->Mz};
+    return finite_all(v, 7);
+}
+
 int cf_advance(const cf_params *p, cf_state *y, double h, double Fx, double My, int n) {
+    /* what no step can take: a step not in (0, inf), a non-finite load or state */
+    if (!(h > 0.0 && h <= DBL_MAX) || n < 1 || !(h / n > 0.0) || !isfinite(Fx) ||
+        !isfinite(My) || !state_finite(y))
+        return CF_FALLBACK;
     cf_state w = *y;
     if (n > 1 && p->quasistationary && !w.sliding && admissible(p, Fx, My)) {
-        if (step(p, &w, h, Fx, My)) return CF_FALLBACK;
+        if (step(p, &w, h, Fx, My) || !state_finite(&w)) return CF_FALLBACK;
         if (!w.sliding) {
             w.t = y->t + h;
+            if (!isfinite(w.t)) return CF_FALLBACK;
             *y = w;
             return CF_OK;
         }
         w = *y;
     }
     double dt = h / n;
+    /* a state that overflowed is not served: each step's end finite */
     for (int k = 0; k < n; k++)
-        if (step(p, &w, dt, Fx, My)) return CF_FALLBACK;
+        if (step(p, &w, dt, Fx, My) || !state_finite(&w)) return CF_FALLBACK;
     w.t = y->t + h;
+    if (!isfinite(w.t)) return CF_FALLBACK;
     *y = w;
     return CF_OK;
 }
@@ -560,7 +592,8 @@ void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
  * load P (the law's ellipse, Eq. 34), the cap on internal steps (a note to log), a path
  * cf_advance leaves out, a non-finite output (the discard and its message). */
 int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
-    if (b->P != p->P) return CF_FALLBACK;
+    if (b->P != p->P || !isfinite(b->P)) return CF_FALLBACK;
+    if (!(h > 0.0 && h <= DBL_MAX && b->h_max > 0.0)) return CF_FALLBACK;
     /* integrator.LOAD_LIMIT (and NaN): Python refuses the loads with a message */
     double cap = CF_LOAD_LIMIT * p->mu * p->P;
     if (!(fabs(b->Fx_ex) <= cap && fabs(b->My_ex) <= cap * p->Rx)) return CF_FALLBACK;
@@ -631,6 +664,10 @@ static void march_straight(const cf_strips *g, double vx, double vy, double Vx, 
 
 static void march_one(const cf_strips *g, double vx, double vy, double Vx, double phi,
                       double *tau, unsigned char *slip, double R[3]) {
+    if (g == NULL) { /* callers check; never a NULL grid dereferenced */
+        R[0] = R[1] = R[2] = NAN;
+        return;
+    }
     if (phi == 0.0 && tau == NULL) {
         march_straight(g, vx, vy, Vx, R);
         return;
@@ -682,22 +719,42 @@ static void march_one(const cf_strips *g, double vx, double vy, double Vx, doubl
 }
 
 /* march_one for n inputs: the fields tau and slip, (n x ny x nx). */
-void cf_strip_march(const cf_strips *g, int n, const double *vx, const double *vy,
-                    const double *Vx, const double *phi, double *tau, unsigned char *slip) {
+/* CF_FALLBACK (the fields then hold NaN for those inputs) where an input is not finite,
+ * Vx is 0 (standstill is numpy's) or a traction overflowed. */
+int cf_strip_march(const cf_strips *g, int n, const double *vx, const double *vy,
+                   const double *Vx, const double *phi, double *tau, unsigned char *slip) {
+    if (g == NULL || g->ny < 0 || g->nx < 0) return CF_FALLBACK;
     const size_t field = (size_t)g->ny * g->nx;
+    int status = CF_OK;
     for (int k = 0; k < n; k++) {
-        double R[3];
-        march_one(g, vx[k], vy[k], Vx[k], phi[k], tau + 2 * k * field, slip + k * field, R);
+        double R[3], *t = tau + 2 * (size_t)k * field;
+        const double in[4] = {vx[k], vy[k], Vx[k], phi[k]};
+        if (!finite_all(in, 4) || Vx[k] == 0.0) {
+            for (size_t e = 0; e < field; e++) t[2 * e] = t[2 * e + 1] = NAN, slip[k * field + e] = 1;
+            status = CF_FALLBACK;
+            continue;
+        }
+        march_one(g, vx[k], vy[k], Vx[k], phi[k], t, slip + (size_t)k * field, R);
+        if (!finite_all(t, (int)(2 * field)) || !finite_all(R, 3)) status = CF_FALLBACK;
     }
+    return status;
 }
 
 /* LayerContact.forces for n rolling inputs: the closed form without spin (forces above,
  * LayerContact._forces_scalar) plus, where phi != 0, the strip march with the spin less
  * the march without it. out: (Tx, Ty, Mz) per input. */
-void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double *vx,
-                     const double *vy, const double *phi, const double *Vx, double *out) {
+int cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double *vx,
+                    const double *vy, const double *phi, const double *Vx, double *out) {
+    int status = CF_OK;
     for (int k = 0; k < n; k++) {
-        double *T = out + 3 * k;
+        double *T = out + 3 * (size_t)k;
+        const double in[4] = {vx[k], vy[k], phi[k], Vx[k]};
+        /* CF_FALLBACK, NaN forces: a non-finite input, standstill, spin without a grid */
+        if (!finite_all(in, 4) || Vx[k] == 0.0 || (phi[k] != 0.0 && g == NULL)) {
+            T[0] = T[1] = T[2] = NAN;
+            status = CF_FALLBACK;
+            continue;
+        }
         forces(p, vx[k], vy[k], Vx[k], T);
         if (phi[k] != 0.0) {
             double with[3], without[3];
@@ -705,7 +762,9 @@ void cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double
             march_one(g, vx[k], vy[k], Vx[k], 0.0, NULL, NULL, without);
             for (int c = 0; c < 3; c++) T[c] += with[c] - without[c];
         }
+        if (!finite_all(T, 3)) status = CF_FALLBACK;
     }
+    return status;
 }
 
 /* ---- integrator.RollingBody._lobatto_vector: Vy and/or Omega_z as stage unknowns ---- */
@@ -734,6 +793,13 @@ typedef struct {
  * cf_layer_forces */
 static void law_at(const cf_params *p, const double y[4], double V, double T[3],
                    march_cache *c) {
+    /* a non-finite state (a step that overflowed) has no forces: NaN, which every
+     * caller's check turns into "not covered"; a spin without a spin grid likewise */
+    const cf_strips *g = (const cf_strips *)p->strips;
+    if (!finite_all(y, 4) || !isfinite(V) || (p->law == LAW_LAYER && y[3] != 0.0 && !g)) {
+        T[0] = T[1] = T[2] = NAN;
+        return;
+    }
     if (p->law == LAW_TABLE) {
         double o[4];
         table_scalar(p, y[1], y[2], y[3], V, o);
@@ -742,7 +808,6 @@ static void law_at(const cf_params *p, const double y[4], double V, double T[3],
     }
     forces(p, y[1], y[2], V, T);
     if (y[3] == 0.0) return;
-    const cf_strips *g = (const cf_strips *)p->strips;
     double with[3];
     march_one(g, y[1], y[2], V, y[3], NULL, NULL, with);
     if (!(c->valid && c->vx == y[1] && c->vy == y[2] && c->V == V)) {
@@ -1053,15 +1118,24 @@ static int qs_step(const cf_params *p, cf_vstate *w, double h, const double L[4]
 /* RollingBody.advance with Vy and/or Omega_z as unknowns (either method), loads
  * L = (Fx_ex, Fy_ex, My_ex, Mz_ex) held: h (s) in n equal steps. On CF_FALLBACK *y is
  * unchanged. */
+static int vstate_finite(const cf_vstate *y) {
+    const double v[9] = {y->Vx, y->vx, y->Vy, y->Oz, y->t, y->dv, y->Tx, y->Ty, y->Mz};
+    return finite_all(v, 9);
+}
+
 int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
     if (p->law == LAW_LAYER && p->strips == NULL) return CF_FALLBACK; /* no spin grid */
+    if (!(h > 0.0 && h <= DBL_MAX) || n < 1 || !(h / n > 0.0) || !finite_all(L, 4) ||
+        !vstate_finite(y))
+        return CF_FALLBACK;
     cf_vstate w = *y;
     if (p->quasistationary && n > 1 && !w.sliding && vadmissible(p, L)) {
         /* RollingBody.advance: rolling under held, admissible loads in one step, unless
          * that step ends in gross sliding */
-        if (qs_step(p, &w, h, L)) return CF_FALLBACK;
+        if (qs_step(p, &w, h, L) || !vstate_finite(&w)) return CF_FALLBACK;
         if (!w.sliding) {
             w.t = y->t + h;
+            if (!isfinite(w.t)) return CF_FALLBACK;
             *y = w;
             return CF_OK;
         }
@@ -1069,9 +1143,11 @@ int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *
     }
     double dt = h / n;
     for (int k = 0; k < n; k++)
-        if (p->quasistationary ? qs_step(p, &w, dt, L) : vstep(p, &w, dt, L, 0))
+        if ((p->quasistationary ? qs_step(p, &w, dt, L) : vstep(p, &w, dt, L, 0)) ||
+            !vstate_finite(&w))
             return CF_FALLBACK;
     w.t = y->t + h;
+    if (!isfinite(w.t)) return CF_FALLBACK;
     *y = w;
     return CF_OK;
 }
