@@ -202,6 +202,15 @@ class LayerField:
         law = self.law
         self.ell = law.a1 * np.sqrt(np.maximum(1.0 - (self.y / law.a2) ** 2, 0.0))  # Eq. (37)
         self._p_strip = law.p0 * (1.0 - (self.y / law.a2) ** 2)  # p at x = 0 (may be < 0)
+        # The strips' widths scaled so that the rule integrates the pressure exactly:
+        # int p dx along a strip is (4/3) p0 l^3/a1^2 (Eq. 33), and the sum over the
+        # strips is P exactly for strips laid over this a2 (the sine rule), but not
+        # once the load has moved the ellipse across them (a full-slip resultant
+        # reached 1.008 mu P after P fell from 1000 to 10 N). Scaled, the capacity
+        # sum w mu p is mu P, so abs(T) <= mu P holds for every field.
+        along = (4.0 / 3.0) * law.p0 * self.ell**3 / law.a1**2
+        held = float(np.dot(self.dy, along))
+        self._dy_w = self.dy * (law.P / held if held > 0.0 else 1.0)
 
     def _geometry(self, x: FloatArray) -> tuple[BoolArray, FloatArray]:
         """inside (ny, nx) and the cap mu p (Pa) at column positions x (nx,)."""
@@ -254,7 +263,7 @@ class LayerField:
             w[:, 1:] += 0.5 * dx * pair
             w[rows, j_lo] += x[j_lo] + ell
             w[rows, j_hi] += ell - x[j_hi]
-            return w * self.dy[:, None]
+            return w * self._dy_w[:, None]
         law = self.law
         c0 = law.mu * law.p0 / law.a1**2
         l2 = (self.ell**2)[:, None]
@@ -303,7 +312,7 @@ class LayerField:
             trail = _capped_linear(c0, l2[rows, 0], x[j], mj, side * slope, lo, lo + e)
             seg = np.where(sl[rows, j], cap_int, 0.5 * e * mj if is_lead else trail)
             w[rows, j] += np.where(mj > 0.0, seg * inv_m[rows, j], e)
-        return w * self.dy[:, None]
+        return w * self._dy_w[:, None]
 
     def set_load(self, P: float) -> None:
         """New normal load P (N): new ellipse and pressure (Eq. 34); the field is kept.
