@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -569,3 +570,32 @@ def test_state_bytes_admit_only_the_classes_a_state_holds():
     state = {"y": np.array([1.0, 2e-3, 0.0, 0.0]), "out": (1.5, np.float64(2.0), True)}
     back = state_bytes.loads(state_bytes.dumps(state, "contact_fmu"), "contact_fmu")
     assert back["out"] == state["out"] and np.array_equal(back["y"], state["y"])
+
+
+def test_fmu_state_is_checked_whole_and_refused_without_a_trace():
+    """Crafted states (NaN outputs, outputs beyond Coulomb's bound, a value of the
+    wrong type, a model snapshot that cannot be restored, another FMU's fields) answer
+    fmi2Error and change nothing; pythonfmu answered fmi2Fatal and left the instance
+    half restored, or accepted NaN outputs."""
+    b = loaded_body()
+    assert b.step()
+    good = b.s._get_fmu_state()
+    before = (b.outputs(), pickle.dumps(b.s._get_fmu_state()))
+
+    def crafted(**change):
+        return {**good, **change}
+
+    cases = [
+        (crafted(out={**good["out"], "Tx": math.nan}), "not a finite float"),
+        (crafted(out={**good["out"], "Tx": 10.0 * ex.mu * ex.P}), "Coulomb's bound"),
+        (crafted(values={**good["values"], "mu": "0.3"}), "is not a number"),
+        (crafted(model=(good["model"][0], "not a snapshot")), "cannot be restored"),
+        ({k: v for k, v in good.items() if k != "dirty"}, "fields differ"),
+        (crafted(values={k: v for k, v in good["values"].items() if k != "mu"}), "differ"),
+    ]
+    for state, reason in cases:
+        b.cell.value = OK
+        b.s._set_fmu_state(state)
+        assert b.status == ERROR and reason in b.messages[-1], b.messages[-1]
+        assert (b.outputs(), pickle.dumps(b.s._get_fmu_state())) == before
+    assert b.step()

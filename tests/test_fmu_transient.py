@@ -17,6 +17,7 @@ from pathlib import Path
 import fmpy
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 import fmu_build
@@ -25,7 +26,7 @@ from contact_fmu.dynamics import Lateral, Loads
 from contact_fmu.fmu.body_model import substeps
 from contact_fmu.fmu.body_transient import FIELD_COLUMNS
 from contact_fmu.scenario import load
-from contact_fmu.scenario.instance import DISCARD, FATAL, OK, Instance
+from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from contact_fmu.transient import TransientRollingBody
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -165,14 +166,24 @@ def test_field_file_is_the_steppers_field_at_the_requested_times(fmu, tmp_path):
         ("field_times", "1e-4, soon", "must be times in s separated by spaces or commas"),
     ],
 )
-def test_bad_parameter_gives_discard_naming_it_until_corrected(fmu, name, value, fragment):
-    """A bad grid, step or list of field times: doStep answers fmi2Discard with a logged
-    message naming the parameter and its value; corrected, the instance steps."""
-    with start(fmu, **{name: value}) as b:
-        assert b.step(H) == DISCARD
+def test_bad_parameter_fails_initialisation_naming_it_until_corrected(fmu, name, value, fragment):
+    """A bad grid, step or list of field times: fmi2Error (at its setter where its range
+    says so, at exitInitializationMode in any case) with a logged message naming the
+    parameter and its value; corrected, the model starts and steps."""
+    params = {**SCENE.cases[0].parameters, **SMALL}
+    with Instance(fmu, "transient", params, initialise=False) as b:
+        try:
+            b.set(name, value)
+        except FMICallException as e:
+            assert e.status == ERROR
+        with pytest.raises(FMICallException) as e:
+            b.initialise()
+        assert e.value.status == ERROR
         assert any(fragment in m for _, m in b.messages), b.messages
-        good = {**SCENE.cases[0].parameters, **SMALL, "field_times": ""}[name]
-        b.set(name, good)
+        assert b.step(H) == ERROR
+        b.set(name, {**params, "field_times": ""}[name])
+        b.initialise()
+        b.set("Fx_ex", F3)
         assert b.step(H) == OK and b.get("Tx") > 0.0
         assert all(s < FATAL for s, _ in b.messages)
 
@@ -187,7 +198,8 @@ def test_bad_input_and_unwritable_field_file_give_discard_and_keep_the_state(fmu
         for _ in range(3):
             assert b.step(H) == OK
         before = b.outputs()
-        b.set("Fx_ex", math.nan)
+        with pytest.raises(FMICallException):
+            b.set("Fx_ex", math.nan)
         assert b.step(H) == DISCARD
         assert any("Fx_ex = nan is invalid: must be finite" in m for _, m in b.messages)
         assert b.outputs() == before

@@ -474,9 +474,10 @@ class ContactSlave(Fmi2Slave):
         """The model set up from the parameters and inputs; a model that cannot start
         answers fmi2Error (with the reasons logged) so that the importer stops."""
         self._init_problem = None
-        for problem in native.PROBLEMS:
+        built = self._build()
+        for problem in native.PROBLEMS:  # the compiled parts it tried to load
             self.log(problem, Fmi2Status.warning)
-        if not self._build():
+        if not built:
             self._init_problem = "; ".join(self._bad.values()) or "see the messages above"
             self._refuse(f"exitInitializationMode: the model cannot start: {self._init_problem}")
 

@@ -1,0 +1,235 @@
+"""Regression tests of the FMUs under hostile input, broken hosts and damaged states.
+
+Each test is one failure seen when the built FMUs were driven call by call through
+fmpy's low-level API, as an importer's test bench would: a crash, fmi2Fatal where the
+standard wants fmi2Error, a silent fmi2OK, stale or wrong outputs served as fmi2OK. What
+may crash the process runs in a subprocess, so that a crash fails the test instead of
+ending the run.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import fmpy
+import pytest
+from fmpy.fmi1 import FMICallException
+
+import fmu_build
+from contact_fmu import examples as ex
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.scenario import load
+from contact_fmu.scenario.instance import DISCARD, ERROR, OK, Instance
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+MU_P = ex.mu * ex.P
+WARNING = 1
+
+
+def scene_fmu(name: str) -> Path:
+    return fmu_build.build(load(ROOT / "scenarios" / f"{name}.toml").config, OUT).path
+
+
+def full_fmu(mode: str) -> Path:
+    return fmu_build.build(ModelConfig.full(mode), OUT).path
+
+
+def run_isolated(code: str) -> subprocess.CompletedProcess:
+    """``code`` in a fresh interpreter (a crash is its exit status, not ours)."""
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+
+
+@pytest.mark.parametrize(
+    ("scene", "name", "value"),
+    [("fig13", "My_ex", 6e306), ("fig13", "Fx_ex", 1.2e308), ("brake", "My_ex", 6e306)],
+)
+def test_huge_finite_load_is_discarded_not_a_segfault(scene, name, value):
+    """The compiled thin-layer march segfaulted on a huge finite load; loads beyond
+    integrator.LOAD_LIMIT mu P are now refused at the step, naming the input."""
+    proc = run_isolated(
+        f"""
+        from contact_fmu.scenario.instance import Instance
+        with Instance({str(scene_fmu(scene))!r}, "huge") as b:
+            b.set({name!r}, {value!r})
+            print(b.step(1e-4), b.messages[-1][1])
+            b.set({name!r}, 0.0)
+            print(b.step(1e-4))
+        """
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    first, second = proc.stdout.splitlines()[-2:]
+    assert first.startswith(f"{DISCARD} ") and f"{name} = {value!r} is invalid" in first
+    assert second == str(OK)
+
+
+def test_momentum_balance_holds_or_the_moment_is_refused():
+    """fig13 with My_ex = 1e20 answered OK with Vx from 5.6 to 8.0 m/s in 1e-4 s (the
+    balance allows mu P h/M = 0.03 m/s)."""
+    h = 1e-4
+    with Instance(scene_fmu("fig13"), "balance") as b:
+        V0, Fx = b.get("Vx"), b.get("Fx_ex")
+        b.set("My_ex", 1e20)
+        assert b.step(h) == DISCARD
+        assert b.get("Vx") == V0
+        b.set("My_ex", 1e9 * MU_P * ex.Rx)  # at the limit: gross sliding, balance kept
+        assert b.step(h) == OK
+        # Eq. (8): M dVx = (Fx_ex - Tx) h with abs(Tx) <= mu P; LOAD_LIMIT's rounding
+        assert abs(ex.M * (b.get("Vx") - V0) - Fx * h) <= MU_P * h * (1 + 1e-5)
+
+
+def test_every_declared_input_of_every_full_fmu_works_with_non_zero_values():
+    """The full contact FMU logged FileNotFoundError (native/stepper.c, not carried by
+    a contact FMU) for Omega_z != 0 and kept old outputs: every input, non-zero."""
+    values = {"P": 900.0, "Fx_ex": 0.1 * MU_P, "Fy_ex": 0.1 * MU_P, "My_ex": -0.01,
+              "Mz_ex": 1e-4, "Vx": 5.0, "Vy": 0.002, "Omega_y": 99.9, "Omega_z": 0.5,
+              "Tx": 10.0}  # fmt: skip
+    for mode in ("body", "contact", "rigid_body"):
+        with Instance(full_fmu(mode), mode) as b:
+            inputs = [n for n, v in b.vars.items() if v.causality == "input"]
+            assert inputs
+            for n in inputs:
+                b.set(n, values[n])
+            assert b.step(1e-4) == OK, b.messages
+            out = b.outputs()
+            assert all(math.isfinite(v) for v in out.values()), out
+            assert all(s == OK for s, _ in b.messages), b.messages
+            if "Tx" in out:
+                assert math.hypot(out["Tx"], out.get("Ty", 0.0)) <= 0.3 * 900.0 * (1 + 1e-12)
+
+
+@pytest.mark.parametrize(("name", "value"), [("Vx", 1.797e308), ("P", 5e-324)])
+def test_contact_outputs_that_cannot_be_computed_are_an_error_not_stale(name, value):
+    """rail_creep served the previous outputs with OK after FloatingPointError (Vx =
+    1.797e308) or ZeroDivisionError (P = 5e-324); they break abs(T) <= mu P for the
+    new load. Now getReal answers fmi2Error until the inputs admit outputs again."""
+    with Instance(scene_fmu("rail_creep"), "stale") as c:
+        good = c.get(name)
+        c.get("Tx")
+        try:
+            c.set(name, value)
+        except FMICallException as e:  # a value outside the declared range
+            assert e.status == ERROR
+        with pytest.raises(FMICallException) as e:
+            c.get("Tx")
+        assert e.value.status == ERROR
+        assert "no outputs for the current inputs" in c.messages[-1][1]
+        c.set(name, good)
+        assert math.isfinite(c.get("Tx"))
+
+
+def test_transient_field_keeps_coulomb_bound_after_the_load_falls():
+    """fig12_transient answered abs(T) = 1.008 mu P with OK in gross sliding after P fell
+    from 1000 to 10 N: the strips' rule no longer integrated the new pressure."""
+    with Instance(scene_fmu("fig12_transient"), "bound", {"nx": 16, "ny": 8}) as b:
+        b.set("Fx_ex", 2000.0)  # beyond mu P: gross sliding
+        for P in (1000.0, 500.0, 100.0, 10.0):
+            b.set("P", P)
+            for _ in range(5):
+                assert b.step(2e-5) == OK
+                T = math.hypot(b.get("Tx"), b.get("Ty"))
+                assert T <= ex.mu * P * (1 + 1e-12), (P, T / (ex.mu * P))
+
+
+def test_communication_point_is_checked_in_ulps_of_t_not_in_h():
+    """After a step of 1e6 s, a point 5e-4 s off was accepted (tolerance 1e-9 h)."""
+    with Instance(scene_fmu("fig13"), "time") as b:
+        assert b.step(1e6) in (OK, WARNING)
+        assert b.step(1e-4, time=1e6 + 5e-4) == DISCARD
+        assert "currentCommunicationPoint" in b.messages[-1][1]
+        t = 1e6 + math.ulp(1e6)  # a master's rounding of the same time
+        assert b.step(1e-4, time=t) == OK
+
+
+def test_internal_step_cap_answers_warning():
+    """One doStep capped at MAX_SUBSTEPS internal steps answered fmi2OK with only a
+    logged note while the accuracy it promised (h_max) was not kept."""
+    with Instance(scene_fmu("fig13"), "cap", {"h_max": 1e-6}) as b:
+        status = b.fmu.fmi2DoStep(b.fmu.component, 0.0, 0.1, 1)
+        assert status == WARNING
+        assert b.messages[-1][0] == WARNING and "internal steps" in b.messages[-1][1]
+
+
+def test_doStep_before_initialisation_is_an_error():
+    with Instance(scene_fmu("fig13"), "early", initialise=False) as b:
+        assert b.step(1e-4) == ERROR
+        assert "fmi2ExitInitializationMode not called" in b.messages[-1][1]
+
+
+def test_compiled_library_that_cannot_load_falls_back_to_python_with_a_warning(tmp_path):
+    """A damaged compiled stepper (or one needing a newer C library) killed the FMU;
+    now the Python path takes over, with a warning at initialisation."""
+    path = scene_fmu("fig13")
+    fmpy.extract(str(path), str(tmp_path))
+    libs = list(tmp_path.glob("resources/cfmu_*/native/_stepper_*.so"))
+    assert libs
+    libs[0].write_bytes(b"not an ELF file")
+    proc = run_isolated(
+        f"""
+        from contact_fmu.scenario.instance import Instance
+        with Instance({str(path)!r}, "broken", unzip_dir={str(tmp_path)!r}) as b:
+            b.set("Fx_ex", 100.0)
+            print(b.step(1.75e-4), b.get("Tx"))
+            print([m for m in b.messages if m[0] == 1])
+        with Instance({str(path)!r}, "good") as g:
+            g.set("Fx_ex", 100.0)
+            print(g.step(1.75e-4), g.get("Tx"))
+        """
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    broken, warnings, good = proc.stdout.splitlines()[-3:]
+    assert "cannot be loaded" in warnings and "runs in Python" in warnings
+    assert broken == good  # the Python path: the same doubles (module docstring)
+
+
+def test_host_without_scipy_fails_loudly():
+    """A host Python without scipy answered OK at initialisation and Discard at the
+    first doStep (fmpy simulate then exited 0 with two rows)."""
+    proc = run_isolated(
+        f"""
+        import sys
+        sys.modules["scipy"] = None  # a host environment without scipy
+        import fmpy
+        try:
+            fmpy.simulate_fmu({str(scene_fmu("fig13"))!r}, stop_time=1e-3,
+                              output_interval=1e-4)
+            print("simulated")
+        except Exception as e:
+            print("raised", type(e).__name__, e)
+        """
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.splitlines()[-1].startswith("raised"), proc.stdout
+
+
+def test_own_state_with_a_bad_input_into_an_instance_of_other_parameters():
+    """A state holding an invalid input (P = -1) set into an instance whose parameters
+    differ answered fmi2Fatal; a state with spin likewise. Now they restore."""
+    path = full_fmu("contact")
+    with Instance(path, "a") as a, Instance(path, "b", {"mu": 0.5}) as b:
+        a.set("Omega_z", 0.5)
+        assert a.step(1e-4) == OK
+        spin = a.serialize_state(a.get_state())
+        with pytest.raises(FMICallException):
+            a.set("P", -1.0)
+        bad = a.serialize_state(a.get_state())
+        for data in (spin, bad):
+            b.set_state(b.deserialize_state(data, a.time))
+            assert b.get("mu") == ex.mu
+        with pytest.raises(FMICallException):  # P = -1 is held: no outputs
+            b.get("Tx")
+        b.set("P", ex.P)
+        b.set_state(b.deserialize_state(spin, a.time))
+        assert b.step(1e-4, time=a.time) == OK and math.isfinite(b.get("Tx"))
+    shutil.rmtree(OUT / "unused", ignore_errors=True)
