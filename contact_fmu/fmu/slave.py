@@ -41,6 +41,7 @@ import copy
 import ctypes
 import importlib
 import math
+import sys
 from functools import partial
 from operator import getitem, itemgetter
 from pathlib import Path
@@ -58,7 +59,6 @@ from pythonfmu import (
 )
 from pythonfmu.enums import Fmi2Status
 
-from .. import native
 from . import state_bytes
 from . import variables as fv
 from .config import ModelConfig
@@ -475,7 +475,10 @@ class ContactSlave(Fmi2Slave):
         answers fmi2Error (with the reasons logged) so that the importer stops."""
         self._init_problem = None
         built = self._build()
-        for problem in native.PROBLEMS:  # the compiled parts it tried to load
+        # the compiled parts the model tried to load (native, where the model imports it:
+        # not imported here, so that FMUs without compiled parts do not carry it)
+        native = sys.modules.get(f"{_PACKAGE}.native")
+        for problem in getattr(native, "PROBLEMS", ()):
             self.log(problem, Fmi2Status.warning)
         if not built:
             self._init_problem = "; ".join(self._bad.values()) or "see the messages above"
