@@ -233,3 +233,17 @@ def test_own_state_with_a_bad_input_into_an_instance_of_other_parameters():
         b.set_state(b.deserialize_state(spin, a.time))
         assert b.step(1e-4, time=a.time) == OK and math.isfinite(b.get("Tx"))
     shutil.rmtree(OUT / "unused", ignore_errors=True)
+
+
+@pytest.mark.skipif(shutil.which("objdump") is None, reason="no objdump")
+def test_fmu_binary_needs_no_c_library_newer_than_pythonfmus():
+    """The FMU's Linux binary (the status shim) needs glibc 2.17 at most (dlopen and
+    dlsym bound to their oldest versions); pythonfmu's own binary, which it loads,
+    sets the FMU's floor at 2.32 (RHEL/Rocky 9 has 2.34)."""
+    from test_native import GLIBC_FLOOR, glibc_needed
+
+    with Instance(scene_fmu("fig13"), "glibc") as b:
+        shim = next((b.dir / "binaries" / "linux64").glob("*.so"))
+        inner = b.dir / "resources" / fmu_build.INNER
+        assert (2, 2) <= glibc_needed(shim) <= GLIBC_FLOOR
+        assert glibc_needed(inner) <= (2, 34)
