@@ -70,7 +70,7 @@ import scipy.linalg as sla
 import scipy.ndimage as ndi
 from numpy.typing import NDArray
 
-from .._validate import InputError, finite, nonnegative, positive
+from .._validate import InputError, count, finite, nonnegative, positive
 from . import multigrid
 from .influence import (
     BlockConvolution,
@@ -431,12 +431,14 @@ class RollingPatch:
         theory: the march tau_I = tau_I+ + W_I/L has the same force per unit creepage as the
         full-adhesion solution (three linear solves, cached)."""
         C = self.contact
-        ones = np.where(C, self.grid.dx, 0.0)
-        X, _ = self.grid.mesh()
+        dx = self.grid.dx
+        ones, zero = np.where(C, dx, 0.0), np.zeros(self.grid.shape)
+        X, Y = self.grid.mesh()
+        # the spin load is the whole rigid slip phi (-y, x) (its -y part loads Ty too
+        # for nu > 0); FASTSIM's march of the lateral part phi x carries Ty
+        spin = np.stack([np.where(C, -Y * dx, 0.0), np.where(C, X * dx, 0.0)])
         out = []
-        for a, W1 in ((0, ones), (1, ones), (1, np.where(C, X * self.grid.dx, 0.0))):
-            W = np.zeros((2, *self.grid.shape))
-            W[a] = W1
+        for a, W in ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin)):
             exact, _ = self.solve_adhesion(W, rtol=1e-6)
             fs = march(W[a], C)
             out.append(float(fs.sum()) / float(exact[a].sum()))
@@ -790,20 +792,24 @@ def ellipse_patch(
     ny: int | None = None,
     backend: str = "fft",
     P: float | None = None,
+    spare_y: bool = False,
 ) -> RollingPatch:
     """Patch on an ellipse x^2/a1^2 + y^2/a2^2 < 1 with n x ny elements (ny = n default).
 
-    The potential contact area is the bounding box with one element to spare in x on each
-    side: dx = 2 a1/(n - 2), dy = 2 a2/ny. pressure(X, Y) gives p (Pa) at the centres,
-    scaled so that sum p dA = P (N) when P is given (the load invariant); theta follows
-    from the exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
+    The potential contact area is the ellipse's bounding box with one element to spare
+    on each side in x, dx = 2 a1/(n - 2), and with ``spare_y`` in y too, dy = 2 a2/(ny -
+    2) (one rule for both axes: the bounding box is (n - 2) x (ny - 2) elements);
+    without it dy = 2 a2/ny (the grids of ``HalfSpaceContact(n=int)``). Either way the
+    box's edges are element edges. pressure(X, Y) gives p (Pa) at the centres, scaled so
+    that sum p dA = P (N) when P is given (the load invariant); theta follows from the
+    exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
     """
-    if n < 4:
-        raise InputError("n", n, ">= 4")
-    ny = n if ny is None else int(ny)
+    least = 4 if spare_y else 1
+    n = count("n", n, 4)
+    ny = n if ny is None else count("ny", ny, least)
     dx = 2.0 * a1 / (n - 2)
-    dy = 2.0 * a2 / ny
-    grid = Grid(n, ny, dx, dy, -a1 - dx, -a2)
+    dy = 2.0 * a2 / (ny - 2 if spare_y else ny)
+    grid = Grid(n, ny, dx, dy, -a1 - dx, -a2 - (dy if spare_y else 0.0))
     X, Y = grid.mesh()
     inside = (X / a1) ** 2 + (Y / a2) ** 2 < 1.0
     p = np.where(inside, pressure(X, Y), 0.0)
@@ -817,7 +823,9 @@ def ellipse_patch(
     if n // 2 >= NESTED_MIN_N and ny // 2 >= NESTED_MIN_N:
 
         def coarsen(bk: str) -> RollingPatch:
-            return ellipse_patch(a1, a2, n // 2, pressure, mu, G, nu, k, kappa, ny // 2, bk, P)
+            return ellipse_patch(
+                a1, a2, n // 2, pressure, mu, G, nu, k, kappa, ny // 2, bk, P, spare_y
+            )
 
     return RollingPatch(grid, p, mu, G, nu, k, theta, kappa, backend, coarsen=coarsen)
 
