@@ -93,3 +93,20 @@ def one_of(name: str, value: object, options: Sequence[object]) -> object:
     if isinstance(value, list | dict | set) or value not in options:
         raise InputError(name, value, "one of " + ", ".join(repr(o) for o in options))
     return value
+
+
+def array(name: str, value: object, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """A finite float array (of ``shape`` when given): reals, lists, numpy arrays."""
+    if isinstance(value, str | bytes | bool | np.bool_) or value is None:
+        raise InputError(name, value, "an array of finite reals")
+    try:
+        out = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(name, type(value).__name__, "an array of finite reals") from None
+    if np.asarray(value).dtype == bool:
+        raise InputError(name, value, "an array of finite reals (not bools)")
+    if shape is not None and out.shape != tuple(shape):
+        raise InputError(f"{name}.shape", out.shape, f"{tuple(shape)}")
+    if not np.all(np.isfinite(out)):
+        raise InputError(name, "non-finite values", "finite")
+    return out

@@ -24,9 +24,11 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import root
 
 from .._validate import (
     InputError,
+    array,
     count,
     counts,
     finite,
@@ -49,6 +51,10 @@ FloatArray = NDArray[np.float64]
 # Default elements of the potential contact area per direction (docs/halfspace.md:
 # about 1 % discretisation error of the creep forces on 32 x 32).
 DEFAULT_N = 32
+# creepages_for: root tolerance on the creepages relative to their scale, and the
+# largest force residual (in units of rtol mu P) accepted as converged.
+FORCE_RTOL = 1e-8
+FORCE_ACCEPT = 100.0
 # Fewest elements per direction of a grid.
 MIN_N = 8
 # Adhesion fraction at or below which a solution counts as full slip: none of the
@@ -238,7 +244,7 @@ class HalfSpaceContact:
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(Tx, Ty, Mz) in N, N m (Eq. 8 convention), one solve per element of the
         broadcast inputs."""
-        vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
+        vx, vy, phi, Vx = _broadcast(vx=vx, vy=vy, phi=phi, Vx=Vx)
         out = np.zeros((3, *vx.shape))
         for idx in np.ndindex(vx.shape):
             s = self.traction(vx[idx], vy[idx], phi[idx], Vx[idx])
@@ -247,7 +253,7 @@ class HalfSpaceContact:
 
     def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike, phi: ArrayLike = 0.0):
         """Adhesion area over contact area (-)."""
-        vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
+        vx, vy, phi, Vx = _broadcast(vx=vx, vy=vy, phi=phi, Vx=Vx)
         out = np.zeros(vx.shape)
         for idx in np.ndindex(vx.shape):
             out[idx] = self.traction(vx[idx], vy[idx], phi[idx], Vx[idx]).adhesion_fraction
@@ -262,6 +268,7 @@ class HalfSpaceContact:
     def onset(self, angle: float) -> float:
         """Creepage magnitude at which the adhesion area vanishes for the creepage
         direction (cos angle, sin angle), no spin (-)."""
+        angle = finite("angle", angle)
         ca, sa = math.cos(angle), math.sin(angle)
 
         def adh(s: float) -> float:
@@ -293,6 +300,55 @@ class HalfSpaceContact:
         Mz = float(np.sum(X * tau[1] - Y * tau[0]) * dA)
         S = np.stack([wx, wy])
         return RollingSolution(patch.grid, tau, S, C, C & ~moving, moving, Tx, Ty, Mz, 0, 0)
+
+    def creepages_for(
+        self, Fx: float, Fy: float, phi: float = 0.0, rtol: float = FORCE_RTOL
+    ) -> tuple[float, float, RollingSolution]:
+        """The creepages (xi, eta) (-) of steady rolling in +x at spin phi (1/m) whose
+        force on the substrate is (Tx, Ty) = (Fx, Fy) (N), and the solution there.
+
+        scipy.optimize.root (Powell's hybrid method) on the forces in units of mu P,
+        from the linear theory stretched by Carter's inverse 1 - (1 - f)^(1/2) (f =
+        |F|/(mu P)), each solve warm-started from the last; converged to ``rtol`` of
+        mu P. |(Fx, Fy)| must be below mu P; a force the spin leaves out of reach
+        answers InputError naming it. Within about 1e-4 mu P of saturation the
+        creepage is ill-conditioned (the force hardly changes with it) and the root
+        finder may stop short: also InputError, with the closest force reached."""
+        Fx, Fy, phi = finite("Fx", Fx), finite("Fy", Fy), finite("phi", phi)
+        rtol = positive("rtol", rtol)
+        muP = self.mu * self.P
+        f = math.hypot(Fx, Fy) / muP
+        if f >= 1.0:
+            raise InputError("Fx, Fy", (Fx, Fy), f"of magnitude below mu P = {muP:.6g} N")
+        G, c = self.elastic.G, self.c
+        k = self._coefficients
+        stretch = 2.0 * (1.0 - math.sqrt(1.0 - f)) / f if f > 0.0 else 1.0
+        x0 = stretch * np.array(
+            [Fx / (G * c * c * k.C11), (Fy / (G * c * c) - c * k.C23 * phi) / k.C22]
+        )
+        xref = muP / (G * c * c)
+        last: dict[str, RollingSolution] = {}
+
+        def residual(u: FloatArray) -> FloatArray:
+            tau0 = last["sol"].tau if last else None
+            sol = self.solve(float(u[0]) * xref, float(u[1]) * xref, phi, tau0=tau0)
+            last["sol"] = sol
+            return np.array([sol.Tx - Fx, sol.Ty - Fy]) / muP
+
+        res = root(residual, x0 / xref, method="hybr", options={"xtol": rtol})
+        r = residual(res.x)
+        if float(np.abs(r).max()) > FORCE_ACCEPT * rtol:
+            raise InputError(
+                "Fx, Fy",
+                (Fx, Fy),
+                f"attainable at phi = {phi:.6g} 1/m (closest: {r[0] * muP + Fx:.6g}, "
+                f"{r[1] * muP + Fy:.6g} N)",
+            )
+        return float(res.x[0]) * xref, float(res.x[1]) * xref, last["sol"]
+
+    @cached_property
+    def _coefficients(self) -> CreepCoefficients:
+        return self.creep_coefficients()
 
     def creep_coefficients(self) -> CreepCoefficients:
         """Kalker's C11, C22, C23, C33 (-) of this patch from full-adhesion solves (the
@@ -335,6 +391,17 @@ class CreepCoefficients(NamedTuple):
     C22: float
     C23: float
     C33: float
+
+
+def _broadcast(**arrays: ArrayLike) -> list[FloatArray]:
+    """The named inputs as finite float arrays broadcast together (InputError naming the
+    first bad one, or all of them when their shapes do not broadcast)."""
+    checked = [array(name, a) for name, a in arrays.items()]
+    try:
+        return np.broadcast_arrays(*checked)
+    except ValueError:
+        shapes = tuple(a.shape for a in checked)
+        raise InputError(", ".join(arrays), shapes, "shapes that broadcast") from None
 
 
 def _no_radii(kw: dict) -> None:

@@ -70,7 +70,7 @@ import scipy.linalg as sla
 import scipy.ndimage as ndi
 from numpy.typing import NDArray
 
-from .._validate import InputError, count, finite, nonnegative, positive
+from .._validate import InputError, array, count, finite, instance, nonnegative, positive
 from . import multigrid
 from .influence import (
     BlockConvolution,
@@ -201,11 +201,10 @@ class RollingPatch:
     preconditioner: str = "block"
 
     def __post_init__(self) -> None:
-        self.p = np.asarray(self.p, float)
-        if self.p.shape != self.grid.shape:
-            raise InputError("p.shape", self.p.shape, f"the grid shape {self.grid.shape}")
-        if np.any(self.p < 0.0) or not np.all(np.isfinite(self.p)):
-            raise InputError("p", "negative or non-finite values", "finite and >= 0")
+        instance("grid", self.grid, Grid, "an influence.Grid")
+        self.p = array("p", self.p, self.grid.shape)
+        if np.any(self.p < 0.0):
+            raise InputError("p", "negative values", ">= 0")
         positive("mu", self.mu)
         positive("G", self.G)
         finite("nu", self.nu)
@@ -219,7 +218,7 @@ class RollingPatch:
             raise InputError(
                 "grid", "contact in the first column", "one element behind each trailing edge"
             )
-        th = np.ones(self.grid.shape) if self.theta is None else np.asarray(self.theta, float)
+        th = np.ones(self.grid.shape) if self.theta is None else array("theta", self.theta)
         if th.shape != self.grid.shape or np.any(th <= 0.0) or np.any(th > 1.0):
             raise InputError("theta", "shape or range", f"shape {self.grid.shape}, in (0, 1]")
         self.theta = np.where(self.leading, th, 1.0)
@@ -501,8 +500,12 @@ def solve_rolling(
     ``prolong``; otherwise, and should a coarse solve fail, the calibrated FASTSIM march
     (``RollingPatch.fastsim_guess``). Either way Newton then solves this grid's problem
     to ``tol``: the converged solution does not depend on the guess beyond ``tol``."""
-    for name, val in (("xi", xi), ("eta", eta), ("phi", phi)):
-        finite(name, val)
+    instance("patch", patch, RollingPatch, "a RollingPatch")
+    xi, eta, phi = finite("xi", xi), finite("eta", eta), finite("phi", phi)
+    tol = positive("tol", tol)
+    maxit = count("maxit", maxit, 1)
+    if tau0 is not None:
+        tau0 = array("tau0", tau0, (2, *patch.grid.shape))
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
     levels: tuple[tuple[int, int, int, int], ...] = ()
@@ -804,6 +807,9 @@ def ellipse_patch(
     that sum p dA = P (N) when P is given (the load invariant); theta follows from the
     exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
     """
+    a1, a2 = positive("a1", a1), positive("a2", a2)
+    if not callable(pressure):
+        raise InputError("pressure", type(pressure).__name__, "a function p(X, Y) (Pa)")
     least = 4 if spare_y else 1
     n = count("n", n, 4)
     ny = n if ny is None else count("ny", ny, least)
