@@ -105,3 +105,25 @@ def test_transient_rolling_at_a_held_force():
         b.advance(b.cell_time(), Loads(My_ex=-F * 0.46))
         assert b.outputs()["Tx"] == pytest.approx(F, rel=1e-9)
     assert 0.0 < b.outputs()["adhesion"] < 1.0
+
+
+def test_richardson_error_estimate_for_a_spin_case():
+    """solve(richardson=True): the combined lateral creepage and spin case of issue 20
+    (ellipse a/b = 2, 7 x 3.5 mm, steel, 50 kN, mu = 0.3, eta = -6e-4, phi = 0.6 rad/m)
+    converges at first order with a large constant (Ty/(mu P) 0.572, 0.593, 0.603,
+    0.607 on 32..256 per side, docs/validation.md). The estimate F(n/2) - F(n) on 64 x
+    64 is within 25 % of the true error (measured 11 %, against the extrapolation from
+    64 and 128), and the extrapolated value is at least four times closer than the
+    64 x 64 value (measured 9 times)."""
+    steel = Material(210e9, 0.28)
+    cases = []
+    for n in (64, 128):
+        c = HalfSpaceContact.from_ellipse(7e-3, 3.5e-3, steel, steel, 0.3, P=5e4, n=(n, n))
+        cases.append(c.solve(0.0, -6e-4, 0.6, richardson=True))
+    s64, s128 = cases
+    best = s128.extrapolated[1]
+    true_error = s64.Ty - best
+    assert s64.error[1] == pytest.approx(true_error, rel=0.25)
+    assert abs(s64.extrapolated[1] - best) < 0.25 * abs(true_error)
+    with pytest.raises(InputError, match="richardson"):
+        wheel_on_rail(n=12).solve(0.0, richardson=True)

@@ -70,8 +70,17 @@ import scipy.linalg as sla
 import scipy.ndimage as ndi
 from numpy.typing import NDArray
 
-from .._validate import InputError, array, count, finite, instance, nonnegative, positive
-from . import multigrid
+from .._validate import (
+    InputError,
+    array,
+    count,
+    finite,
+    instance,
+    nonnegative,
+    one_of,
+    positive,
+)
+from . import direct, multigrid
 from .influence import (
     BlockConvolution,
     Grid,
@@ -113,6 +122,9 @@ GMRES_MAXIT = 600
 # Backtracking: sufficient decrease factor on |F|_2 and the smallest step fraction.
 ARMIJO = 1e-4
 MIN_STEP = 1.0 / 64.0
+# Direct path (direct.py) for contacts of at most this many elements (solve_rolling,
+# method "auto"): measured crossover against the iterative path, docs/performance.md.
+DIRECT_MAX_ELEMENTS = 200
 # Nested iteration (docs/halfspace.md): ellipse_patch grids of n elements per side get a
 # coarse level of n/2 while n/2 >= NESTED_MIN_N, recursively. A 16 x 16 level costs
 # about what it saves (measured: 32 x 32 15-20 % slower nested from 16 x 16, 64 x 64 no
@@ -133,7 +145,10 @@ class RollingSolution:
     mask; forces Tx, Ty (N) and the spin moment Mz = sum (x tau_y - y tau_x) dA (N m);
     Newton and total GMRES iteration counts on this grid. ``levels``: with nested
     iteration, (nx, ny, Newton, GMRES) per level from the coarsest to this grid (the last
-    entry repeats the two counts above); empty for a single-level solve.
+    entry repeats the two counts above); empty for a single-level solve. ``error``:
+    with ``HalfSpaceContact.solve(richardson=True)``, the estimated discretisation error
+    (Tx, Ty, Mz) of this grid's forces, F(n/2) - F(n) for the scheme's first order, and
+    ``extrapolated`` the Richardson values 2 F(n) - F(n/2); None otherwise.
     """
 
     grid: Grid
@@ -148,6 +163,8 @@ class RollingSolution:
     newton_iterations: int
     gmres_iterations: int
     levels: tuple[tuple[int, int, int, int], ...] = ()
+    error: tuple[float, float, float] | None = None
+    extrapolated: tuple[float, float, float] | None = None
 
     @property
     def adhesion_fraction(self) -> float:
@@ -309,6 +326,16 @@ class RollingPatch:
         full = self.op.dense(cols)
         keep = np.concatenate([rows_in, rows_in])
         return full[keep], cols
+
+    @cached_property
+    def dense_contact_operator(self) -> FloatArray:
+        """K on the contact as a dense (2 m, 2 m) matrix (direct.py; small grids)."""
+        return direct.contact_operator(self)
+
+    @cached_property
+    def dense_contact_lu(self):
+        """LU factors of ``dense_contact_operator`` (the direct path's initial guess)."""
+        return sla.lu_factor(self.dense_contact_operator)
 
     # ---- operators ---------------------------------------------------------------------
     def apply_K(self, tau: FloatArray) -> FloatArray:
@@ -490,9 +517,14 @@ def solve_rolling(
     tau0: FloatArray | None = None,
     tol: float = NEWTON_TOL,
     maxit: int = NEWTON_MAXIT,
+    method: str = "auto",
 ) -> RollingSolution:
     """Steady rolling for the creepages xi = vx/Vx, eta = vy/Vx (-) and spin phi =
     Omega_z/Vx (1/m), rolling in +x. tau0: initial traction (2, ny, nx) (warm start).
+
+    method: "iterative" (GMRES Newton steps, below), "direct" (dense Newton steps,
+    direct.py), "auto": direct for contacts of at most DIRECT_MAX_ELEMENTS elements
+    with the FFT backend and the block preconditioner, iterative otherwise.
 
     Initial guess without tau0: nested iteration where the patch has a coarse level
     (``RollingPatch.coarse``; ellipse_patch grids of 64 and more elements per side): the
@@ -506,8 +538,17 @@ def solve_rolling(
     maxit = count("maxit", maxit, 1)
     if tau0 is not None:
         tau0 = array("tau0", tau0, (2, *patch.grid.shape))
+    one_of("method", method, ("auto", "iterative", "direct"))
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
+    if method == "direct" or (
+        method == "auto"
+        and int(C.sum()) <= DIRECT_MAX_ELEMENTS
+        and patch.backend == "fft"
+        and patch.preconditioner == "block"
+    ):
+        tau, S, slip, newton = direct.newton(patch, W, tau0, tol, maxit)
+        return _solution(patch, tau, S, slip, newton, 0, ())
     levels: tuple[tuple[int, int, int, int], ...] = ()
     tau = None
     if tau0 is not None:
@@ -534,6 +575,22 @@ def solve_rolling(
         slip_block=SLIP_BLOCK_RATIO,
         oversolve=OVERSOLVE,
     )
+    if levels:
+        levels = (*levels, (patch.grid.nx, patch.grid.ny, newton, inner))
+    return _solution(patch, tau, S, slip, newton, inner, levels)
+
+
+def _solution(
+    patch: RollingPatch,
+    tau: FloatArray,
+    S: FloatArray,
+    slip: BoolArray,
+    newton: int,
+    inner: int,
+    levels: tuple[tuple[int, int, int, int], ...],
+) -> RollingSolution:
+    """The RollingSolution of a converged traction: forces and masks on the contact."""
+    C = patch.contact
     tau = np.where(C, tau, 0.0)
     X, Y = patch.grid.mesh()
     dA = patch.grid.area
@@ -541,8 +598,6 @@ def solve_rolling(
     Ty = float(tau[1].sum() * dA)
     Mz = float(np.sum(X * tau[1] - Y * tau[0]) * dA)
     adhesion = C & ~slip
-    if levels:
-        levels = (*levels, (patch.grid.nx, patch.grid.ny, newton, inner))
     return RollingSolution(patch.grid, tau, S, C, adhesion, slip, Tx, Ty, Mz, newton, inner, levels)
 
 
