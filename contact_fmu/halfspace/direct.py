@@ -62,7 +62,8 @@ def newton(
     if tau0 is None:
         t = sla.lu_solve(patch.dense_contact_lu, w)
         mag = np.hypot(t[:m], t[m:])
-        t = t * np.tile(np.minimum(1.0, g / np.maximum(mag, 1e-300)), 2)
+        over = mag > g
+        t = t * np.tile(np.where(over, g / np.where(over, mag, 1.0), 1.0), 2)
     else:
         t = np.concatenate([tau0[0][C], tau0[1][C]])
 

@@ -44,11 +44,8 @@ over each adhesion interval (a small dense system, one unknown per interval and
 component), and the march from the leading edge that turns differences into
 tractions. For the thin layer this preconditioner is the exact inverse (the march of
 LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
-|F| globalises the iteration. ``RollingPatch(preconditioner="multigrid")`` replaces the
-block preconditioner by a multigrid V-cycle (multigrid.py) with GMRES on the right
-(krylov.py): 1-2 GMRES iterations per Newton step on 16..256 per side, a V-cycle
-contraction below 0.05 on 32..512, at 1.7-5.9 times the time (docs/halfspace.md,
-"Iteration counts").
+|F| globalises the iteration. Contacts of at most DIRECT_MAX_ELEMENTS elements take
+dense direct Newton steps instead (direct.py).
 
 Nested iteration: a patch from ellipse_patch carries its coarse levels (n/2, n/4, ...
 elements per side over the same ellipse, down to NESTED_MIN_N); solve_rolling solves the
@@ -61,7 +58,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
@@ -80,7 +77,7 @@ from .._validate import (
     one_of,
     positive,
 )
-from . import direct, multigrid
+from . import direct
 from .influence import (
     BlockConvolution,
     Grid,
@@ -88,7 +85,7 @@ from .influence import (
     difference,
     tangential_operator,
 )
-from .krylov import fgmres, gmres
+from .krylov import gmres
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -114,10 +111,6 @@ OVERSOLVE = 0.1
 SLIP_BLOCK_RATIO = 0.5
 # GMRES restart length and cap on the total number of inner iterations per Newton step.
 GMRES_RESTART = 60
-# With the multigrid preconditioner: at most MULTIGRID_MAXIT V-cycles per Newton step
-# (measured 1-3 on every grid, docs/halfspace.md); a step whose cycle stalls then ends
-# with GMRES's best iterate, and backtracking on |F| takes over, for a bounded cost.
-MULTIGRID_MAXIT = 20
 GMRES_MAXIT = 600
 # Backtracking: sufficient decrease factor on |F|_2 and the smallest step fraction.
 ARMIJO = 1e-4
@@ -193,12 +186,10 @@ class RollingPatch:
     nx): fraction of an element between its centre and the leading edge (1 inside,
     (0, 1] in the leading elements; None: 1); kappa: Kalker's difference parameter
     (pressure coupling, 0: quasi-identical bodies); backend "fft" or "dense" (the same
-    solver with an explicit influence matrix, for benchmarks); preconditioner of the
-    Newton systems: "block" (default) or "multigrid" (multigrid.py: 1-2 GMRES iterations
-    per Newton step on 16..256 per side, 1.7-5.9 times slower there, coarse levels
-    included); coarsen: builds the same problem on a grid of about half the
-    elements per side over the same potential contact area, for the backend given
-    (nested iteration, ``solve_rolling``; None: none, as for the coarsest level).
+    solver with an explicit influence matrix, for benchmarks); coarsen: builds the
+    same problem on a grid of about half the elements per side over the same potential
+    contact area, for the backend given (nested iteration, ``solve_rolling``; None:
+    none, as for the coarsest level).
     Derived quantities are cached: treat a patch as immutable once built.
     """
 
@@ -214,8 +205,6 @@ class RollingPatch:
     use_closure: bool = False
     operator: BlockConvolution | None = None
     coarsen: Callable[[str], RollingPatch] | None = field(default=None, repr=False, compare=False)
-    # last, so that the fields before it keep their positions
-    preconditioner: str = "block"
 
     def __post_init__(self) -> None:
         instance("grid", self.grid, Grid, "an influence.Grid")
@@ -229,8 +218,6 @@ class RollingPatch:
         finite("kappa", self.kappa)
         if self.backend not in ("fft", "dense"):
             raise InputError("backend", self.backend, '"fft" or "dense"')
-        if self.preconditioner not in ("block", "multigrid"):
-            raise InputError("preconditioner", self.preconditioner, '"block" or "multigrid"')
         if np.any(self.contact[:, 0]):
             raise InputError(
                 "grid", "contact in the first column", "one element behind each trailing edge"
@@ -263,18 +250,7 @@ class RollingPatch:
         """The next coarser level (cached, with its own coarse levels), or None."""
         if self.coarsen is None:
             return None
-        coarse = self.coarsen(self.backend)
-        if coarse.preconditioner != self.preconditioner:
-            coarse = replace(coarse, preconditioner=self.preconditioner)
-        return coarse
-
-    @cached_property
-    def mg_kernels(self) -> list[multigrid.KernelLevel]:
-        """The influence kernels of the multigrid levels (geometry only; ``multigrid``)."""
-        op = self.op
-        return multigrid.kernel_levels(
-            op.kernel, self.grid.dx, self.grid.dy, op.local, self.grid.shape
-        )
+        return self.coarsen(self.backend)
 
     @cached_property
     def op(self) -> BlockConvolution:
@@ -524,7 +500,7 @@ def solve_rolling(
 
     method: "iterative" (GMRES Newton steps, below), "direct" (dense Newton steps,
     direct.py), "auto": direct for contacts of at most DIRECT_MAX_ELEMENTS elements
-    with the FFT backend and the block preconditioner, iterative otherwise.
+    with the FFT backend, iterative otherwise.
 
     Initial guess without tau0: nested iteration where the patch has a coarse level
     (``RollingPatch.coarse``; ellipse_patch grids of 64 and more elements per side): the
@@ -542,10 +518,7 @@ def solve_rolling(
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
     if method == "direct" or (
-        method == "auto"
-        and int(C.sum()) <= DIRECT_MAX_ELEMENTS
-        and patch.backend == "fft"
-        and patch.preconditioner == "block"
+        method == "auto" and int(C.sum()) <= DIRECT_MAX_ELEMENTS and patch.backend == "fft"
     ):
         tau, S, slip, newton = direct.newton(patch, W, tau0, tol, maxit)
         return _solution(patch, tau, S, slip, newton, 0, ())
@@ -749,15 +722,6 @@ def _newton_direction(
         return np.concatenate([Kd.ravel()[iHH], out_S])
 
     unknowns = _Unknowns(H, Sl, that, cS, iH, iS)
-    if getattr(patch, "preconditioner", "block") == "multigrid":
-        try:
-            cycle = _multigrid_psolve(patch, unknowns)
-        except np.linalg.LinAlgError:
-            pass  # singular row block, or too large a coarsest level: the block one
-        else:
-            # right preconditioning, one V-cycle per iteration (krylov.py)
-            x, its = fgmres(matvec, b, cycle, rtol, MULTIGRID_MAXIT)
-            return to_field(x) + dn * zhat, its
     psolve = _block_psolve(patch, unknowns, slip_block)
     x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
     return to_field(x) + dn * zhat, its
@@ -810,29 +774,6 @@ def _block_psolve(
         d = patch._precondition_adhesion(res.reshape(shape), B, clo).reshape(2, n)
         xs = np.where(in_block, t_S[0] * d[0, iS] + t_S[1] * d[1, iS], vs / dS_S)
         return np.concatenate([d.ravel()[iHH], xs])
-
-    return psolve
-
-
-def _multigrid_psolve(patch: RollingPatch, u: _Unknowns) -> Callable[[FloatArray], FloatArray]:
-    """One multigrid V-cycle (``multigrid``) as the preconditioner of the Newton system,
-    in the unknowns' order of ``_newton_direction`` (adhesion x, adhesion y, slip)."""
-    H, Sl, that, cS, iH, iS = u.H, u.Sl, u.that, u.cS, u.iH, u.iS
-    kern = patch.mg_kernels
-    fine = multigrid.newton_level(kern[0], H, Sl, that, cS, patch.k_extra)
-    cycle = multigrid.VCycle(fine, kern)
-    nx, n = patch.grid.nx, H.size
-    nH = len(iH)
-    pos = np.zeros(n, dtype=np.int_)
-    pos[iH] = np.arange(nH)
-    pos[iS] = 2 * nH + np.arange(len(iS))
-    e = fine.ur * nx + fine.uc
-    order = pos[e] + np.where(H.ravel()[e], fine.ud * nH, 0)  # fine unknown -> Newton row
-
-    def psolve(v: FloatArray) -> FloatArray:
-        out = np.empty_like(v)
-        out[order] = cycle(v[order])
-        return out
 
     return psolve
 
