@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import Akima1DInterpolator, make_interp_spline
 
-from .._validate import InputError, finite, positive
+from .._validate import InputError, array, count, finite, instance, nonnegative, positive
 from .contact import HalfSpaceContact
 from .hertz import Hertz
 
@@ -586,15 +586,18 @@ def build_table(
     docs/halfspace.md.
     Coupling B(p) is switched off (quasi-identity) so that T is odd in the creepages.
     """
+    instance("contact", contact, HalfSpaceContact, "a HalfSpaceContact")
     contact = replace(contact, coupling=False)
-    loads = np.array([contact.P] if loads is None else loads, float).ravel()
+    loads = array("loads", [contact.P] if loads is None else loads).ravel()
     loads.sort()
     if np.any(loads <= 0.0) or len(np.unique(loads)) != len(loads):
         raise InputError("loads", loads.tolist(), "distinct and > 0")
     if contact.k > 0.0 and len(loads) < 2:
         raise InputError("loads", loads.tolist(), "at least two nodes when kb + ks > 0")
-    nodes = tuple(int(n) for n in nodes)
-    if any(n < 3 or n % 2 == 0 for n in nodes):
+    if isinstance(nodes, str | bytes) or not hasattr(nodes, "__len__") or len(nodes) != 3:
+        raise InputError("nodes", nodes, "three odd integers >= 3")
+    nodes = tuple(count("nodes", n, 3) for n in nodes)
+    if any(n % 2 == 0 for n in nodes):
         raise InputError("nodes", nodes, "odd and >= 3 per axis")
     c0 = contact.with_load(float(loads[0]))
     xref0 = c0.mu * c0.P / (c0.elastic.G * c0.c**2)
@@ -602,8 +605,9 @@ def build_table(
     extent = np.array(DEFAULT_EXTENT, float)
     for i, (val, ref) in enumerate(((xi_max, xref0), (eta_max, xref0), (phi_max, pref0))):
         if val is not None:
-            extent[i] = positive(("xi_max", "eta_max", "phi_max")[i], abs(finite("max", val))) / ref
-    beta = float(stretch)
+            name = ("xi_max", "eta_max", "phi_max")[i]
+            extent[i] = positive(name, abs(finite(name, val))) / ref
+    beta = nonnegative("stretch", stretch)
     u = [np.linspace(-1.0, 1.0, n) for n in nodes]
     if beta > 0.0:
         axes = [X * np.sinh(beta * ui) / math.sinh(beta) for X, ui in zip(extent, u, strict=True)]
