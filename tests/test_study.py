@@ -20,11 +20,14 @@ import pytest
 
 from contact_fmu import InputError, cli
 from contact_fmu.halfspace.railway import wheel_on_rail
-from contact_fmu.halfspace.table import build_table
+from contact_fmu.halfspace.table import TableData, build_table
+from contact_fmu.report.workprecision import run_scene
 from contact_fmu.scenario import ScenarioError, load, variation
 from contact_fmu.scenario.schema import Metric, Vary, sweep_values
 from contact_fmu.study import metrics, sweep
+from contact_fmu.study import tables as study_tables
 from contact_fmu.study.engine import Engine, batches
+from fmu_build import tables as fmu_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
@@ -71,6 +74,31 @@ def test_sweep_on_two_workers_equals_the_serial_sweep_row_for_row(engine):
     np.testing.assert_equal(rows_dask, rows_serial)
 
 
+def test_sweep_through_a_running_scheduler_ships_the_fmu(engine):
+    """--scheduler ADDRESS: a client of a running cluster (here the module's), the FMU sent
+    to the workers as bytes: the rows of the serial sweep."""
+    scene = load(SCENARIOS / "fig13.toml")
+    vary = (Vary("Fx_ex", (50.0, 150.0)),)
+    with Engine(workers=0, progress=False) as serial:
+        want = sweep.sweep(scene, vary, serial, OUT)
+    with Engine(scheduler=engine.client.scheduler.address, progress=False) as remote:
+        assert "1 workers" not in remote.describe() and "2 workers" in remote.describe()
+        np.testing.assert_equal(sweep.sweep(scene, vary, remote, OUT), want)
+
+
+def test_report_families_on_two_workers_give_the_serial_errors(engine):
+    """The work-precision families of fig12 (quick) as Dask tasks: every point's errors
+    and settings are the serial report's (only the measured times differ)."""
+    scene = load(SCENARIOS / "fig12.toml")
+    kw = {"quick": True, "repeats": 1, "log": lambda _m: None}
+    serial = run_scene(scene, OUT, **kw)
+    dask = run_scene(scene, OUT, engine=engine, **kw)
+    keys = ("family", "level", "h", "Tx_max", "Tx_rms", "vx_max", "vx_rms", "error")
+    assert len(serial.rows) == len(dask.rows) > 4
+    for a, b in zip(serial.rows, dask.rows, strict=True):
+        np.testing.assert_equal([getattr(b, k) for k in keys], [getattr(a, k) for k in keys])
+
+
 def test_a_failed_run_is_a_row_and_the_others_keep_their_values(tmp_path, engine):
     """P steps to -1000 N in one run: the FMU discards the step (Eq. 33 needs P > 0) and
     the row says so; mu = -0.1 is refused by the scene check; every other run is ok
@@ -102,6 +130,25 @@ def test_creep_force_table_built_through_dask_equals_the_serial_build(engine):
     assert np.array_equal(dask.data.values, serial.data.values)
     assert np.array_equal(dask.data.onset, serial.data.onset)
     assert all(np.array_equal(a, b) for a, b in zip(dask.data.axes, serial.data.axes, strict=True))
+
+
+def test_scene_table_through_dask_is_the_fmu_builds_file(tmp_path, engine):
+    """study.tables.ensure (the engine) and fmu_build.tables.ensure (a subprocess, serial)
+    on rail_creep's declaration cut to 8 x 8 elements and 5 x 5 x 3 nodes: the same file
+    name (content key) and the same nodal values and onsets."""
+    text = (SCENARIOS / "rail_creep.toml").read_text()
+    text = text.replace("grid = 32 ", "grid = 8 ").replace(
+        "nodes = [25, 21, 3]", "nodes = [5, 5, 3]"
+    )
+    path = tmp_path / "tiny.toml"
+    path.write_text(text[: text.index("[[reference]]")])
+    cfg = load(path).config
+    a = study_tables.ensure(cfg, engine, cache=tmp_path / "dask")
+    b = fmu_tables.ensure(cfg, tmp_path / "serial")
+    assert a.name == b.name
+    ta, tb = TableData.load(a), TableData.load(b)
+    assert ta.values.shape == (1, 5, 5, 3, 4)
+    assert np.array_equal(ta.values, tb.values) and np.array_equal(ta.onset, tb.onset)
 
 
 def test_engine_keeps_the_order_and_reports_failures_per_item(engine):

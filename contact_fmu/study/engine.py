@@ -41,7 +41,22 @@ class _Failed:
         self.exc = exc
 
 
-def _call_batch(batch: list[Any], fn: Callable[[Any, Any], Any], shared: Any) -> list[Any]:
+def forget(prefix: str) -> list[Any]:
+    """Remove this process's ``once`` values whose keys start with ``prefix``; returns
+    them (their owner cleans them up)."""
+    keys = [k for k in _ONCE if k.startswith(prefix)]
+    return [_ONCE.pop(k) for k in keys]
+
+
+class _Box:
+    """A value scattered as one object (scatter splits lists, tuples and dicts)."""
+
+    def __init__(self, value: Any) -> None:
+        self.value = value
+
+
+def _call_batch(batch: list[Any], fn: _Box, shared: _Box) -> list[Any]:
+    fn, shared = fn.value, shared.value
     out = []
     for item in batch:
         try:
@@ -164,8 +179,8 @@ class Engine:
         if self.client is None:
             raise RuntimeError("Engine.map outside its with-block")
         parts = batches(len(items), self.n_workers(), batch)
-        fn_f = self.client.scatter(fn, broadcast=True, hash=False)
-        shared_f = self.client.scatter(shared, broadcast=True, hash=False)
+        fn_f = self.client.scatter(_Box(fn), broadcast=True, hash=False)
+        shared_f = self.client.scatter(_Box(shared), broadcast=True, hash=False)
         futures = self.client.map(
             _call_batch, [items[s] for s in parts], fn=fn_f, shared=shared_f, pure=False
         )

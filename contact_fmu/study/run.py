@@ -75,6 +75,7 @@ def run_case(fmu_dir: Path, scene: Scene, case: Case, name: str = "run") -> Outc
     rec = {n: np.full(grid.size, np.nan) for n in scene.outputs}
     path_before = list(sys.path)
     inst = None
+    t, last = 0.0, -1  # the time of the step under way, the last recorded point
     try:
         inst = Instance(None, name=name, start_values=starts, unzip_dir=fmu_dir)
         in_vr = [inst.vars[n].valueReference for n in scene.inputs]
@@ -84,11 +85,12 @@ def run_case(fmu_dir: Path, scene: Scene, case: Case, name: str = "run") -> Outc
         h = scene.step
         last = 0
         for i in range(grid.size - 1):
+            t = float(grid[i])
             if in_vr:
                 inst.fmu.setReal(in_vr, [float(inputs[n][i]) for n in scene.inputs])
-            code = inst.step(h, time=float(grid[i]))
+            code = inst.step(h, time=t)
             if code not in (OK, WARNING):
-                status = _reason(code, float(grid[i]), inst.messages)
+                status = _reason(code, t, inst.messages)
                 break
             for n, v in read():
                 rec[n][i + 1] = v
@@ -97,8 +99,7 @@ def run_case(fmu_dir: Path, scene: Scene, case: Case, name: str = "run") -> Outc
             status = "ok"
     except Exception as e:  # fmpy raises plain Exceptions for fmi2Error/Fatal calls
         msgs = inst.messages if inst is not None else []
-        status = f"error: {type(e).__name__}: {e}" + (f" ({_reason(3, 0.0, msgs)})" if msgs else "")
-        last = -1
+        status = f"error: {type(e).__name__}: {e}" + (f" ({_reason(3, t, msgs)})" if msgs else "")
     finally:
         if inst is not None:
             try:

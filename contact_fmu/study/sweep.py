@@ -19,7 +19,9 @@ number of workers.
 from __future__ import annotations
 
 import atexit
+import hashlib
 import itertools
+import json
 import math
 import shutil
 import tempfile
@@ -32,7 +34,7 @@ import numpy as np
 from ..scenario import variation
 from ..scenario.schema import Metric, ScenarioError, Scene, Vary, from_data
 from . import metrics as mt
-from .engine import Engine, once
+from .engine import Engine, forget, once
 from .run import run_case
 
 
@@ -61,6 +63,7 @@ class Context:
 
     scene_path: str
     scene_source: dict[str, Any]
+    scene_key: str
     fmu: FmuRef
     metrics: tuple[Metric, ...]
     trajectories: bool
@@ -106,8 +109,7 @@ def _fmu_dir(ref: FmuRef) -> Path:
 
 
 def _base(ctx: Context) -> Scene:
-    key = f"scene:{ctx.fmu.key}:{ctx.scene_path}"
-    return once(key, lambda: from_data(ctx.scene_path, ctx.scene_source))
+    return once(f"scene:{ctx.scene_key}", lambda: from_data(ctx.scene_path, ctx.scene_source))
 
 
 def run_one(ctx: Context, run: Run) -> dict[str, Any]:
@@ -149,8 +151,10 @@ def sweep(
     metric_list: tuple[Metric, ...] | None = None,
     trajectories: bool | None = None,
     share_by_path: bool | None = None,
+    batch: int | None = None,
 ) -> list[dict[str, Any]]:
-    """The rows of every run of the study (see the module docstring)."""
+    """The rows of every run of the study (see the module docstring); ``batch``: runs
+    per task (default: the engine's batches)."""
     import fmu_build
 
     if not vary:
@@ -164,9 +168,13 @@ def sweep(
     if share_by_path is None:
         share_by_path = engine.scheduler is None
     data = None if share_by_path else built.path.read_bytes()
+    source_key = hashlib.sha256(
+        json.dumps([str(scene.path), scene.source], sort_keys=True, default=str).encode()
+    ).hexdigest()
     ctx = Context(
         str(scene.path),
         scene.source,
+        source_key,
         FmuRef(built.key, str(built.path), data),
         tuple(ms),
         scene.sweep.trajectories if trajectories is None else trajectories,
@@ -178,6 +186,7 @@ def sweep(
         shared=ctx,
         desc=f"sweep {scene.name}",
         on_error=lambda run, exc: failed_row(ctx, run, exc),
+        batch=batch,
     )
 
 
@@ -227,10 +236,7 @@ def strip(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def cleanup_local() -> None:
-    """Remove this process's extracted FMUs (the ``once`` cache's folders)."""
-    from .engine import _ONCE
-
-    for k, v in list(_ONCE.items()):
-        if k.startswith("fmu:"):
-            shutil.rmtree(Path(v).parent, ignore_errors=True)
-            del _ONCE[k]
+    """Remove the FMUs this process extracted (a serial sweep's; a worker's go when it
+    exits)."""
+    for d in forget("fmu:"):
+        shutil.rmtree(Path(d).parent, ignore_errors=True)
