@@ -131,10 +131,14 @@ def _references(args: argparse.Namespace) -> int:
 
 
 def _report(args: argparse.Namespace) -> int:
+    from . import InputError
     from .report import command
+    from .study.engine import Engine
 
     if args.write_docs and (args.quick or args.scenes or args.case):
         raise SystemExit("--write-docs needs the full report (no --quick, scenes or --case)")
+    if args.write_docs and (args.workers or args.scheduler):
+        raise SystemExit("--write-docs needs the times of runs one at a time (no --workers)")
     if args.repeats < 1:
         raise SystemExit(f"--repeats = {args.repeats} is invalid: must be >= 1")
     if not args.budget > 0:
@@ -142,16 +146,30 @@ def _report(args: argparse.Namespace) -> int:
     both = not (args.stiff or args.workprecision)
     reports = results = None
     fmu_dir = args.fmu_out
-    if args.workprecision or both:
-        paths = command.scene_paths(args.scenes, args.scenarios)
-        reports = command.workprecision(
-            paths, args.out, fmu_dir, args.quick, args.repeats, args.held, budget=args.budget
-        )
-    if args.stiff or both:
-        try:
-            results = command.stiff_suite(args.out, fmu_dir, args.quick, args.case)
-        except ValueError as e:
-            raise SystemExit(str(e)) from e
+    try:
+        engine = Engine(None if args.scheduler else args.workers, args.scheduler)
+    except InputError as e:
+        raise SystemExit(f"contact-fmu report: {e}") from None
+    with engine:
+        if args.workprecision or both:
+            paths = command.scene_paths(args.scenes, args.scenarios)
+            reports = command.workprecision(
+                paths,
+                args.out,
+                fmu_dir,
+                args.quick,
+                args.repeats,
+                args.held,
+                budget=args.budget,
+                engine=engine,
+            )
+        if args.stiff or both:
+            try:
+                results = command.stiff_suite(
+                    args.out, fmu_dir, args.quick, args.case, engine=engine
+                )
+            except ValueError as e:
+                raise SystemExit(str(e)) from e
     if args.write_docs:
         cmd = "contact-fmu report" + (" --stiff" if args.stiff else "")
         cmd += " --workprecision" if args.workprecision else ""
@@ -282,6 +300,13 @@ def parser() -> argparse.ArgumentParser:
     rep.add_argument(
         "--write-docs", action="store_true", help="update README.md, docs/performance.md"
     )
+    rep_where = rep.add_mutually_exclusive_group()
+    rep_where.add_argument(
+        "--workers", type=int, default=0, help="the work-precision families and the stiff "
+        "cases on a LocalCluster of N worker processes (default 0: in this process; times "
+        "are then measured with N runs at once)"
+    )  # fmt: skip
+    rep_where.add_argument("--scheduler", help="... or on a running Dask scheduler (tcp://...)")
     rep.set_defaults(func=_report)
 
     sw = sub.add_parser(
