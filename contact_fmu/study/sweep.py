@@ -97,11 +97,11 @@ def _fmu_dir(ref: FmuRef) -> Path:
         d = Path(tempfile.mkdtemp(prefix=f"study-{ref.key[:12]}-"))
         atexit.register(shutil.rmtree, d, True)
         src = Path(ref.path)
-        if not src.is_file() or ref.data is not None and src.stat().st_size != len(ref.data):
-            if ref.data is None:
-                raise FileNotFoundError(f"{ref.path}: not on this worker and not shipped")
+        if ref.data is not None:  # shipped: the worker may not see the path
             src = d / "shipped.fmu"
             src.write_bytes(ref.data)
+        elif not src.is_file():
+            raise FileNotFoundError(f"{ref.path}: not on this worker, and not shipped")
         fmpy.extract(str(src), str(d / "fmu"))
         return d / "fmu"
 
@@ -160,10 +160,10 @@ def sweep(
     if not vary:
         raise ScenarioError(f"{scene.path}: nothing varied (--vary NAME=VALUES or [sweep].vary)")
     variation.check(scene, [v.name for v in vary])
-    clash = {v.name for v in vary} & {"run", "case", "status"}
+    ms = metric_list or scene.sweep.metrics or mt.defaults(scene.outputs)
+    clash = {v.name for v in vary} & ({"run", "case", "status"} | {m.name for m in ms})
     if clash:
         raise ScenarioError(f"{scene.path}: {sorted(clash)} cannot be varied (a column name)")
-    ms = metric_list or scene.sweep.metrics or mt.defaults(scene.outputs)
     built = fmu_build.build(scene.config, fmu_out)
     if share_by_path is None:
         share_by_path = engine.scheduler is None
