@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 SCENE  ?= scenarios/fig13.toml
 
-.PHONY: run test lint figures report venv clean
+.PHONY: run test lint figures report docs venv clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,5 +30,9 @@ figures: venv
 report: venv
 	$(VENV)/bin/contact-fmu report
 
+# the documentation site from docs/ into site/ (mkdocs.yml)
+docs: venv
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict
+
 clean:
-	rm -rf out reports .pytest_cache .ruff_cache
+	rm -rf out reports site .pytest_cache .ruff_cache

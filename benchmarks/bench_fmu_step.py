@@ -9,8 +9,8 @@ runs; the cost per communication step is the mean over the steps of each step's 
 run (the machine is shared: the minimum filters out the other processes). "model" is
 the same model object called directly in Python (no FMI), timed between the scene FMU's
 steps, to separate the FMI/pythonfmu overhead from the numerics.
-``--write`` replaces the section "## FMU step cost" of docs/performance.md and the table
-between the README_MARKS comments in README.md.
+``--write`` replaces the section "## FMU step cost" of docs/performance.md (the only
+place the table lives; docs/fmu.md quotes its range and links to it).
 """
 
 from __future__ import annotations
@@ -35,12 +35,10 @@ from contact_fmu.scenario.instance import OK, Instance
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
-README = ROOT / "README.md"
 SECTION = "## FMU step cost"
 # Untimed runs before the timed ones: the first runs in a process are slower (caches,
 # lazy imports), measured up to 1.8x for the model stepped outside the FMU.
 WARMUP = 1
-README_MARKS = ("<!-- bench_fmu_step.py: table -->", "<!-- bench_fmu_step.py: end -->")
 
 
 def time_fmu(
@@ -231,17 +229,6 @@ def cornering(rows: list[dict]) -> str:
     )
 
 
-def write_readme(text: str) -> None:
-    """Replace the table between README_MARKS in README.md."""
-    readme = README.read_text()
-    begin, end = README_MARKS
-    if begin not in readme or end not in readme:
-        raise SystemExit(f"README.md lacks the markers {begin} ... {end}")
-    head, rest = readme.split(begin, 1)
-    tail = rest.split(end, 1)[1]
-    README.write_text(head + begin + "\n" + text + "\n" + end + tail)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--steps", type=int, default=40)
@@ -253,7 +240,6 @@ def main() -> None:
     print(section)
     if args.write:
         replace_section(DOC, SECTION, section)
-        write_readme(table(rows))
 
 
 if __name__ == "__main__":

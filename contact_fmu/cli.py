@@ -298,7 +298,7 @@ def parser() -> argparse.ArgumentParser:
         "--held", action="store_true", help="also the error against held inputs (slower)"
     )
     rep.add_argument(
-        "--write-docs", action="store_true", help="update README.md, docs/performance.md"
+        "--write-docs", action="store_true", help="update docs/accuracy.md, docs/performance.md"
     )
     rep_where = rep.add_mutually_exclusive_group()
     rep_where.add_argument(

@@ -372,21 +372,37 @@ def test_report_refuses_bad_options_naming_them():
         cli.main(["report", "--stiff", "--case", "eta=7"])
 
 
-def test_readme_section_gets_both_parts_and_keeps_the_other(tmp_path):
-    """The report's README section is created with its two subsections; writing one part
-    leaves the other's text alone."""
+def test_accuracy_page_gets_both_parts_and_keeps_the_other(tmp_path):
+    """docs/accuracy.md is created with its two sections; writing one part leaves the
+    other's text and the page's own text alone."""
     from contact_fmu.report import command
 
-    readme = tmp_path / "README.md"
-    readme.write_text("# X\n\n## Other\n\ntext\n")
-    command.ensure_readme_section(readme)
-    output.replace_section(readme, command.README_STIFF, "stiff table")
-    command.ensure_readme_section(readme)  # idempotent
-    output.replace_section(readme, command.README_WP, "wp table")
-    text = readme.read_text()
-    assert text.count(command.README_SECTION) == 1 and "## Other\n\ntext" in text
-    assert text.index("wp table") < text.index(command.README_STIFF) < text.index("stiff table")
-    assert "Not run yet" not in text
+    page = tmp_path / "accuracy.md"
+    command.ensure_accuracy_page(page)
+    assert page.read_text().startswith(command.ACCURACY_TITLE + "\n")
+    output.replace_section(page, command.ACCURACY_STIFF, "stiff table")
+    command.ensure_accuracy_page(page)  # idempotent
+    output.replace_section(page, command.ACCURACY_WP, "wp table")
+    text = page.read_text()
+    assert text.count(command.ACCURACY_WP) == 1 and text.count(command.ACCURACY_STIFF) == 1
+    assert text.index("wp table") < text.index(command.ACCURACY_STIFF) < text.index("stiff table")
+    assert "Not run yet" not in text and "contact-fmu report --quick" in text
+    # a page that lost a section gets it back, the rest kept
+    page.write_text(command.ACCURACY_TITLE + "\n\nintro\n\n" + command.ACCURACY_WP + "\n\nwp\n")
+    command.ensure_accuracy_page(page)
+    text = page.read_text()
+    assert "intro" in text and text.index("wp") < text.index(command.ACCURACY_STIFF)
+
+
+def test_write_docs_targets_exist_with_their_sections():
+    """The pages --write-docs rewrites hold the sections it replaces (so a rerun replaces
+    them instead of appending)."""
+    from contact_fmu.report import command
+
+    accuracy = (command.ROOT / "docs" / "accuracy.md").read_text().split("\n")
+    perf = (command.ROOT / "docs" / "performance.md").read_text().split("\n")
+    assert command.ACCURACY_WP in accuracy and command.ACCURACY_STIFF in accuracy
+    assert command.PERF_WP_SECTION in perf and command.PERF_STIFF_SECTION in perf
 
 
 def test_replace_section_keeps_the_rest(tmp_path):

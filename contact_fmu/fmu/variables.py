@@ -537,7 +537,8 @@ def select(s: Structure, inputs: tuple[str, ...], outputs: tuple[str, ...]) -> l
 
 
 def markdown_table() -> str:
-    """Every variable as a Markdown table (README): causality per mode, unit, start."""
+    """Every variable as a Markdown table (docs/variables.md): causality per mode, unit,
+    start."""
     rows = [
         "| name | body | contact | rigid_body | unit | start | description |",
         "|---|---|---|---|---|---|---|",
@@ -552,5 +553,28 @@ def markdown_table() -> str:
     return "\n".join(rows)
 
 
+DOCS_MARKS = ("<!-- variables.py: table -->", "<!-- variables.py: end -->")
+
+
+def write_docs(page: str) -> str:
+    """``page`` (the text of docs/variables.md) with the table between DOCS_MARKS
+    regenerated."""
+    begin, end = DOCS_MARKS
+    head, sep, rest = page.partition(begin)
+    _, sep2, tail = rest.partition(end)
+    if not (sep and sep2):
+        raise ValueError(f"the page lacks the markers {begin} ... {end}")
+    return head + begin + "\n" + markdown_table() + "\n" + end + tail
+
+
 if __name__ == "__main__":
-    print(markdown_table())
+    # python -m contact_fmu.fmu.variables               the table on stdout
+    # python -m contact_fmu.fmu.variables --write-docs  regenerate it in docs/variables.md
+    import sys
+    from pathlib import Path
+
+    if sys.argv[1:] == ["--write-docs"]:
+        doc = Path(__file__).resolve().parents[2] / "docs" / "variables.md"
+        doc.write_text(write_docs(doc.read_text()))
+    else:
+        print(markdown_table())

@@ -6,13 +6,16 @@ Files (under ``--out``, default reports/, gitignored):
     workprecision.md                       every scene's table and the summary
     stiff.md, stiff.csv                    the stiff and extreme cases
 
-``--write-docs`` (full runs only) copies the summary into README.md and
-docs/performance.md and the Fig. 13 plot into docs/figures/.
+``--write-docs`` (full runs only) copies the summary into docs/accuracy.md, the full
+tables into docs/performance.md and the Fig. 13 plot into docs/figures/.
 """
 
 from __future__ import annotations
 
 import csv
+import datetime
+import os
+import platform
 import shutil
 import time
 from collections.abc import Callable
@@ -25,9 +28,9 @@ from .stiff_cases import cases
 from .workprecision import BUDGET, SceneReport, run_scene
 
 ROOT = Path(__file__).resolve().parents[2]
-README_SECTION = "## Report: error against run time, stiff and extreme cases"
-README_WP = "### Error against run time"
-README_STIFF = "### Stiff and extreme cases"
+ACCURACY_TITLE = "# Accuracy: error against run time, stiff and extreme cases"
+ACCURACY_WP = "## Error against run time"
+ACCURACY_STIFF = "## Stiff and extreme cases"
 PERF_WP_SECTION = "## Error against run time (work-precision)"
 PERF_STIFF_SECTION = "## Stiff and extreme cases"
 DOC_PLOT_SCENE = "fig13"
@@ -58,7 +61,7 @@ USAGE = """    contact-fmu report                  # both parts, every scene (mi
     contact-fmu report --quick          # two steps per family, first case; no long run
     contact-fmu report --workprecision [scenes...] [--held] [--repeats N]
     contact-fmu report --stiff [--case NAME_OR_GROUP ...]
-    contact-fmu report --write-docs     # also rewrite this section and docs/performance.md
+    contact-fmu report --write-docs     # also rewrite this page and docs/performance.md
     contact-fmu report --workers 2      # the families on two worker processes (Dask)
 """
 
@@ -149,22 +152,23 @@ def stiff_suite(
 def write_docs(
     reports: list[SceneReport] | None, results: list[stiff.Result] | None, out: Path, command: str
 ) -> None:
-    """README and docs/performance.md sections of the parts that ran (the other part's
-    sections are kept), and the Fig. 13 plot in docs/figures."""
-    readme, perf = ROOT / "README.md", ROOT / "docs" / "performance.md"
+    """docs/accuracy.md and docs/performance.md sections of the parts that ran (the other
+    part's sections are kept), and the Fig. 13 plot in docs/figures."""
+    accuracy, perf = ROOT / "docs" / "accuracy.md", ROOT / "docs" / "performance.md"
     how = (
-        "Run by `" + command + "` (numbers from a shared 2-core machine: times vary with its "
-        "load, errors do not). Full tables and plots: `reports/workprecision/`, "
-        "`reports/stiff.md` (gitignored; `contact-fmu report --quick` is the short version "
-        "the tests run)."
+        f"Run by `{command}` on {datetime.date.today().isoformat()} ({machine()}; times "
+        "vary with the machine's load, errors do not). Full tables and plots: "
+        "`reports/workprecision/`, `reports/stiff.md` (gitignored; `contact-fmu report "
+        "--quick` is the short version the tests run)."
     )
-    ensure_readme_section(readme)
+    ensure_accuracy_page(accuracy)
     if reports:
         src = out / "workprecision" / f"{DOC_PLOT_SCENE}.png"
         if src.exists():
             dst = ROOT / "docs" / "figures" / f"workprecision_{DOC_PLOT_SCENE}.png"
             shutil.copyfile(src, dst)
-        readme_wp = [
+        figure = f"![work-precision, {DOC_PLOT_SCENE}](figures/workprecision_{DOC_PLOT_SCENE}.png)"
+        summary = [
             how,
             "Each scene's FMU run by fmpy over a sweep of communication steps h (the scene's "
             "step x 2^k), internal steps n per communication step, scheme (Lobatto IIIC, "
@@ -173,45 +177,48 @@ def write_docs(
             + output.ERROR_NOTE
             + " "
             + output.LADDER_NOTE,
-            f"![work-precision, {DOC_PLOT_SCENE}](docs/figures/workprecision_{DOC_PLOT_SCENE}.png)",
-            "With n = 4 internal steps (every family: `docs/performance.md`):",
+            figure,
+            "With n = 4 internal steps (every family: "
+            "[performance](performance.md#error-against-run-time-work-precision)):",
             output.summary_markdown(reports, only_substeps=4),
             READING,
         ]
-        output.replace_section(readme, README_WP, "\n\n".join(readme_wp))
-        figure = f"![work-precision, {DOC_PLOT_SCENE}](figures/workprecision_{DOC_PLOT_SCENE}.png)"
+        output.replace_section(accuracy, ACCURACY_WP, "\n\n".join(summary))
         body = [how, output.ERROR_NOTE + " " + output.LADDER_NOTE,
                 output.summary_markdown(reports), figure]  # fmt: skip
         output.replace_section(perf, PERF_WP_SECTION, "\n\n".join(body))
     if results:
-        readme_stiff = [
+        short = [
             how,
             "`tests/test_stiff.py` runs the same list. " + stiff.NOTE,
             stiff.short_markdown(results),
             stiff.failures(results),
         ]
-        output.replace_section(readme, README_STIFF, "\n\n".join(readme_stiff))
+        output.replace_section(accuracy, ACCURACY_STIFF, "\n\n".join(short))
         table = stiff.markdown(results)
         output.replace_section(perf, PERF_STIFF_SECTION, how + "\n\n" + stiff.NOTE + "\n\n" + table)
 
 
-def ensure_readme_section(readme: Path) -> None:
-    """The README's report section with its usage and two subsections (placeholders
-    until a part has run), appended if absent; a missing subsection is added at its end."""
-    text = readme.read_text()
-    lines = text.split("\n")
-    if README_SECTION not in lines:
-        parts = [README_SECTION, USAGE.rstrip("\n"), README_WP, "Not run yet.", README_STIFF,
-                 "Not run yet."]  # fmt: skip
-        readme.write_text(text.rstrip("\n") + "\n\n" + "\n\n".join(parts) + "\n")
+def machine() -> str:
+    """The machine a measurement ran on, in a few words."""
+    cpu = platform.processor() or platform.machine()
+    return f"{cpu}, {os.cpu_count()} CPUs, Python {platform.python_version()}"
+
+
+def ensure_accuracy_page(page: Path) -> None:
+    """docs/accuracy.md with its title, the command's usage and the two sections
+    (placeholders until a part has run), written if absent; a missing section is added
+    at its end."""
+    if not page.exists():
+        parts = [ACCURACY_TITLE, USAGE.rstrip("\n"), ACCURACY_WP, "Not run yet.",
+                 ACCURACY_STIFF, "Not run yet."]  # fmt: skip
+        page.write_text("\n\n".join(parts) + "\n")
         return
-    start = lines.index(README_SECTION)
-    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
-    for sub in (README_WP, README_STIFF):
-        if sub not in lines[start:end]:
-            lines[end:end] = [sub, "", "Not run yet.", ""]
-            end += 4
-    readme.write_text("\n".join(lines))
+    lines = page.read_text().split("\n")
+    for sub in (ACCURACY_WP, ACCURACY_STIFF):
+        if sub not in lines:
+            lines += ["", sub, "", "Not run yet."]
+    page.write_text("\n".join(lines).rstrip("\n") + "\n")
 
 
 def scene_paths(scenes: list[Path], scenarios: Path) -> list[Path]:

@@ -470,7 +470,7 @@ def failures(results: list[Result]) -> str:
 
 
 def short_markdown(results: list[Result]) -> str:
-    """A compact table (README): case, what, result, bound, order, wall time."""
+    """A compact table (docs/accuracy.md): case, what, result, bound, order, wall time."""
     rows = [
         "| case | what | result | max abs(T)/(mu P) | order T, v | wall (s) |",
         "|---|---|---|---|---|---|",
