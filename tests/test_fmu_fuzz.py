@@ -1,0 +1,111 @@
+"""Randomised hostile-input runs of every kind of FMU we build (issue 19, "Must show").
+
+hypothesis draws runs of FMI calls (``fmu_fuzz.strategies``); each run goes to a
+persistent worker subprocess per FMU (``fmu_fuzz.pool``), so that a crash is counted
+and the worker replaced; the call records are checked against the target behaviour
+(``fmu_fuzz.invariants``, whose docstring lists the rules and their tolerances).
+
+Default suite: a short fixed-seed run (derandomized, CONTACT_FMU_FUZZ_SHORT examples
+per kind, 12 unless set); the first violation fails the kind's test with the run as
+its reproducer (no shrinking: set CONTACT_FMU_FUZZ_SHRINK=1 for a minimal one).
+Long run (`make fuzz`): CONTACT_FMU_FUZZ_EXAMPLES runs per kind, every violation
+counted instead of raised (CONTACT_FMU_FUZZ_SECONDS: a time budget per kind); the
+summary (runs, calls, statuses per call, crashes, failure classes with the shortest
+run showing each) goes to out/fuzz/summary.md and .json, and the last test fails if
+anything was found.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+
+import pytest
+from fmu_fuzz import invariants, strategies
+from fmu_fuzz.kinds import KINDS, ROOT
+from fmu_fuzz.pool import Pool
+from fmu_fuzz.summary import Stats
+from hypothesis import HealthCheck, Phase, given, settings
+
+LONG = int(os.environ.get("CONTACT_FMU_FUZZ_EXAMPLES", "0"))
+BUDGET = float(os.environ.get("CONTACT_FMU_FUZZ_SECONDS", "inf"))
+SHRINK = os.environ.get("CONTACT_FMU_FUZZ_SHRINK") == "1"
+OUT = ROOT / "out" / "fuzz"
+_HEALTH = [HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much]
+settings.register_profile(
+    "fmu-fuzz-short",
+    max_examples=int(os.environ.get("CONTACT_FMU_FUZZ_SHORT", "12")),
+    derandomize=True,
+    deadline=None,
+    database=None,
+    phases=[Phase.explicit, Phase.generate] + ([Phase.shrink] if SHRINK else []),
+    suppress_health_check=_HEALTH,
+    print_blob=False,
+)
+settings.register_profile(
+    "fmu-fuzz-long",
+    max_examples=max(LONG, 1),
+    deadline=None,
+    database=None,
+    phases=[Phase.explicit, Phase.generate] + ([Phase.shrink] if SHRINK else []),
+    suppress_health_check=_HEALTH,
+)
+PROFILE = settings.get_profile("fmu-fuzz-long" if LONG else "fmu-fuzz-short")
+
+
+class FuzzViolation(AssertionError):
+    """A run broke an invariant of issue 19 (the message holds the reproducer)."""
+
+
+@pytest.fixture(scope="module")
+def pool():
+    p = Pool(OUT)
+    yield p
+    p.close()
+
+
+@pytest.fixture(scope="module")
+def stats():
+    s = Stats()
+    yield s
+    command = f"CONTACT_FMU_FUZZ_EXAMPLES={LONG} make fuzz" if LONG else "pytest (default suite)"
+    s.write(OUT / ("long" if LONG else "short"), command)
+
+
+def _report(kind: str, ops: list[dict], violations, res) -> str:
+    v = violations[0]
+    rec = res.records[v.index] if 0 <= v.index < len(res.records) else None
+    classes = sorted({x.cls for x in violations})
+    return (
+        f"{kind}: {v.cls} ({len(violations)} violations: {classes})\n"
+        f"detail: {v.detail}\nat record: {json.dumps(rec)[:600]}\n"
+        f"reproducer (worker ops): {json.dumps(ops)}"
+    )
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_fmu_under_hostile_calls(kind, pool, stats):
+    k = KINDS[kind]
+    path = k.path  # built (or taken from the cache) before hypothesis starts timing
+    t_end = time.monotonic() + BUDGET
+
+    @PROFILE
+    @given(ops=strategies.runs(k, long_steps=bool(LONG)))
+    def run(ops):
+        if LONG and time.monotonic() > t_end:
+            return
+        res = pool.execute(path, ops)
+        violations = invariants.check(k, ops, res)
+        stats.add(kind, ops, res, violations)
+        if violations and not LONG:
+            raise FuzzViolation(_report(kind, ops, violations, res))
+
+    run()
+
+
+@pytest.mark.skipif(not LONG, reason="the long run's verdict (make fuzz)")
+def test_long_fuzz_found_nothing(stats):
+    summary = stats.write(OUT / "long", f"CONTACT_FMU_FUZZ_EXAMPLES={LONG} make fuzz")
+    found = stats.as_dict()["violations"]
+    assert not found, f"failure classes {list(found)}: see {summary}"
