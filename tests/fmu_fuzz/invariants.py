@@ -10,7 +10,7 @@ index. The rules:
   fmi2Error or worse (exitInitializationMode of a model that cannot start, getReal
   serving outputs it could not update, setFMUstate refusing a state: each must answer
   fmi2Error);
-- doStep before initialisation (or after fmi2Terminate) answers fmi2Error;
+- doStep before initialisation answers fmi2Error, after fmi2Terminate not fmi2OK;
 - a step size <= 0 or not finite, or a communication point off the FMU's time by
   more than 1e-9 max(1, |t|), is not answered fmi2OK/fmi2Warning;
 - an inadmissible value (outside the declared range, NaN, inf) of a parameter or input
@@ -73,6 +73,9 @@ class Track:
     t: float | None = 0.0  # the FMU's time
     load: tuple[float, float] | None = None  # (mu, P) the body's outputs belong to
     named: dict[str, list[str]] = field(default_factory=dict)  # messages since a bad set
+    # a doStep before initialisation was answered OK (itself a violation): what the
+    # model was set up with is unknown from then on
+    tainted: bool = False
 
 
 def _finite(values: dict) -> bool:
@@ -88,6 +91,9 @@ class Checker:
         self.start = start
         self.slots: dict[int, Track | None] = {}  # state slot -> the track it holds
         self.bufs: dict[int, Track | None] = {}
+        # where a state came from: own, foreign (the other instance), damaged, crafted
+        self.origin: dict[int, str] = {}
+        self.buf_origin: dict[int, str] = {}
         self.freed: set[int] = set()
         self.roundtrip: Track | None = None
         self.badfix_pre: int | None = None  # status of the last badfix-pre step
@@ -116,12 +122,17 @@ class Checker:
 
     def record(self, k: int, rec: dict, op: dict, tr: Track) -> None:
         call, st, log = rec["call"], rec["status"], rec["log"]
+        if call == "setFMUstate" and "slot" in op and rec.get("phase") != "roundtrip":
+            call = f"setFMUstate[{self.origin.get(op['slot'], 'unknown')}]"
+        if rec.get("freed"):
+            call = "setFMUstate[freed]"
         if st >= FATAL:
             self.flag(f"fatal:{call}", k, _msgs(log))
             return
-        if st <= WARNING and any(s >= ERROR for s, _ in log) and call != "setReal":
-            if not call.startswith("set") or call == "setFMUstate":
+        if st <= WARNING and any(s >= ERROR for s, _ in log):
+            if not call.startswith("set") or call.startswith("setFMUstate"):
                 self.flag(f"silent_error:{call}", k, _msgs(log))
+        call = rec["call"]
         handler = getattr(self, "on_" + call, None)
         if handler is not None:
             handler(k, rec, op, tr)
@@ -137,6 +148,9 @@ class Checker:
     def on_exitInitializationMode(self, k, rec, op, tr):
         bad = [n for n, v in tr.values.items() if not self.kind.admissible(n, v)]
         st = rec["status"]
+        if tr.tainted:
+            tr.phase = "ready" if st <= WARNING else "error"
+            return
         if bad:
             if st != ERROR:
                 self.flag("bad_value_init_not_error", k, f"{bad} held; answered {st}")
@@ -149,7 +163,6 @@ class Checker:
             tr.known = True
         else:
             tr.phase = "error"
-        tr.named = {}
 
     def on_terminate(self, k, rec, op, tr):
         if rec["status"] <= WARNING:
@@ -204,7 +217,9 @@ class Checker:
             return
         if not _finite(values):
             bad = {n: v for n, v in values.items() if isinstance(v, str) or not math.isfinite(v)}
-            self.flag("nonfinite_ok", k, f"{bad}")
+            # an output, or only the held value of an input/parameter set so
+            outs = [n for n in bad if self.kind.variables[n].causality == "output"]
+            self.flag("nonfinite_ok:output" if outs else "nonfinite_ok:held_value", k, f"{bad}")
             return
         if not tr.known:
             return
@@ -233,10 +248,12 @@ class Checker:
         if tr.phase in ("instantiated", "init"):
             if st != ERROR:
                 self.flag("step_before_init_not_error", k, f"phase {tr.phase}, answered {st}")
+            if st <= WARNING:  # it did step: the FMU's time moved
+                tr.t, tr.tainted, tr.known = t + h, True, False
             return
         if tr.phase == "terminated":
-            if st != ERROR:
-                self.flag("step_after_terminate_not_error", k, f"answered {st}")
+            if st <= WARNING:
+                self.flag("step_after_terminate_ok", k, f"answered {st}")
             return
         if tr.phase != "ready":
             return
@@ -248,7 +265,7 @@ class Checker:
             if off > TIME_RTOL * max(1.0, abs(tr.t)):
                 self.flag("time_off_ok", k, f"t = {t!r}, FMU time {tr.t!r}, h = {h!r}")
         bad = [n for n, v in tr.values.items() if not self.kind.admissible(n, v)]
-        if bad:
+        if bad and tr.known:
             if st not in (DISCARD, ERROR):
                 self.flag("bad_value_step_not_refused", k, f"{bad} held; answered {st}")
             elif not self._named(bad, tr, rec):
@@ -306,8 +323,9 @@ class Checker:
             d = x1[name] - x0[name]
             r = factor * EPS * (abs(x0[name]) + abs(x1[name]) + terms)
             if not abs(d - expect) <= slack * (1.0 + 1e-12) + r:
+                method = v.get("method", "full")  # "quasistationary": Eq. 26's stepper
                 self.flag(
-                    "momentum_balance",
+                    "momentum_balance" + ("" if method == "full" else f"({method})"),
                     k,
                     f"d{name} = {d!r} over h = {h!r}: the balance allows {expect!r} +- "
                     f"{slack + r!r} (loads {dict(v)})",
@@ -323,6 +341,7 @@ class Checker:
         else:
             self.slots[op["slot"]] = snap
             self.freed.discard(op["slot"])
+            self.origin[op["slot"]] = "own" if int(op.get("inst", 0)) == 0 else "foreign"
 
     def on_setFMUstate(self, k, rec, op, tr):
         st = rec["status"]
@@ -365,15 +384,19 @@ class Checker:
     def on_serializeFMUstate(self, k, rec, op, tr):
         src = self.slots.get(op["slot"])
         self.bufs[op["buf"]] = src if rec["status"] <= WARNING else None
+        self.buf_origin[op["buf"]] = "bytes," + self.origin.get(op["slot"], "unknown")
 
     def on_craft(self, k, rec, op, tr):
         self.bufs[op["buf"]] = None  # the state is no longer one the FMU wrote
+        self.buf_origin[op["buf"]] = f"crafted:{op['edit'][0]}"
 
     def on_deSerializeFMUstate(self, k, rec, op, tr):
         src = self.bufs.get(op["buf"])
         damaged = bool(op.get("damage"))
         self.slots[op["slot"]] = None if (damaged or src is None) else copy.deepcopy(src)
         self.freed.discard(op["slot"])
+        origin = self.buf_origin.get(op["buf"], "unknown")
+        self.origin[op["slot"]] = f"damaged:{op['damage'][0]}" if damaged else origin
 
 
 def _msgs(log: list) -> str:

@@ -33,6 +33,7 @@ import json
 import math
 import os
 import pickle
+import resource
 import shutil
 import sys
 import tempfile
@@ -339,6 +340,10 @@ def main() -> None:
     PROTO = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever the FMU prints goes to stderr
     faulthandler.enable(sys.stderr)
+    # a bound on the address space: a hostile grid size must fail with MemoryError in
+    # the worker, not take the memory of the machine
+    limit = int(float(os.environ.get("CONTACT_FMU_FUZZ_MEMORY_GB", "4")) * 2**30)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     host = Host(sys.argv[1])
     emit({"ready": True, "reals": [v.name for v in host.reals]})
     try:
