@@ -114,7 +114,7 @@ class Checker:
                 "crash",
                 len(recs),
                 f"{signal_name(self.res.returncode)} after {last['call']} of op {last['i']}; "
-                f"stderr: {self.res.stderr_tail[-600:]}",
+                f"stack: {_stack(self.res.stderr_tail)}",
             )
         if self.res.hung:
             self.flag("hang", len(recs), f"no answer within the limit ({self.res.seconds:.0f} s)")
@@ -397,6 +397,12 @@ class Checker:
         self.freed.discard(op["slot"])
         origin = self.buf_origin.get(op["buf"], "unknown")
         self.origin[op["slot"]] = f"damaged:{op['damage'][0]}" if damaged else origin
+
+
+def _stack(stderr: str) -> str:
+    """The worker's Python frames from faulthandler's report of the crash."""
+    frames = [ln.strip() for ln in stderr.splitlines() if ln.strip().startswith("File")]
+    return " < ".join(frames[:3]) or stderr[-300:]
 
 
 def _msgs(log: list) -> str:

@@ -51,12 +51,12 @@ class Worker:
         self.sel.register(self.proc.stdout, selectors.EVENT_READ)
         self.buf = b""
         ready = self._line(60.0)
-        if ready is None or not json.loads(ready).get("ready"):
+        if not ready or not json.loads(ready).get("ready"):
             self.close()
             raise RuntimeError(f"fuzz worker for {fmu} did not start: {self._tail()}")
 
     def _line(self, timeout: float) -> bytes | None:
-        """The next line of the protocol, None at EOF or after ``timeout`` s."""
+        """The next line of the protocol; None after ``timeout`` s; b"" at EOF."""
         deadline = time.monotonic() + timeout
         while b"\n" not in self.buf:
             left = deadline - time.monotonic()
@@ -64,12 +64,12 @@ class Worker:
                 return None
             chunk = os.read(self.proc.stdout.fileno(), 1 << 16)
             if not chunk:
-                return None
+                return b""
             self.buf += chunk
         line, _, self.buf = self.buf.partition(b"\n")
         return line
 
-    def _tail(self, n: int = 2000) -> str:
+    def _tail(self, n: int = 6000) -> str:
         self.log.flush()
         try:
             with open(self.log_path, "rb") as f:
@@ -88,11 +88,12 @@ class Worker:
             res.crashed = True
         while not res.crashed:
             line = self._line(max(0.0, t0 + timeout - time.monotonic()))
-            if line is None:
-                if self.proc.poll() is None:  # alive but silent: hung
-                    res.hung = True
-                    self.proc.kill()
-                res.crashed = not res.hung
+            if line is None:  # alive but silent: hung
+                res.hung = True
+                self.proc.kill()
+                break
+            if line == b"":  # the pipe closed: the worker died
+                res.crashed = True
                 break
             msg = json.loads(line)
             if msg.get("done"):
