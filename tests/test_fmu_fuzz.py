@@ -56,7 +56,7 @@ settings.register_profile(
 PROFILE = settings.get_profile("fmu-fuzz-long" if LONG else "fmu-fuzz-short")
 
 
-class FuzzViolation(AssertionError):
+class FuzzViolationError(AssertionError):
     """A run broke an invariant of issue 19 (the message holds the reproducer)."""
 
 
@@ -101,7 +101,7 @@ def test_fmu_under_hostile_calls(kind, pool, stats):
         violations = invariants.check(k, ops, res)
         stats.add(kind, ops, res, violations)
         if violations and not COLLECT:
-            raise FuzzViolation(_report(kind, ops, violations, res))
+            raise FuzzViolationError(_report(kind, ops, violations, res))
 
     run()
 
@@ -111,3 +111,62 @@ def test_long_fuzz_found_nothing(stats):
     summary = stats.write(OUT / "long", f"CONTACT_FMU_FUZZ_EXAMPLES={LONG} make fuzz")
     found = stats.as_dict()["violations"]
     assert not found, f"failure classes {list(found)}: see {summary}"
+
+
+# ---- the checker itself, on synthetic call records (no FMU run) ------------------------
+def _records(kind, ops, steps):
+    """Records of an initialised fig13-like run: ops[0:3] = setup, enter, exit, then one
+    doStep op per entry of ``steps`` = (status, before, after) with getReal values."""
+    recs = [{"i": -1, "call": "instantiate", "status": 0, "log": []}]
+    recs += [
+        {"i": i, "call": c, "status": 0, "log": []}
+        for i, c in enumerate(("setupExperiment", "enterInitializationMode"))
+    ]
+    recs.append({"i": 2, "call": "exitInitializationMode", "status": 0, "log": []})
+    for n, (st, before, after) in enumerate(steps):
+        i = 3 + n
+        h = ops[i]["h"]
+        recs += [
+            {
+                "i": i,
+                "call": "getReal",
+                "status": 0,
+                "log": [],
+                "values": before,
+                "phase": "before",
+            },
+            {"i": i, "call": "doStep", "status": st, "log": [], "t": 1e-4 * n, "h": h},
+            {"i": i, "call": "getReal", "status": 0, "log": [], "values": after, "phase": "after"},
+        ]
+    return recs
+
+
+def _check(kind, steps, h=1e-4, **result):
+    from fmu_fuzz.pool import Result
+
+    ops = [{"op": "setup"}, {"op": "enter"}, {"op": "exit"}] + [{"op": "step", "h": h}] * len(steps)
+    res = Result(records=_records(kind, ops, steps), **result)
+    return {v.cls for v in invariants.check(KINDS[kind], ops, res)}
+
+
+def test_checker_momentum_balance_bound():
+    """fig13 (M = 1 kg, Fx_ex = F = 190.99 N, mu P = 300 N, h = 1e-4 s): Eq. (8) allows
+    dVx = h (Fx_ex -+ mu P)/M = 0.0191 +- 0.03 m/s; 0.049 passes, 0.0492 does not."""
+    base = {"Vx": 5.6, "Omega_y": 112.0, "Tx": 0.0}
+    ok = dict(base, Vx=5.6 + 0.0490)
+    bad = dict(base, Vx=5.6 + 0.0492)
+    assert "momentum_balance" not in _check("fig13", [(0, base, ok)])
+    assert "momentum_balance" in _check("fig13", [(0, base, bad)])
+    # a discarded step changes nothing and is not checked
+    assert "momentum_balance" not in _check("fig13", [(2, base, bad)])
+
+
+def test_checker_flags_fatal_nan_friction_and_crash():
+    k = KINDS["fig13"]
+    base = {"Vx": k.start("Vx0"), "Omega_y": k.start("Omega_y0"), "Tx": 0.0}
+    over = dict(base, Tx=300.0 * (1 + 1e-9))  # mu P = 300 N
+    assert "T_exceeds_muP" in _check("fig13", [(0, base, over)])
+    assert "T_exceeds_muP" not in _check("fig13", [(0, base, dict(base, Tx=300.0))])
+    assert "nonfinite_ok:output" in _check("fig13", [(0, base, dict(base, Tx="nan"))])
+    assert "fatal:doStep" in _check("fig13", [(4, base, base)])
+    assert "crash" in _check("fig13", [(0, base, base)], crashed=True, returncode=-11)

@@ -12,7 +12,7 @@ index. The rules:
   fmi2Error);
 - doStep before initialisation answers fmi2Error, after fmi2Terminate not fmi2OK;
 - a step size <= 0 or not finite, or a communication point off the FMU's time by
-  more than 1e-9 max(1, |t|), is not answered fmi2OK/fmi2Warning;
+  more than 1e-10 max(1, |t|) (TIME_RTOL), is not answered fmi2OK/fmi2Warning;
 - an inadmissible value (outside the declared range, NaN, inf) of a parameter or input
   is refused: fmi2Error at fmi2SetXXX, or else fmi2Error at exitInitializationMode /
   fmi2Discard or fmi2Error at the next doStep; either with a logged message naming
@@ -32,7 +32,12 @@ index. The rules:
   new value) formed by a few operations on the loads and stage values (a few eps of
   their sizes); over at most N internal steps (N = 10^4, the body model's cap
   MAX_SUBSTEPS; 1 for the rigid body) that is below 16 N eps (|x0| + |x1| + the
-  increment's terms), and 4 eps (...) for the rigid body's single update;
+  increment's terms), and 4 eps (...) for the rigid body's single update. The body's
+  stepper holds vx and Omega_y (Eq. 20), so its Vx = vx + Rx Omega_y is resolved only
+  to eps (Rx |Omega_y| + |vx|) (and Omega_y to eps (|Vx| + |vx|)/Rx): a violation within
+  that is classed "momentum_balance(precision)" (values beyond what doubles resolve in
+  that formulation, answered OK: the target is a refusal or a declared range), beyond
+  it "momentum_balance"; the quasistationary stepper's are tagged with its name;
 - a round trip (get state, k steps, set state, the same k steps) repeats statuses and
   outputs bit for bit;
 - freeFMUstate of a state already freed (a dangling handle) and setFMUstate of a freed
@@ -51,7 +56,11 @@ from .pool import Result, signal_name
 
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 EPS = 2.220446049250313e-16
-TIME_RTOL = 1e-9
+# A communication point may differ from the FMU's time by the rounding of a master's
+# accumulated steps (a few ulp per step: 1e4 steps of ~1e-16 relative stay below 1e-12),
+# not by a fraction of the step: the issue's 5e-4 s at t = 1e6 s (5e-10 relative) is
+# refused, so the bound is 1e-10 max(1, |t|).
+TIME_RTOL = 1e-10
 N_BODY = 10_000  # the body model's most internal steps per doStep (MAX_SUBSTEPS)
 
 
@@ -229,10 +238,9 @@ class Checker:
             if bad and tr.phase == "ready":
                 self.flag("stale_outputs_ok", k, f"inputs {bad} inadmissible, getReal OK")
                 return
-            mu = (tr.inforce or {}).get("mu")
-            load = (mu, tr.values["P"]) if mu is not None else None
-            if load and not all(self.kind.admissible(n, x) for n, x in zip(("mu", "P"), load)):
-                load = None
+            mu, P = (tr.inforce or {}).get("mu"), tr.values["P"]
+            admissible = mu is not None and self.kind.admissible("mu", mu)
+            load = (mu, P) if admissible and self.kind.admissible("P", P) else None
         else:
             load = tr.load
         if load and "Tx" in values and self.kind.variables["Tx"].causality == "output":
@@ -310,22 +318,33 @@ class Checker:
         else:
             mu, P = float(p["mu"]), float(v["P"])
             n = 16.0 * N_BODY
-            checks = [("Vx", h * Fx / M, h * mu * P / M, n, h * (abs(Fx) + mu * P) / M)]
+            # the stepper's state is the slip vx and Omega_y (Eq. 20), Vx = vx + Rx Omega_y:
+            # its Vx carries the rounding of Rx |Omega_y| and its Omega_y that of |Vx| / Rx
+            spin = Rx * _sizes(x0, x1, "Omega_y", fallback=abs(float(p.get("Omega_y0", 0.0))))
+            slip = _sizes(x0, x1, "vx")
+            terms = h * (abs(Fx) + mu * P) / M
+            checks = [("Vx", h * Fx / M, h * mu * P / M, n, terms, spin + slip)]
             if Iy and Iy > 0.0:
                 terms = h * (abs(My) + Rx * mu * P) / Iy
-                terms += (abs(x0.get("Vx", 0.0)) + abs(x1.get("Vx", 0.0))) / Rx
-                checks.append(("Omega_y", h * My / Iy, h * Rx * mu * P / Iy, n, terms))
+                extra = (_sizes(x0, x1, "Vx") + slip) / Rx
+                checks.append(("Omega_y", h * My / Iy, h * Rx * mu * P / Iy, n, terms, extra))
             if self.kind.cfg.vy == "eq10":
-                checks.append(("Vy", h * Fy / M, h * mu * P / M, n, h * (abs(Fy) + mu * P) / M))
-        for name, expect, slack, factor, terms in checks:
+                terms = h * (abs(Fy) + mu * P) / M
+                checks.append(("Vy", h * Fy / M, h * mu * P / M, n, terms, 0.0))
+        for name, expect, slack, factor, terms, extra in checks:
             if name not in x0 or name not in x1:
                 continue
             d = x1[name] - x0[name]
             r = factor * EPS * (abs(x0[name]) + abs(x1[name]) + terms)
             if not abs(d - expect) <= slack * (1.0 + 1e-12) + r:
+                # within what the (vx, Omega_y) formulation can resolve at these sizes: a
+                # value beyond the doubles' reach answered OK (refuse it, or declare a range)
+                resolvable = abs(d - expect) > slack * (1.0 + 1e-12) + r + factor * EPS * extra
                 method = v.get("method", "full")  # "quasistationary": Eq. 26's stepper
+                tags = [] if method == "full" else [method]
+                tags += [] if resolvable else ["precision"]
                 self.flag(
-                    "momentum_balance" + ("" if method == "full" else f"({method})"),
+                    "momentum_balance" + (f"({','.join(tags)})" if tags else ""),
                     k,
                     f"d{name} = {d!r} over h = {h!r}: the balance allows {expect!r} +- "
                     f"{slack + r!r} (loads {dict(v)})",
@@ -397,6 +416,13 @@ class Checker:
         self.freed.discard(op["slot"])
         origin = self.buf_origin.get(op["buf"], "unknown")
         self.origin[op["slot"]] = f"damaged:{op['damage'][0]}" if damaged else origin
+
+
+def _sizes(x0: dict, x1: dict, name: str, fallback: float = 0.0) -> float:
+    """|x| before plus after the step (2 fallback where the FMU does not output x)."""
+    if name in x0 and name in x1:
+        return abs(x0[name]) + abs(x1[name])
+    return 2.0 * fallback
 
 
 def _stack(stderr: str) -> str:

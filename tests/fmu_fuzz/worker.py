@@ -62,7 +62,7 @@ PROTO = None  # the protocol's file (the original stdout)
 FATAL = 4
 
 
-class Fatal(Exception):
+class FatalStatusError(Exception):
     """A call answered fmi2Fatal: the run ends and the worker with it."""
 
 
@@ -131,7 +131,7 @@ class Host:
         emit({"i": i, "call": call, "status": int(status), "log": self.log, **extra})
         self.log = []
         if status >= FATAL:  # the instance may not be called again, not even freed
-            raise Fatal
+            raise FatalStatusError
 
     # ---- calls -----------------------------------------------------------------------
     def op_setup(self, i, op, c):
@@ -328,7 +328,9 @@ class Host:
 
 def _enc(values: dict) -> dict:
     """Floats as JSON numbers (repr is exact); NaN/inf as strings JSON can carry."""
-    return {k: (v if isinstance(v, int) or math.isfinite(v) else repr(v)) for k, v in values.items()}
+    return {
+        k: (v if isinstance(v, int) or math.isfinite(v) else repr(v)) for k, v in values.items()
+    }
 
 
 def _hex(values: dict) -> dict:
@@ -353,7 +355,7 @@ def main() -> None:
             req = json.loads(line)
             try:
                 host.run(req["ops"])
-            except Fatal:
+            except FatalStatusError:
                 emit({"done": True, "fatal": True})
                 break
             emit({"done": True})
