@@ -103,7 +103,10 @@ def test_fmu_under_hostile_calls(kind, pool, stats):
         if violations and not COLLECT:
             raise FuzzViolationError(_report(kind, ops, violations, res))
 
-    run()
+    try:
+        run()
+    finally:
+        pool.release(path)
 
 
 @pytest.mark.skipif(not LONG, reason="the long run's verdict (make fuzz)")

@@ -145,6 +145,12 @@ class Pool:
             self.restarts += 1
         return res
 
+    def release(self, fmu: Path) -> None:
+        """End the worker of ``fmu`` (its runs are done)."""
+        w = self.workers.pop(fmu, None)
+        if w is not None:
+            w.close()
+
     def close(self) -> None:
         for w in self.workers.values():
             w.close()

@@ -2,7 +2,8 @@
 
 A run instantiates, sets up, initialises (with parameters and inputs drawn from their
 declared ranges or from the hostile values below) and then calls at random: inputs,
-parameters and outputs set, doSteps of any size at or off the FMU's time, outputs read,
+parameters and outputs set, doSteps of any size at or off the FMU's time, marches of
+5 to 60 equal steps (for slip and the transient field to build up), outputs read,
 FMU states got, set, freed (twice, or set after free), serialized, damaged (a byte
 changed, truncated), crafted (the pickled state rewritten), taken from a second
 instance with other parameters, round trips (get, step, set, step), bad inputs then
@@ -178,12 +179,15 @@ def runs(draw, kind: Kind) -> list[dict]:
                 ["step"] * 6
                 + ["set_input"] * 3
                 + ["get", "set_param", "set_output", "state", "state", "serial", "craft"]
-                + ["roundtrip", "badfix", "terminate", "reset"]
+                + ["roundtrip", "badfix", "terminate", "reset", "march"]
                 + (["foreign"] * 2 if foreign else [])
             )
         )
         if what == "step":
             ops.append({"op": "step", "h": draw(h), "t": draw(time_offset())})
+        elif what == "march":  # long enough for slip and the transient field to build up
+            hh = draw(st.floats(-6.0, -4.0).map(lambda e: 10.0**e))
+            ops += [{"op": "step", "h": hh}] * draw(st.integers(5, 60))
         elif what == "set_input" and inputs:
             name = draw(st.sampled_from(inputs))
             ops.append({"op": "set", "name": name, "value": draw(value(kind, name))})
