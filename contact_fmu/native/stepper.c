@@ -24,6 +24,18 @@
 #include <math.h>
 #include <stddef.h>
 
+/* The Python path's roundings wherever this file is compiled (the native FMU's
+ * sources/ too, by a build this project does not control): no contraction into fused
+ * multiply-adds (gcc takes -ffp-contract=off from its flags; clang and MSVC this). */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(_MSC_VER)
+#pragma fp_contract(off)
+#endif
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 /* The C library's oldest versions of the symbols whose default version is newer than
  * the floor of manylinux2014 (glibc 2.17): hypot (2.35) and pow (2.29) were re-versioned
  * when their errno handling changed, not their values (the compat entries wrap the same
@@ -543,6 +555,47 @@ typedef struct {
     int max_substeps;
     double out[N_OUT];
 } cf_body;
+
+/* ---- the derived constants of layer.LayerContact and dynamics.Body ------------------ */
+/* The thin-layer law at load P into p (mu, P, a1, creep_full_slip, beta_per_creep:
+ * LayerContact.native_fields) and its lateral semi-axis a2 and peak pressure p0, Eq. (34):
+ * delta = (P (k1 + k2)/pi)^(1/2) (Rx Ry)^(-1/4), a1 = (2 Rx delta)^(1/2), a2 = (2 Ry
+ * delta)^(1/2), p0 = delta/(k1 + k2), creep_full_slip = 2 mu p0 (kb + ks)/a1. The
+ * expressions of layer.py in its order: the same doubles (tests/test_native_fmu.py). */
+void cf_layer_law(cf_params *p, double P, double Rx, double Ry, double k1, double k2,
+                  double kb, double ks, double mu, double *a2, double *p0) {
+    const double kn = k1 + k2;
+    const double delta = sqrt(P * kn / M_PI) * pow(Rx * Ry, -0.25);
+    const double a1 = sqrt(2.0 * Rx * delta);
+    *a2 = sqrt(2.0 * Ry * delta);
+    *p0 = delta / kn;
+    const double cfs = p->beta_full_slip * mu * *p0 * (kb + ks) / a1;
+    p->mu = mu;
+    p->P = P;
+    p->a1 = a1;
+    p->creep_full_slip = cfs;
+    p->beta_per_creep = p->beta_full_slip / cfs;
+}
+
+/* dynamics.Body: A1 = M Rx^2/(M Rx^2 + Iy) (1 for Iy = 0), A2 = Iy/(M Rx^2 + Iy),
+ * m_slip = M A2 (Eq. 23), in its operations (Rx**2 is pow there) */
+void cf_body_inertia(cf_params *p, double M, double Rx, double Iy) {
+    const double MR2 = M * pow(Rx, 2.0);
+    p->A1 = Iy == 0.0 ? 1.0 : MR2 / (MR2 + Iy);
+    p->A2 = Iy / (MR2 + Iy);
+    p->m_slip = M * p->A2;
+}
+
+/* RollingBody.__init__'s forces at the initial state (vy = ry Vx, no spin) and the
+ * regime flag, in y->Tx, Ty, Mz, out_sliding */
+void cf_initial_forces(const cf_params *p, cf_state *y) {
+    double T[3];
+    law(p, y->vx, y->Vx, T);
+    y->Tx = T[0], y->Ty = T[1], y->Mz = T[2];
+    y->out_sliding = saturated(p, y->Vx, y->vx);
+    y->sliding = 0;
+    y->dv = 0.0;
+}
 
 /* LayerContact.adhesion_fraction, float path without spin */
 static double adhesion_fraction(const cf_params *p, double vx, double vy, double Vx) {
