@@ -43,7 +43,8 @@ import numpy as np
 
 SOURCE = Path(__file__).with_name("stepper.c")
 # No contraction into fused multiply-adds, no fast math: the Python path's roundings.
-CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math")
+# CF_GLIBC_COMPAT: the oldest glibc symbol versions of hypot and pow (stepper.c).
+CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math", "-DCF_GLIBC_COMPAT")
 OK = 0
 
 

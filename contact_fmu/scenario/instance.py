@@ -62,11 +62,15 @@ class Instance:
         )
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         self.time = start_time
-        self.fmu.setupExperiment(startTime=start_time)
-        self.fmu.enterInitializationMode()
-        for k, v in (start_values or {}).items():
-            self.set(k, v)
-        self.fmu.exitInitializationMode()
+        try:
+            self.fmu.setupExperiment(startTime=start_time)
+            self.fmu.enterInitializationMode()
+            for k, v in (start_values or {}).items():
+                self.set(k, v)
+            self.fmu.exitInitializationMode()
+        except FMICallException:  # a model that cannot start: freed, then the error
+            self.close()
+            raise
 
     def _log(self, env, instance, status, category, message) -> None:
         self.messages.append((int(status), message.decode(errors="replace") if message else ""))

@@ -1,0 +1,581 @@
+"""The native FMU (fmu_build --native: the FMI 2.0 layer fmu2.c on the compiled stepper,
+no Python on the target) against the pythonfmu FMU and the scenes' references.
+
+Both FMUs run the same C step (stepper.c's cf_advance and cf_body_outputs), the native
+one with the law's and the body's constants derived in C (cf_layer_law, cf_body_inertia)
+from the same expressions as layer.py and dynamics.py: their outputs must be the same
+doubles, step for step. Tests that need a C compiler, cmake or a sanitizer skip only
+where the tool is missing (CI has them all).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import re
+import shutil
+import subprocess
+import sys
+import threading
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fmu_build
+from contact_fmu import examples as ex
+from contact_fmu import native
+from contact_fmu.dynamics import Body
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.layer import LayerContact
+from contact_fmu.scenario import load, runner
+from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
+from fmu_build import native_fmu
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+SCENES = ("fig13", "brake", "fig12", "railway")
+F = ex.force_unit()
+MU_P = ex.mu * ex.P
+
+needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+pytestmark = needs_cc
+
+
+@pytest.fixture(scope="session")
+def scenes():
+    return {n: load(ROOT / "scenarios" / f"{n}.toml") for n in SCENES}
+
+
+@pytest.fixture(scope="session")
+def native_fmus(scenes) -> dict[str, Path]:
+    return {n: native_fmu.build(s.config, OUT).path for n, s in scenes.items()}
+
+
+@pytest.fixture(scope="session")
+def python_fmus(scenes) -> dict[str, Path]:
+    return {n: fmu_build.build(s.config, OUT).path for n, s in scenes.items()}
+
+
+# ---- the scenes ----------------------------------------------------------------------------
+@pytest.mark.parametrize("name", SCENES)
+def test_scene_through_the_native_fmu_passes_its_references_bit_for_bit(
+    scenes, native_fmus, python_fmus, name
+):
+    """Every steady scene the native FMU covers: its references pass, and each output of
+    each step is the pythonfmu FMU's double (both run stepper.c's step)."""
+    scene = scenes[name]
+    got = runner.simulate(native_fmus[name], scene)
+    ref = runner.simulate(python_fmus[name], scene)
+    for a, b in zip(got, ref, strict=True):
+        assert a.error is None and b.error is None, (a.error, b.error)
+        for k in b.columns:
+            assert np.array_equal(a.columns[k], b.columns[k]), (name, a.case, k)
+    checks = runner.compare(scene, got)
+    assert checks and all(c.ok for c in checks), [c for c in checks if not c.ok]
+
+
+def test_law_and_body_constants_in_c_are_pythons_doubles():
+    """The contact ellipse and the law's constants (Eqs. 33-34, creep_full_slip and
+    beta per creepage: LayerContact.native_fields, a2, p0) and the body's A1, A2, M A2
+    (Eq. 23), derived in C for every new load, equal layer.py's and dynamics.py's bit for
+    bit over random parameters spanning twelve decades."""
+    lib = native.library()
+    lib.cf_layer_law.argtypes = (
+        [ctypes.POINTER(native.Params)]
+        + [ctypes.c_double] * 8
+        + [ctypes.POINTER(ctypes.c_double)] * 2
+    )
+    lib.cf_body_inertia.argtypes = [ctypes.POINTER(native.Params)] + [ctypes.c_double] * 3
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        P, Rx, Ry, M = 10 ** rng.uniform([-1, -3, -3, -2], [6, 1, 1, 3])
+        k1, k2, kb, ks = 10 ** rng.uniform(-16, -8, 4)
+        mu, Iy = rng.uniform(0.01, 1.0), float(rng.choice([0.0, 10 ** rng.uniform(-6, 1)]))
+        law = LayerContact(P, Rx, Ry, k1, k2, kb, ks, mu)
+        p = native.Params(beta_full_slip=LayerContact.native_constants["beta_full_slip"])
+        a2, p0 = ctypes.c_double(), ctypes.c_double()
+        lib.cf_layer_law(p, P, Rx, Ry, k1, k2, kb, ks, mu, a2, p0)
+        for k, v in law.native_fields().items():
+            assert getattr(p, k) == v, k
+        assert (a2.value, p0.value) == (law.a2, law.p0)
+        body = Body(M, Rx, Iy)
+        lib.cf_body_inertia(p, M, Rx, Iy)
+        assert (p.A1, p.A2, p.m_slip) == (body.A1, body.A2, body.m_slip)
+
+
+# ---- model description, build ----------------------------------------------------------------
+def _md(path: Path) -> ET.Element:
+    with zipfile.ZipFile(path) as z:
+        return ET.fromstring(z.read("modelDescription.xml"))
+
+
+@pytest.mark.parametrize("name", ["fig13", "railway"])
+def test_model_description_is_the_pythonfmu_ones_and_validates(native_fmus, python_fmus, name):
+    """Generated from the same declarations: the same variables (names, value
+    references, causality, variability, units, ranges, starts), unit definitions and
+    ModelStructure; the native one needs no execution tool, handles and serializes its
+    state, lists its C sources; fmpy's validation finds no problem."""
+    from fmpy.validation import validate_fmu
+
+    a, b = _md(native_fmus[name]), _md(python_fmus[name])
+    for tag in ("ModelVariables", "ModelStructure", "UnitDefinitions", "DefaultExperiment"):
+        ea, eb = a.find(tag), b.find(tag)
+        assert (ea is None) == (eb is None), tag
+        if ea is not None:
+            assert ET.tostring(ea) == ET.tostring(eb), tag
+    cs = a.find("CoSimulation")
+    assert cs.get("needsExecutionTool") == "false"
+    assert cs.get("canGetAndSetFMUstate") == "true" and cs.get("canSerializeFMUstate") == "true"
+    assert [f.get("name") for f in cs.find("SourceFiles")] == ["fmu2.c"]
+    with zipfile.ZipFile(native_fmus[name]) as z:
+        names = set(z.namelist())
+    assert {"sources/fmu2.c", "sources/stepper.c", "sources/cf_model.h"} <= names
+    assert not any(n.endswith(".h") and "fmi2" in n for n in names)  # fmpy's headers
+    assert validate_fmu(str(native_fmus[name])) == []
+
+
+def test_guid_follows_the_model(scenes):
+    """The GUID is a content key: the same model gives the same GUID, a changed start
+    value another one."""
+    cfg = scenes["fig13"].config
+    other = ModelConfig.from_dict(cfg.to_dict() | {"starts": {**cfg.starts, "mu": 0.25}})
+    assert native_fmu.identity(cfg) == native_fmu.identity(ModelConfig.from_dict(cfg.to_dict()))
+    assert native_fmu.identity(cfg) != native_fmu.identity(other)
+
+
+@pytest.mark.parametrize(
+    ("scene", "feature"),
+    [
+        ("cornering", 'vy = "eq10"'),
+        ("rail_creep", 'mode = "contact"'),
+        ("rail_traction", 'contact_law = "halfspace"'),
+        ("fig12_transient", 'phase = "transient"'),
+        ("full_body", 'vy = "eq10"'),
+    ],
+)
+def test_models_the_c_kernel_does_not_cover_are_refused_naming_the_feature(scene, feature):
+    if scene == "full_body":
+        cfg = ModelConfig.full("body")
+    else:
+        cfg = load(ROOT / "scenarios" / f"{scene}.toml").config
+    with pytest.raises(native_fmu.NativeUnsupportedError, match=re.escape(feature)):
+        native_fmu.build(cfg, OUT)
+
+
+def test_command_line_prints_the_fmu_path_last(native_fmus):
+    cmd = [sys.executable, "-m", "fmu_build", "--native", "scenarios/fig13.toml", "--out", str(OUT)]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert Path(proc.stdout.splitlines()[-1]) == native_fmus["fig13"]
+    cmd[4] = "scenarios/cornering.toml"
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1 and 'vy = "eq10"' in proc.stderr
+
+
+# ---- call by call, both targets ------------------------------------------------------------------
+@pytest.fixture(params=["pythonfmu", "native"])
+def fig13(request, native_fmus, python_fmus) -> Path:
+    return (native_fmus if request.param == "native" else python_fmus)["fig13"]
+
+
+def body(path: Path, **params) -> Instance:
+    """The Fig. 13 FMU (eta = 3) under Fx_ex = F, My_ex = -0.1 F Rx."""
+    inst = Instance(path, "body", params)
+    inst.set("Fx_ex", F)
+    inst.set("My_ex", -0.1 * F * ex.Rx)
+    return inst
+
+
+def steps(inst: Instance, n: int, h: float = 1.75e-4) -> None:
+    for _ in range(n):
+        assert inst.step(h) == OK, inst.messages[-1:]
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "requirement"),
+    [
+        ("Fx_ex", math.nan, "finite"),
+        ("My_ex", math.inf, "finite"),
+        ("My_ex", 6e306, None),  # finite: the step itself fails (the drive overflows)
+        ("Fx_ex", 1.2e308, None),
+        ("P", 0.0, "> 0"),
+        ("P", -5.0, "> 0"),
+    ],
+)
+def test_bad_input_gives_discard_a_named_message_and_recovery(fig13, name, value, requirement):
+    """A bad or impossible input: doStep answers fmi2Discard with a message naming the
+    variable and the value (or the failed step), the outputs stay, and once the input is
+    corrected the instance steps to the same doubles as one that never saw it."""
+    with body(fig13) as clean:  # one at a time: pythonfmu logs to the last instance
+        steps(clean, 3)
+        expected = clean.outputs()
+    with body(fig13) as b:
+        steps(b, 1)
+        good, before = b.get(name), b.outputs()
+        b.set(name, value)
+        assert b.step(1.75e-4) == DISCARD
+        if requirement is not None:
+            text = f"{name} = {value!r} is invalid: must be {requirement}"
+            assert any(text in m for s, m in b.messages if s == DISCARD), b.messages
+        else:
+            assert any("discarded, state unchanged" in m for s, m in b.messages if s == DISCARD)
+        assert b.outputs() == before
+        b.set(name, good)
+        steps(b, 2)
+        assert b.outputs() == expected
+        assert all(s < FATAL for s, _ in b.messages)
+
+
+@pytest.mark.parametrize("h", [0.0, -1.75e-4, math.nan, math.inf])
+def test_a_step_not_in_0_inf_gives_discard(fig13, h):
+    with body(fig13) as b:
+        assert b.step(h) == DISCARD
+        assert f"communicationStepSize = {h!r} is invalid" in b.messages[-1][1]
+        assert b.step(1.75e-4) == OK
+
+
+def test_bad_parameter_gives_discard_until_corrected(fig13):
+    """A parameter out of its range: the native FMU answers fmi2Error at
+    exitInitializationMode (the model cannot start), naming it; the pythonfmu FMU
+    answers fmi2Discard at each doStep until it is corrected."""
+    from fmpy.fmi1 import FMICallException
+
+    if "native" in fig13.name:
+        with pytest.raises(FMICallException) as e:
+            Instance(fig13, "bad", {"mu": -0.3})
+        assert e.value.status == ERROR
+        return
+    with body(fig13, mu=-0.3) as b:
+        assert b.step(1.75e-4) == DISCARD
+        assert any("mu = -0.3 is invalid: must be > 0" in m for _, m in b.messages)
+        b.set("mu", 0.3)
+        assert b.step(1.75e-4) == OK
+        assert abs(b.get("Tx")) <= MU_P
+
+
+def test_fmu_state_get_step_set_step_is_bit_identical(fig13):
+    with body(fig13) as b:
+        steps(b, 4)
+        state = b.get_state()
+        steps(b, 3)
+        first = b.outputs()
+        b.set_state(state)
+        steps(b, 3)
+        assert b.outputs() == first
+        b.free_state(state)
+
+
+def test_serialized_native_state_restores_bit_for_bit_in_another_instance(native_fmus):
+    """fmi2SerializeFMUstate of the native FMU into a fresh instance: the same steps give
+    the same doubles (the P change on the way rebuilds the law from the state)."""
+    with body(native_fmus["fig13"]) as a, body(native_fmus["fig13"]) as b:
+        steps(a, 4)
+        a.set("P", 0.9 * ex.P)
+        steps(a, 1)
+        state = a.get_state()
+        data = a.serialize_state(state)
+        steps(a, 3)
+        b.set_state(b.deserialize_state(data, state[1]))
+        b.set("P", 0.9 * ex.P)
+        steps(b, 3)
+        assert b.outputs() == a.outputs()
+
+
+def test_native_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(native_fmus):
+    """Foreign or damaged bytes (another FMU's state, a flipped byte, truncated, another
+    version): fmi2DeSerializeFMUstate answers fmi2Error naming the reason, nothing
+    changes, and the instance steps on."""
+    from fmpy.fmi1 import FMICallException
+
+    with Instance(native_fmus["railway"], "other") as other:
+        foreign = other.serialize_state(other.get_state())
+    with body(native_fmus["fig13"]) as b:
+        steps(b, 2)
+        state = b.get_state()
+        good = b.serialize_state(state)
+        flipped = bytearray(good)
+        flipped[len(good) // 2] ^= 0x10
+        version = bytearray(good)
+        version[8] ^= 1
+        cases = [
+            (b"garbage", "not an FMU state"),
+            (foreign, "another FMU"),
+            (bytes(flipped), "checksum"),
+            (good[:-20], "length"),
+            (bytes(version), "format version"),
+        ]
+        for data, reason in cases:
+            before = b.outputs()
+            with pytest.raises(FMICallException) as e:
+                b.deserialize_state(data, b.time)
+            assert e.value.status == ERROR and reason in b.messages[-1][1], b.messages[-1:]
+            assert b.outputs() == before
+        steps(b, 1)
+        b.set_state(b.deserialize_state(good, state[1]))
+        steps(b, 1)
+
+
+def test_instances_are_independent_also_on_threads(native_fmus):
+    """Two instances stepped at once on two threads with different loads give each the
+    doubles of a lone run: no shared mutable state."""
+
+    def run(my: float, out: list) -> None:
+        with body(native_fmus["fig13"]) as b:
+            b.set("My_ex", my)
+            for _ in range(200):
+                assert b.step(1.75e-4) == OK
+            out.append(b.outputs())
+
+    alone = ([], [])
+    run(-0.1 * F * ex.Rx, alone[0])
+    run(0.2 * F * ex.Rx, alone[1])
+    both = ([], [])
+    threads = [
+        threading.Thread(target=run, args=(-0.1 * F * ex.Rx, both[0])),
+        threading.Thread(target=run, args=(0.2 * F * ex.Rx, both[1])),
+    ]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert both == alone and alone[0] != alone[1]
+
+
+def test_fixed_parameter_or_output_set_after_initialisation_is_refused(native_fmus):
+    """Illegal calls (FMI 2.0: a fixed parameter after initialisation, an output) answer
+    fmi2Error with the pythonfmu FMU's message; the value stays, the instance steps on."""
+    from fmpy.fmi1 import FMICallException
+
+    with body(native_fmus["fig13"]) as b:
+        mu = b.get("mu")
+        for name, text in (("mu", "mu is a fixed parameter"), ("Tx", "Tx is an output")):
+            with pytest.raises(FMICallException) as e:
+                b.set(name, 0.5)
+            assert e.value.status == ERROR and text in b.messages[-1][1]
+        assert b.get("mu") == mu
+        steps(b, 1)
+
+
+def test_a_model_that_cannot_start_is_an_error_at_initialisation(native_fmus):
+    from fmpy.fmi1 import FMICallException
+
+    with pytest.raises(FMICallException) as e:
+        Instance(native_fmus["fig13"], "bad", {"k1": 0.0, "k2": 0.0})
+    assert e.value.status == ERROR
+
+
+# ---- the library itself ---------------------------------------------------------------------
+def test_native_binary_needs_no_python_and_an_old_c_library(native_fmus, tmp_path):
+    """The FMU's binary exports the FMI functions and needs nothing from Python; its
+    newest glibc symbol version is at most 2.17 (test_native.GLIBC_FLOOR)."""
+    from test_native import GLIBC_FLOOR, glibc_needed
+
+    with zipfile.ZipFile(native_fmus["fig13"]) as z:
+        (so,) = [n for n in z.namelist() if n.startswith("binaries/linux64/")]
+        z.extract(so, tmp_path)
+    lib = tmp_path / so
+    undefined = subprocess.run(
+        ["nm", "-D", "--undefined-only", str(lib)], capture_output=True, text=True, check=True
+    ).stdout
+    assert "Py" not in undefined and "python" not in undefined.lower()
+    exported = subprocess.run(
+        ["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True
+    ).stdout
+    names = set(re.findall(r" T (fmi2\w+)", exported))
+    assert len(names) == 34 and not re.search(r" T cf_", exported)  # FMI 2.0 CS: 34
+    if shutil.which("objdump"):
+        assert glibc_needed(lib) <= GLIBC_FLOOR
+
+
+# ---- a C importer, a source build, sanitizers -------------------------------------------------
+IMPORTER = Path(__file__).with_name("native_importer.c")
+
+
+def _spec(md, scene, case, rows: bool = True) -> str:
+    """The importer's input: the case's inputs per step, its parameters."""
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    reals = [o for o in scene.outputs if o != "regime"]
+    params = runner.start_values(scene, case)
+    lines = [
+        f"{len(scene.inputs)} " + " ".join(str(vr[n]) for n in scene.inputs),
+        f"{len(reals)} " + " ".join(str(vr[n]) for n in reals),
+        f"{len(params)} " + " ".join(f"{vr[k]} {float(v).hex()}" for k, v in params.items()),
+    ]
+    if rows:
+        table = runner.input_table(scene, case)
+        for k in range(scene.grid.size - 1):
+            u = " ".join(float(table[n][k]).hex() for n in scene.inputs)
+            lines.append(f"{float(scene.grid[k]).hex()} {scene.step.hex()} {u}")
+    return "\n".join(lines) + "\n"
+
+
+def _compile(out: Path, *args: str) -> Path:
+    headers = native_fmu.fmi_headers()
+    cmd = ["cc", "-O1", "-g", f"-I{headers}", "-o", str(out), *args, "-lm"]
+    subprocess.run(cmd, check=True, capture_output=True, text=True)
+    return out
+
+
+def _instance_run(path: Path, scene, case) -> np.ndarray:
+    """The case through fmpy's FMU2Slave, the input table's row k held over step k (the
+    importer's inputs exactly; fmpy's simulate_fmu interpolates them at its own time)."""
+    table = runner.input_table(scene, case)
+    reals = [o for o in scene.outputs if o != "regime"]
+    rows = []
+    with Instance(path, "expected", runner.start_values(scene, case)) as inst:
+        for k in range(scene.grid.size - 1):
+            for n in scene.inputs:
+                inst.set(n, float(table[n][k]))
+            assert inst.step(scene.step, float(scene.grid[k])) == OK
+            rows.append([inst.get(o) for o in reals])
+    return np.array(rows)
+
+
+@pytest.fixture(scope="session")
+def fig13_expected(scenes, native_fmus, python_fmus) -> np.ndarray:
+    """Fig. 13, eta = 3, through fmpy: the native FMU's outputs, which are the pythonfmu
+    FMU's doubles."""
+    scene = scenes["fig13"]
+    case = scene.case("eta = 3")
+    got = _instance_run(native_fmus["fig13"], scene, case)
+    assert np.array_equal(got, _instance_run(python_fmus["fig13"], scene, case))
+    return got
+
+
+def _fig13_case(scenes, native_fmus, expected, tmp_path):
+    import fmpy
+
+    scene = scenes["fig13"]
+    case = scene.case("eta = 3")
+    unzip = tmp_path / "fmu"
+    fmpy.extract(str(native_fmus["fig13"]), str(unzip))
+    md = fmpy.read_model_description(str(unzip))
+    spec = tmp_path / "spec.txt"
+    spec.write_text(_spec(md, scene, case))
+    return unzip, md, spec, expected
+
+
+def _importer_run(exe: Path, lib: Path, md, spec: Path) -> np.ndarray:
+    args = [str(exe), str(lib), md.guid, md.coSimulation.modelIdentifier, "run", str(spec)]
+    proc = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = [line for line in proc.stdout.split("\n") if line]
+    return np.array([[float.fromhex(x) for x in line.split()] for line in lines])
+
+
+def test_a_c_importer_without_python_runs_fig13_to_fmpys_numbers(
+    scenes, native_fmus, fig13_expected, tmp_path
+):
+    """A plain C program (dlopen, the FMI calls; no libpython linked: it needs no Python
+    symbol) runs the Fig. 13 case eta = 3 on the FMU's binary: the same doubles as fmpy's
+    run of the same FMU, and so the pythonfmu FMU's."""
+    unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
+    exe = _compile(tmp_path / "importer", str(IMPORTER), "-ldl")
+    undefined = subprocess.run(
+        ["nm", "-D", "--undefined-only", str(exe)], capture_output=True, text=True, check=True
+    ).stdout
+    assert "Py" not in undefined
+    lib = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+    got = _importer_run(exe, lib, md, spec)
+    assert got.shape == expected.shape and np.array_equal(got, expected)
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="no cmake")
+def test_source_fmu_built_by_fmpy_from_sources_alone_gives_the_same_numbers(
+    scenes, native_fmus, fig13_expected, tmp_path
+):
+    """fmpy's build of a source FMU (cmake, its own CMakeLists and FMI headers) from the
+    FMU's sources/ alone, the shipped binary removed first: the C importer gets the same
+    doubles from the binary it made."""
+    from fmpy.build import build_platform_binary
+
+    unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
+    shutil.rmtree(unzip / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(str(unzip), str(tmp_path / "build"))
+    lib = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+    assert lib.is_file()
+    exe = _compile(tmp_path / "importer", str(IMPORTER), "-ldl")
+    assert np.array_equal(_importer_run(exe, lib, md, spec), expected)
+
+
+def _sanitized(tmp_path: Path, unzip: Path) -> Path:
+    flags = (
+        "-fsanitize=address,undefined,float-cast-overflow",
+        "-fno-sanitize-recover=all",
+        "-fno-omit-frame-pointer",
+        "-ffp-contract=off",
+        "-DLINKED",
+        f"-I{unzip / 'sources'}",
+    )
+    sources = (str(IMPORTER), str(unzip / "sources" / "fmu2.c"))
+    return _compile(tmp_path / "importer_asan", *flags, *sources)
+
+
+def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
+    scenes, native_fmus, fig13_expected, tmp_path
+):
+    """The FMU's sources and the C importer in one program built with AddressSanitizer
+    and UBSan (float-to-int overflow included, no recovery): Fig. 13 to the same doubles,
+    then 4 x 3000 random calls (extreme and non-finite values of every variable, zero,
+    negative, non-finite and huge steps, steps at the wrong time, states got, set,
+    serialized, damaged and refused, resets) with no sanitizer report, no fmi2Fatal, no
+    non-finite output served with fmi2OK and no damaged bytes accepted."""
+    unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
+    try:
+        exe = _sanitized(tmp_path, unzip)
+    except subprocess.CalledProcessError as e:  # pragma: no cover - gcc without libasan
+        pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
+    assert np.array_equal(_importer_run(exe, Path("-"), md, spec), expected)
+    short = tmp_path / "params.txt"
+    short.write_text(_spec(md, scenes["fig13"], scenes["fig13"].case("eta = 3"), rows=False))
+    for seed in range(4):
+        args = [str(exe), "-", md.guid, "fuzz", "fuzz", str(short), str(seed), "3000"]
+        proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        assert "runtime error" not in proc.stderr and "Sanitizer" not in proc.stderr
+        counts = dict(zip(*[iter(proc.stdout.split())] * 2, strict=True))
+        assert int(counts["ok"]) > 1000 and int(counts["discard"]) > 100, proc.stdout
+
+
+def test_libcosim_runs_the_native_fmu_to_fmpys_numbers(scenes, native_fmus, fig13_expected):
+    """libcosim (Open Simulation Platform) drives the native Fig. 13 FMU: 60 steps of the
+    case eta = 3 give fmpy's doubles."""
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.ERROR)
+    scene = scenes["fig13"]
+    case = scene.case("eta = 3")
+    fmu = native_fmus["fig13"]
+    execution = CosimExecution.from_step_size(step_size=round(scene.step * 1e9))
+    slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu), instance_name="n"))
+    vr = {v.name.decode(): v.reference for v in execution.slave_variables(slave)}
+    for name, value in runner.start_values(scene, case).items():
+        assert execution.real_initial_value(slave, vr[name], float(value))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    override = CosimManipulator.create_override()
+    execution.add_manipulator(override)
+    table = runner.input_table(scene, case)
+    reals = [o for o in scene.outputs if o != "regime"]
+    got = []
+    for k in range(60):
+        override.slave_real_values(
+            slave, [vr[i] for i in scene.inputs], [float(table[i][k]) for i in scene.inputs]
+        )
+        assert execution.step()
+        got.append(observer.last_real_values(slave, [vr[o] for o in reals]))
+    # libcosim's step is an integer count of nanoseconds, its double not always fmpy's
+    # (1.75e-4 s): the substep differs by a rounding, the outputs by rounding times the
+    # sensitivity of 60 steps
+    want = fig13_expected[:60]
+    err = np.abs(np.array(got) - want) / np.abs(want).max(axis=0)
+    assert err.max() <= 1e-9, err.max()
