@@ -1,6 +1,7 @@
-/* The FMI 2.0 co-simulation layer of the native FMU (fmu_build --native): the body mode
- * of contact_fmu on the compiled stepper (stepper.c, included: one translation unit),
- * with no Python anywhere.
+/* The FMI 2.0 co-simulation layer of the native FMU (fmu_build --native): contact_fmu's
+ * body mode on the compiled stepper (stepper.c, included: one translation unit), its
+ * contact mode (the thin-layer law without spin, fmu/contact_model.py) and its
+ * rigid_body mode (fmu/rigid_body.py), with no Python anywhere (CF_MODE picks one).
  *
  * The model is the one of fmu/body_model.py on its compiled path: the thin-layer law
  * (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
@@ -44,8 +45,12 @@ enum { T_REAL, T_INTEGER, T_STRING };
 /* the parameters and inputs the model reads, by role */
 enum {
     R_MU, R_RX, R_RY, R_K1, R_K2, R_KB, R_KS, R_M, R_IY, R_VY_RATIO, R_VX0, R_OMEGA_Y0,
-    R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX, R_COUNT
+    R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX,
+    R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
+    R_COUNT
 };
+/* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
+enum { MODE_BODY, MODE_CONTACT, MODE_RIGID };
 #define R_OUT 1000 /* outputs: R_OUT + the index in cf_body.out */
 
 typedef struct {
@@ -76,6 +81,8 @@ typedef struct {
     char method_text[METHOD_TEXT]; /* the string set (cut at METHOD_TEXT - 1) */
     double time;
     int phase, built;
+    int dirty;                    /* contact mode: inputs set since the outputs */
+    double rb_Vx, rb_Omega_y;     /* rigid_body mode's state */
     double P_law;                 /* the load the law's constants are for */
     cf_params p;
     cf_state s;
@@ -241,6 +248,72 @@ static void law_at_load(const cf_core *c, double P, cf_params *p, cf_body *b) {
                  &b->p0);
 }
 
+/* the outputs of the struct into the variables */
+static void publish(cf_core *c) {
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = c->b.out[CF_VARS[i].role - R_OUT];
+}
+
+/* the name of the first of the FMU's outputs in out[] that is not finite (its value in
+ * r), or NULL */
+static const char *nonfinite(const double *out, char *r, size_t n) {
+    for (int i = 0; i < CF_N_VARS; i++) {
+        const cf_var *v = &CF_VARS[i];
+        if (v->kind == K_OUTPUT && !isfinite(out[v->role - R_OUT])) {
+            py_repr(out[v->role - R_OUT], r, n);
+            return v->name;
+        }
+    }
+    return NULL;
+}
+
+/* ContactElement.evaluate: the law at the inputs' load and kinematics, rigid slip of
+ * Eq. (3) at the contact centre (kinematics.rigid_slip), the forces (the closed form,
+ * LayerContact._forces_scalar: this mode has no spin input) and
+ * kinematics.contact_quantities; p and b hold the law at the load afterwards. The name
+ * of a non-finite output, or NULL. */
+static const char *contact_outputs(const cf_core *c, cf_params *p, cf_body *b,
+                                   double out[N_OUT], char *r, size_t n) {
+    const double *v = c->val;
+    if (v[R_P] != p->P) law_at_load(c, v[R_P], p, b);
+    const double Vx = v[R_VX], vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY];
+    const double Omega_z = v[R_OMEGA_Z];
+    double T[3];
+    forces(p, vx, vy, Vx, T);
+    for (int i = 0; i < N_OUT; i++) out[i] = 0.0;
+    out[O_TX] = T[0], out[O_TY] = T[1], out[O_MZ] = T[2];
+    out[O_VX_SLIP] = vx, out[O_VY_SLIP] = vy;
+    const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
+    out[O_XI_X] = vx / V, out[O_XI_Y] = vy / V, out[O_XI_SP] = Omega_z / V;
+    out[O_A1] = p->a1, out[O_A2] = b->a2, out[O_P0] = b->p0;
+    out[O_ADHESION] = adhesion_fraction(p, vx, vy, Vx);
+    out[O_REGIME] = full_slip(p, vx, vy, Vx) ? 1.0 : 0.0;
+    return nonfinite(out, r, n);
+}
+
+/* RigidBody (rigid_body.py): M, Rx, Iy > 0, the initial state */
+static int build_rigid(Inst *I) {
+    cf_core *c = &I->c;
+    const double *v = c->val;
+    static const int need[3] = {R_M, R_RX, R_IY};
+    static const char *const names[3] = {"M", "Rx", "Iy"};
+    for (int k = 0; k < 3; k++)
+        if (!(v[need[k]] > 0.0)) {
+            char r[40];
+            py_repr(v[need[k]], r, sizeof r);
+            say(I, fmi2Error, "cannot initialise the model: %s = %s is invalid: must be > 0",
+                names[k], r);
+            return 0;
+        }
+    c->rb_Vx = v[R_VX0];
+    c->rb_Omega_y = v[R_OMEGA_Y0];
+    c->b.out[O_VX] = c->rb_Vx;
+    c->b.out[O_OMEGA_Y] = c->rb_Omega_y;
+    c->built = 1;
+    publish(c);
+    return 1;
+}
+
 /* BodyModel / RollingBody set up from the parameters and inputs at the FMU's time;
  * 0 with the reasons logged (fmi2Error) where it cannot be */
 static int build(Inst *I) {
@@ -253,6 +326,7 @@ static int build(Inst *I) {
     }
     const double *v = c->val;
     char r[40];
+    if (CF_MODE == MODE_RIGID) return build_rigid(I);
     /* LayerContact.__post_init__ beyond the declared ranges */
     if (!(v[R_K1] + v[R_K2] > 0.0)) {
         py_repr(v[R_K1] + v[R_K2], r, sizeof r);
@@ -273,6 +347,23 @@ static int build(Inst *I) {
     memset(&b, 0, sizeof b);
     memset(&s, 0, sizeof s);
     set_constants(&p, &b);
+    if (CF_MODE == MODE_CONTACT) {
+        law_at_load(c, v[R_P], &p, &b);
+        double out[N_OUT];
+        const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+        if (bad) {
+            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+                "is not finite", bad, r);
+            return 0;
+        }
+        c->p = p, c->b = b;
+        memcpy(c->b.out, out, sizeof out);
+        c->P_law = v[R_P];
+        c->built = 1;
+        c->dirty = 0;
+        publish(c);
+        return 1;
+    }
     const double M = v[R_M], Rx = v[R_RX], Iy = v[R_IY];
     p.M = M, p.Rx = Rx;
     cf_body_inertia(&p, M, Rx, Iy);
@@ -304,6 +395,67 @@ static int build(Inst *I) {
     return 1;
 }
 
+/* a step of the contact mode (the outputs at the inputs held) or of the rigid body
+ * (Eqs. 8-9 under held inputs, exact: Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx
+ * Tx)/Iy), committed only when its outputs are finite */
+static fmi2Status other_step(Inst *I, double t, double h, const char *rt, const char *rh) {
+    cf_core *c = &I->c;
+    char r[40];
+    const char *bad;
+    if (CF_MODE == MODE_CONTACT) {
+        cf_params p = c->p;
+        cf_body b = c->b;
+        double out[N_OUT];
+        bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+        if (!bad) {
+            c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
+            memcpy(c->b.out, out, sizeof out);
+        }
+    } else {
+        const double *v = c->val;
+        const double Tx = v[R_TX];
+        const double Vx = c->rb_Vx + h * (v[R_FX_EX] - Tx) / v[R_M];
+        const double Oy = c->rb_Omega_y + h * (v[R_MY_EX] + v[R_RX] * Tx) / v[R_IY];
+        double out[N_OUT] = {0.0};
+        out[O_VX] = Vx, out[O_OMEGA_Y] = Oy;
+        bad = nonfinite(out, r, sizeof r);
+        if (!bad) {
+            c->rb_Vx = Vx, c->rb_Omega_y = Oy;
+            c->b.out[O_VX] = Vx, c->b.out[O_OMEGA_Y] = Oy;
+        }
+    }
+    if (bad) {
+        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
+            "FloatingPointError: output %s = %s is not finite", rt, rh, bad, r);
+        return fmi2Discard;
+    }
+    publish(c);
+    c->time = t + h;
+    return fmi2OK;
+}
+
+/* ContactSlave._refresh (direct feedthrough): the outputs for the inputs set, unless an
+ * input is bad (then the last ones stay); an output that is not finite keeps them too,
+ * with a logged error */
+static void refresh(Inst *I) {
+    cf_core *c = &I->c;
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (c->bad[i] && CF_VARS[i].kind == K_INPUT) return;
+    cf_params p = c->p;
+    cf_body b = c->b;
+    double out[N_OUT];
+    char r[40];
+    const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+    if (bad) {
+        say(I, fmi2Error, "outputs not updated for the new inputs: FloatingPointError: output "
+            "%s = %s is not finite", bad, r);
+        return;
+    }
+    c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
+    memcpy(c->b.out, out, sizeof out);
+    publish(c);
+}
+
 /* BodyModel.step + the outputs, committed only when all is well */
 static fmi2Status fmu_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
@@ -332,6 +484,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
         say(I, fmi2Discard, "doStep at t = %s discarded, state unchanged: %s", rt, list);
         return fmi2Discard;
     }
+    if (CF_MODE != MODE_BODY) return other_step(I, t, h, rt, rh);
     cf_params p = c->p;
     cf_body b = c->b;
     cf_state w = c->s;
@@ -496,6 +649,7 @@ static int vr_ok(const Inst *I, fmi2ValueReference vr, int type, const char *fn)
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[]) {
     INST(fmi2GetReal);
     if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_REAL, "fmi2GetReal")) return fmi2Error;
         v[i] = I->c.var[vr[i]];
@@ -507,6 +661,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
                           fmi2Integer v[]) {
     INST(fmi2GetInteger);
     if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_INTEGER, "fmi2GetInteger")) return fmi2Error;
         double x = I->c.var[vr[i]];
@@ -581,6 +736,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
         if (var->role < R_COUNT) C->val[var->role] = v[k];
         const int bad = requirement(var, v[k]) != NULL;
         mark(C, i, bad);
+        if (var->kind == K_INPUT) C->dirty = 1;
         if (bad) {
             char msg[256];
             bad_text(var, v[k], msg, sizeof msg);
@@ -732,6 +888,7 @@ static void sanitize(cf_core *c) {
     c->method_text[METHOD_TEXT - 1] = '\0';
     c->p.quasistationary = c->method == 1;
     c->built = c->built != 0;
+    c->dirty = c->dirty != 0;
     if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED) c->phase = PH_STEP;
     c->s.out_sliding = c->s.out_sliding != 0;
     c->s.sliding = c->s.sliding != 0;
