@@ -2,6 +2,9 @@
  *
  *   native_importer LIB GUID IDENT run  SPEC   run a case: outputs of every step (hex)
  *   native_importer LIB GUID IDENT fuzz SPEC SEED N   N random calls with extreme values
+ *   native_importer LIB GUID IDENT bench SPEC H N     N steps of H, inputs at their
+ *                                                   starts: steps per second (the
+ *                                                   master's setReal, doStep, getReal)
  *
  * LIB is the FMU's shared library, opened with dlopen; built with -DLINKED (the
  * sanitizer build: the FMU's sources compiled into this program) the functions are
@@ -15,6 +18,7 @@
  * (fmi2Fatal, a non-finite output served with fmi2OK, damaged bytes accepted).
  */
 #include <math.h>
+#include <time.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -307,6 +311,34 @@ static int fuzz(const api *f, const char *guid, const char *ident, FILE *in, uns
     return 0;
 }
 
+static int bench(const api *f, const char *guid, const char *ident, FILE *in, double h, long n) {
+    spec s;
+    if (read_spec(in, &s)) return 2;
+    quiet = 1;
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = start(f, guid, ident, &cb, &s);
+    if (c == NULL) return 3;
+    double u[16], y[32], best = INFINITY;
+    if (f->GetReal(c, s.in, (size_t)s.n_in, u) != fmi2OK) return 3; /* the start inputs */
+    double t = 0.0;
+    for (int rep = 0; rep < 3; rep++) {
+        struct timespec a, b;
+        clock_gettime(CLOCK_MONOTONIC, &a);
+        for (long k = 0; k < n; k++) {
+            if (f->SetReal(c, s.in, (size_t)s.n_in, u) != fmi2OK) return 3;
+            if (f->DoStep(c, t, h, fmi2True) != fmi2OK) return 3;
+            t += h;
+            if (f->GetReal(c, s.out, (size_t)s.n_out, y) != fmi2OK) return 3;
+        }
+        clock_gettime(CLOCK_MONOTONIC, &b);
+        double dt = (double)(b.tv_sec - a.tv_sec) + 1e-9 * (double)(b.tv_nsec - a.tv_nsec);
+        best = dt < best ? dt : best;
+    }
+    printf("%.6g\n", (double)n / best);
+    f->FreeInstance(c);
+    return 0;
+}
+
 int main(int argc, char **argv) {
     if (argc < 6) {
         fprintf(stderr, "usage: %s LIB GUID IDENT run|fuzz SPEC [SEED N]\n", argv[0]);
@@ -318,6 +350,8 @@ int main(int argc, char **argv) {
     if (in == NULL) return 2;
     int rc;
     if (strcmp(argv[4], "run") == 0) rc = run(&f, argv[2], argv[3], in);
+    else if (strcmp(argv[4], "bench") == 0 && argc >= 8)
+        rc = bench(&f, argv[2], argv[3], in, strtod(argv[6], NULL), strtol(argv[7], NULL, 10));
     else if (strcmp(argv[4], "fuzz") == 0 && argc >= 8)
         rc = fuzz(&f, argv[2], argv[3], in, strtoull(argv[6], NULL, 10), strtol(argv[7], NULL, 10));
     else rc = 2;

@@ -189,6 +189,12 @@ static void bad_text(const cf_var *v, double x, char *out, size_t n) {
     snprintf(out, n, "%s = %s is invalid: must be %s", v->name, r, requirement(v, x));
 }
 
+static int any_bad(const cf_core *c) {
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (c->bad[i]) return 1;
+    return 0;
+}
+
 /* the messages of the bad values held, in the order they became bad, joined by "; " */
 static void bad_list(const Inst *I, char *out, size_t n) {
     const cf_core *c = &I->c;
@@ -398,7 +404,7 @@ static int build(Inst *I) {
 /* a step of the contact mode (the outputs at the inputs held) or of the rigid body
  * (Eqs. 8-9 under held inputs, exact: Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx
  * Tx)/Iy), committed only when its outputs are finite */
-static fmi2Status other_step(Inst *I, double t, double h, const char *rt, const char *rh) {
+static fmi2Status other_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
     char r[40];
     const char *bad;
@@ -425,6 +431,9 @@ static fmi2Status other_step(Inst *I, double t, double h, const char *rt, const 
         }
     }
     if (bad) {
+        char rt[40], rh[40];
+        py_repr(t, rt, sizeof rt);
+        py_repr(h, rh, sizeof rh);
         say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
             "FloatingPointError: output %s = %s is not finite", rt, rh, bad, r);
         return fmi2Discard;
@@ -459,32 +468,37 @@ static void refresh(Inst *I) {
 /* BodyModel.step + the outputs, committed only when all is well */
 static fmi2Status fmu_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
+    /* t and h as Python writes them, formatted only for a message (a repr costs
+     * microseconds: more than the step) */
     char rt[40], rh[40];
-    py_repr(t, rt, sizeof rt);
-    py_repr(h, rh, sizeof rh);
+#define REPRS() (py_repr(t, rt, sizeof rt), py_repr(h, rh, sizeof rh))
     if (!(h > 0.0 && h <= DBL_MAX)) {
+        REPRS();
         say(I, fmi2Discard, "communicationStepSize = %s is invalid: must be > 0 and finite", rh);
         return fmi2Discard;
     }
     double scale = fmax(1.0, fmax(fabs(t), h));
     if (!isfinite(t) || fabs(t - c->time) > CF_TIME_RTOL * scale) {
         char now[40];
+        REPRS();
         py_repr(c->time, now, sizeof now);
         say(I, fmi2Discard, "currentCommunicationPoint = %s is invalid: must be the FMU's time "
             "%s", rt, now);
         return fmi2Discard;
     }
     if (!c->built && !build(I)) {
+        REPRS();
         say(I, fmi2Discard, "doStep at t = %s discarded: the model is not initialised", rt);
         return fmi2Discard;
     }
-    char list[1536];
-    bad_list(I, list, sizeof list);
-    if (list[0]) {
+    if (c->next_bad && any_bad(c)) {
+        char list[1536];
+        bad_list(I, list, sizeof list);
+        REPRS();
         say(I, fmi2Discard, "doStep at t = %s discarded, state unchanged: %s", rt, list);
         return fmi2Discard;
     }
-    if (CF_MODE != MODE_BODY) return other_step(I, t, h, rt, rh);
+    if (CF_MODE != MODE_BODY) return other_step(I, t, h);
     cf_params p = c->p;
     cf_body b = c->b;
     cf_state w = c->s;
@@ -495,6 +509,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     double q = ceil(h / b.h_max * (1.0 - b.substep_slack));
     int n = q < b.max_substeps ? (q < 1.0 ? 1 : (int)q) : b.max_substeps;
     if (cf_advance(&p, &w, h, b.Fx_ex, b.My_ex, n) != CF_OK) {
+        REPRS();
         say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
             "StageSolveError: the compiled stage solve found no root or did not converge "
             "(loads beyond mu P?)", rt, rh);
@@ -506,6 +521,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
         if (v->kind == K_OUTPUT && !isfinite(b.out[v->role - R_OUT])) {
             char r[40];
             py_repr(b.out[v->role - R_OUT], r, sizeof r);
+            REPRS();
             say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
                 "FloatingPointError: output %s = %s is not finite", rt, rh, v->name, r);
             return fmi2Discard;
@@ -515,6 +531,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     for (int i = 0; i < CF_N_VARS; i++)
         if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = b.out[CF_VARS[i].role - R_OUT];
     c->time = t + h;
+#undef REPRS
     if (n == b.max_substeps && h / b.h_max > b.max_substeps)
         say(I, fmi2Warning, "communication step h = %g s exceeds %d internal steps of h_max = "
             "%g s: taken in %d steps of %g s", h, b.max_substeps, b.h_max, n, h / n);
@@ -725,8 +742,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
         if (!vr_ok(I, vr[k], T_REAL, "fmi2SetReal")) return fmi2Error;
         const int i = (int)vr[k];
         const cf_var *var = &CF_VARS[i];
-        char r[40];
-        py_repr(v[k], r, sizeof r);
+        char r[40] = "";
+        if (var->kind == K_OUTPUT || (var->kind == K_PARAMETER && I->c.built))
+            py_repr(v[k], r, sizeof r); /* for the refusal's message */
         if (!settable(I, i, r)) {
             status = fmi2Error;
             continue;
