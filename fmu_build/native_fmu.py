@@ -212,7 +212,8 @@ def _skeleton(cfg: ModelConfig, identifier: str, guid: str) -> bytes:
         canNotUseMemoryManagementFunctions="false",
         canGetAndSetFMUstate="true",
         canSerializeFMUstate="true",
-        providesDirectionalDerivative="false",
+        # the contact mode's force element, for masters that couple implicitly
+        providesDirectionalDerivative="true" if cfg.mode == "contact" else "false",
     )
     files = ET.SubElement(cs, "SourceFiles")
     ET.SubElement(files, "File", name=SOURCES[0])

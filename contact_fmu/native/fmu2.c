@@ -869,14 +869,153 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
     return fmi2Error;
 }
 
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
-                                        const fmi2ValueReference z[], size_t nz,
-                                        const fmi2Real dv[], fmi2Real dz[]) {
+/* d(Tx, Ty, Mz, vx, vy)/d(vx, vy, V) of the thin-layer law without spin at (vx, vy, V),
+ * V != 0, analytic: T = mu P h(beta) e, Mz = sign(V) mu P a1 g(beta) e_y with
+ * e = v/|v|, beta = |v| c/|V| (Eqs. 40-43 corrected; g = beta (h - 1)/2, docs/model.md),
+ * so dT = mu P (h' dbeta e + h de), de = (I - e e^T) dv/|v|, dbeta = c e.dv/|V| -
+ * beta dV/V; h/|v| = (h/beta)(c/|V|) from the series below BETA_SERIES. At v = 0 the
+ * limits: dT = mu P h'(0) c dv/|V|, dMz = sign(V) mu P a1 g'(0) c dvy/|V|. */
+static void law_jacobian(const cf_params *p, double vx, double vy, double V, double J[3][3]) {
+    const double muP = p->mu * p->P, c = p->beta_per_creep, aV = fabs(V);
+    const double sg = V > 0.0 ? 1.0 : -1.0, a1 = p->a1;
+    const double s = hypot(vx, vy);
+    if (s == 0.0) {
+        const double d = muP * force_fraction_slope(p, 0.0) * c / aV;
+        const double dg = -0.5; /* g'(0) = (h(0) - 1)/2 */
+        double Z[3][3] = {{d, 0.0, 0.0}, {0.0, d, 0.0}, {0.0, sg * muP * a1 * dg * c / aV, 0.0}};
+        memcpy(J, Z, sizeof Z);
+        return;
+    }
+    const double ex = vx / s, ey = vy / s, beta = s * c / aV;
+    double h = 1.0, dh = 0.0, g = 0.0, dg = 0.0;
+    if (beta < p->beta_full_slip) {
+        const double m = m_of(beta);
+        h = py_min((2.0 / M_PI) * H_m(beta, m), 1.0);
+        dh = slope_m(beta, m);
+        g = 0.5 * beta * (h - 1.0);
+        dg = 0.5 * (h - 1.0) + 0.5 * beta * dh;
+    }
+    const double per_beta = beta < p->beta_series
+        ? 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI)
+        : h / beta;
+    const double h_s = per_beta * c / aV;                       /* h/|v| */
+    const double g_s = beta < p->beta_full_slip ? 0.5 * (h - 1.0) * c / aV : 0.0; /* g/|v| */
+    const double db[3] = {c * ex / aV, c * ey / aV, -beta / V}; /* dbeta/d(vx, vy, V) */
+    const double de[2][3] = {{ey * ey, -ex * ey, 0.0}, {-ex * ey, ex * ex, 0.0}}; /* |v| de */
+    for (int k = 0; k < 3; k++) {
+        J[0][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ex + h_s * de[0][k]);
+        J[1][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ey + h_s * de[1][k]);
+        J[2][k] = sg * muP * a1 * ((dg != 0.0 ? dg * db[k] : 0.0) * ey + g_s * de[1][k]);
+    }
+}
+
+/* the output i's row of d(outputs)/d(Vx, Vy, Omega_y) where it is analytic, else 0 */
+static int analytic_row(const cf_core *c, int role, double row[3]) {
+    const double *v = c->val, Vx = v[R_VX], Rx = v[R_RX];
+    const double vx = Vx - v[R_OMEGA_Y] * Rx, vy = v[R_VY];
+    int k;
+    switch (role - R_OUT) {
+    case O_TX: k = 0; break;
+    case O_TY: k = 1; break;
+    case O_MZ: k = 2; break;
+    case O_VX_SLIP: row[0] = 1.0, row[1] = 0.0, row[2] = -Rx; return 1;
+    case O_VY_SLIP: row[0] = 0.0, row[1] = 1.0, row[2] = 0.0; return 1;
+    default: return 0;
+    }
+    if (Vx == 0.0) return 0; /* standstill: the blend of the law is not this */
+    double J[3][3];
+    law_jacobian(&c->p, vx, vy, Vx, J);
+    /* chain rule: vx = Vx - Omega_y Rx, vy = Vy, V = Vx */
+    row[0] = J[k][0] + J[k][2];
+    row[1] = J[k][1];
+    row[2] = -Rx * J[k][0];
+    return 1;
+}
+
+/* Contact mode: the directional derivative of the outputs (vUnknown) along the inputs
+ * (vKnown, direction dvKnown) at the current inputs. Tx, Ty, Mz, vx, vy with respect
+ * to Vx, Vy, Omega_y analytic (law_jacobian); any other pair (P, the creepages, the
+ * adhesion) by central differences of the outputs along the direction. */
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference zr[], size_t nz,
+                                        const fmi2ValueReference ur[], size_t nu,
+                                        const fmi2Real du[], fmi2Real dz[]) {
     INST(fmi2GetDirectionalDerivative);
-    (void)u, (void)nu, (void)z, (void)nz, (void)dv, (void)dz;
-    say(I, fmi2Error, "fmi2GetDirectionalDerivative: not provided by this FMU "
-        "(providesDirectionalDerivative is false)");
-    return fmi2Error;
+    if (CF_MODE != MODE_CONTACT) {
+        say(I, fmi2Error, "fmi2GetDirectionalDerivative: provided by the contact mode only "
+            "(providesDirectionalDerivative is false here)");
+        return fmi2Error;
+    }
+    if ((nz && (zr == NULL || dz == NULL)) || (nu && (ur == NULL || du == NULL))) return fmi2Error;
+    cf_core *C = &I->c;
+    if (!C->built) {
+        say(I, fmi2Error, "fmi2GetDirectionalDerivative: the model is not initialised");
+        return fmi2Error;
+    }
+    if (C->next_bad && any_bad(C)) {
+        say(I, fmi2Error, "fmi2GetDirectionalDerivative: an input is invalid (see setReal)");
+        return fmi2Error;
+    }
+    if (C->dirty) refresh(I);
+    int only_kin = 1; /* every known among (Vx, Vy, Omega_y) */
+    double dir[3] = {0.0, 0.0, 0.0};
+    for (size_t j = 0; j < nu; j++) {
+        if (ur[j] >= CF_N_VARS || CF_VARS[ur[j]].kind != K_INPUT || CF_VARS[ur[j]].type != T_REAL) {
+            say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
+                "input", (unsigned)ur[j]);
+            return fmi2Error;
+        }
+        const int role = CF_VARS[ur[j]].role;
+        const int k = role == R_VX ? 0 : role == R_VY ? 1 : role == R_OMEGA_Y ? 2 : -1;
+        if (k < 0) only_kin = 0;
+        else dir[k] += du[j];
+        if (!isfinite(du[j])) {
+            say(I, fmi2Error, "fmi2GetDirectionalDerivative: a direction is not finite");
+            return fmi2Error;
+        }
+    }
+    /* central differences along the direction for what is not analytic */
+    double plus[N_OUT], minus[N_OUT], eps = 0.0;
+    int have_fd = 0;
+    for (size_t i = 0; i < nz; i++) {
+        if (zr[i] >= CF_N_VARS || CF_VARS[zr[i]].kind != K_OUTPUT ||
+            CF_VARS[zr[i]].type != T_REAL) {
+            say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
+                "output", (unsigned)zr[i]);
+            return fmi2Error;
+        }
+        const int role = CF_VARS[zr[i]].role;
+        double row[3];
+        if (only_kin && analytic_row(C, role, row)) {
+            dz[i] = row[0] * dir[0] + row[1] * dir[1] + row[2] * dir[2];
+            continue;
+        }
+        if (!have_fd) {
+            double size = 0.0, dn = 0.0;
+            for (size_t j = 0; j < nu; j++) {
+                size = fmax(size, fabs(C->val[CF_VARS[ur[j]].role]));
+                dn = fmax(dn, fabs(du[j]));
+            }
+            eps = dn > 0.0 ? 1e-6 * fmax(size, 1e-3) / dn : 0.0;
+            cf_core X = *C;
+            char r[40];
+            for (int sgn = 0; sgn < 2; sgn++) {
+                for (size_t j = 0; j < nu; j++)
+                    X.val[CF_VARS[ur[j]].role] = C->val[CF_VARS[ur[j]].role] +
+                                                 (sgn ? -eps : eps) * du[j];
+                cf_params p = C->p;
+                cf_body b = C->b;
+                if (contact_outputs(&X, &p, &b, sgn ? minus : plus, r, sizeof r)) {
+                    say(I, fmi2Error, "fmi2GetDirectionalDerivative: the outputs are not "
+                        "finite next to the inputs");
+                    return fmi2Error;
+                }
+            }
+            have_fd = 1;
+        }
+        const int o = role - R_OUT;
+        dz[i] = eps > 0.0 ? (plus[o] - minus[o]) / (2.0 * eps) : 0.0;
+    }
+    return fmi2OK;
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
