@@ -564,13 +564,56 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     assert np.array_equal(_importer_run(exe, Path("-"), md, spec), expected)
     short = tmp_path / "params.txt"
     short.write_text(_spec(md, scenes["fig13"], scenes["fig13"].case("eta = 3"), rows=False))
-    for seed in range(4):
-        args = [str(exe), "-", md.guid, "fuzz", "fuzz", str(short), str(seed), "3000"]
+    counts = _fuzz(exe, md, short, 4, 3000)
+    assert counts["ok"] > 4000 and counts["discard"] > 400, counts
+
+
+def _fuzz(exe: Path, md, spec: Path, seeds: int, calls: int) -> dict[str, int]:
+    counts: dict[str, int] = {}
+    for seed in range(seeds):
+        args = [str(exe), "-", md.guid, "fuzz", "fuzz", str(spec), str(seed), str(calls)]
         proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0, proc.stderr[-3000:]
         assert "runtime error" not in proc.stderr and "Sanitizer" not in proc.stderr
-        counts = dict(zip(*[iter(proc.stdout.split())] * 2, strict=True))
-        assert int(counts["ok"]) > 1000 and int(counts["discard"]) > 100, proc.stdout
+        for k, v in dict(zip(*[iter(proc.stdout.split())] * 2, strict=True)).items():
+            counts[k] = counts.get(k, 0) + int(v)
+    return counts
+
+
+@pytest.mark.parametrize("mode", ["contact", "rigid_body"])
+def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly(
+    scenes, native_fmus, tmp_path, mode
+):
+    """The contact mode (the sweep scene's FMU: direct feedthrough, the directional
+    derivatives and their difference path) and the rigid_body mode under the sanitized
+    importer's random calls: no sanitizer report, no fmi2Fatal, no non-finite output
+    served with fmi2OK, no damaged bytes accepted."""
+    import fmpy
+
+    if mode == "contact":
+        path = native_fmus["sweep"]
+    else:
+        path = native_fmu.build(ModelConfig.full("rigid_body"), OUT).path
+    unzip = tmp_path / "fmu"
+    fmpy.extract(str(path), str(unzip))
+    md = fmpy.read_model_description(str(unzip))
+    spec = tmp_path / "spec.txt"
+    if mode == "contact":
+        sweep = scenes["sweep"]
+        spec.write_text(_spec(md, sweep, sweep.cases[0], rows=False))
+    else:
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        ins, outs = ("Tx", "Fx_ex", "My_ex"), ("Vx", "Omega_y")
+        spec.write_text(
+            f"{len(ins)} {' '.join(str(vr[n]) for n in ins)}\n"
+            f"{len(outs)} {' '.join(str(vr[n]) for n in outs)}\n0\n"
+        )
+    try:
+        exe = _sanitized(tmp_path, unzip)
+    except subprocess.CalledProcessError as e:  # pragma: no cover - gcc without libasan
+        pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
+    counts = _fuzz(exe, md, spec, 2, 3000)
+    assert counts["ok"] > 1000 and counts["error"] > 100, counts
 
 
 def test_libcosim_runs_the_native_fmu_to_fmpys_numbers(scenes, native_fmus, fig13_expected):
