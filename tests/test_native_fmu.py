@@ -120,7 +120,7 @@ def _md(path: Path) -> ET.Element:
         return ET.fromstring(z.read("modelDescription.xml"))
 
 
-@pytest.mark.parametrize("name", ["fig13", "railway"])
+@pytest.mark.parametrize("name", ["fig13", "railway", "sweep"])
 def test_model_description_is_the_pythonfmu_ones_and_validates(native_fmus, python_fmus, name):
     """Generated from the same declarations: the same variables (names, value
     references, causality, variability, units, ranges, starts), unit definitions and
@@ -175,6 +175,9 @@ def test_rigid_body_fmu_steps_eqs_8_9_to_the_pythonfmu_doubles(tmp_path):
     assert results[0] == results[1]
     with pytest.raises(FMICallException):
         Instance(paths[0], "rb", {"Iy": 0.0})
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(paths[0])) == []
 
 
 @pytest.mark.parametrize(
