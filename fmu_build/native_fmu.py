@@ -120,6 +120,7 @@ def constants() -> dict[str, float | int]:
         "ALGEBRAIC_KEY": integrator.ALGEBRAIC,
         "SOLVE_RTOL": solvers.SOLVE_RTOL,
         "EXPAND": solvers.EXPAND,
+        "MAX_EXPANSIONS": solvers.MAX_EXPANSIONS,
         "MAX_NEWTON": solvers.MAX_NEWTON,
         "FD_STEP": solvers.FD_STEP,
         "LINE_SEARCH_MIN": solvers.LINE_SEARCH_MIN,

@@ -65,6 +65,7 @@ class Params(ctypes.Structure):
         ("fd_step", ctypes.c_double), ("line_search_min", ctypes.c_double),
         ("contraction_max", ctypes.c_double), ("contraction_fast", ctypes.c_double),
         ("newton_iterations", ctypes.c_int), ("algebraic_key", ctypes.c_double),
+        ("bracket", ctypes.c_int), ("max_expansions", ctypes.c_int),
     ]  # fmt: skip
 
 

@@ -17,9 +17,9 @@
  *   answers fmi2Discard with that message and changes nothing; once corrected the
  *   instance steps normally;
  * - doStep with a step not in (0, inf) or not at the FMU's time: fmi2Discard;
- * - a step the compiled solver cannot take (no stage root: loads beyond mu P with an
- *   eta = inf body, or no convergence) or with non-finite outputs: fmi2Discard, state
- *   unchanged (the pythonfmu FMU tries scipy's brentq on a non-converged stage first);
+ * - a step with no stage root (loads beyond mu P with an eta = inf body; a stage whose
+ *   Newton iteration does not converge is bracketed and closed by brentq, as in Python)
+ *   or with non-finite outputs: fmi2Discard, state unchanged;
  * - parameters are fixed once the model is set up: setting one then is refused
  *   (fmi2Error, the value kept); setting an output likewise;
  * - a model that cannot be set up (bad parameters): fmi2Error at
@@ -236,6 +236,8 @@ static void set_constants(cf_params *p, cf_body *b) {
     p->contraction_fast = CF_CONTRACTION_FAST;
     p->newton_iterations = CF_NEWTON_ITERATIONS;
     p->algebraic_key = CF_ALGEBRAIC_KEY;
+    p->bracket = 1; /* a stage Newton cannot close: bracket and brentq, as Python does */
+    p->max_expansions = CF_MAX_EXPANSIONS;
     p->law = LAW_LAYER;
     p->coef = p->ax1 = p->ax2 = p->ax3 = NULL;
     p->strips = NULL;
@@ -511,8 +513,8 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     if (cf_advance(&p, &w, h, b.Fx_ex, b.My_ex, n) != CF_OK) {
         REPRS();
         say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
-            "StageSolveError: the compiled stage solve found no root or did not converge "
-            "(loads beyond mu P?)", rt, rh);
+            "StageSolveError: no root: the stage residual keeps its sign (loads beyond mu P?)",
+            rt, rh);
         return fmi2Discard;
     }
     cf_body_outputs(&p, &w, &b);

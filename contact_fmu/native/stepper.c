@@ -12,8 +12,11 @@
  *
  * Whatever this file does not cover returns CF_FALLBACK with the state untouched, and
  * the Python path takes the whole interval: a stage whose safeguarded Newton iteration
- * does not converge (Python then brackets and calls brentq), and a stage with no root
- * (Python raises StageSolveError with its message).
+ * does not converge (Python then brackets and calls brentq; with params.bracket, as in
+ * the native FMU, this file does the same, to the same doubles), a stage with no root
+ * (Python raises StageSolveError with its message), and any non-finite input, state or
+ * result (a load that overflows the step): no function here turns a double it receives
+ * into an index or a loop count without checking it.
  *
  * Then the strip march of the thin-layer law with spin (layer._Grid.march), which
  * the Python steppers call: one loop of the same operations; and, at the end, the
@@ -90,6 +93,11 @@ typedef struct {
     int newton_iterations;
     /* integrator.ALGEBRAIC: the key of a kept Newton matrix of the algebraic stage */
     double algebraic_key;
+    /* 1: a scalar stage whose Newton iteration does not converge is solved here by
+     * solvers.increasing_root (its bracket search, then scipy's brentq, in C), as the
+     * Python path does; 0: CF_FALLBACK, the Python path solves it (its own kernel) */
+    int bracket;
+    int max_expansions; /* solvers.MAX_EXPANSIONS */
 } cf_params;
 
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
@@ -387,7 +395,94 @@ static void residual_lobatto(const stage *s, double v2, double f[2]) {
     f[1] = o1[1] * dv1 + s->m * (dv1 + 1.0) / s->h;
 }
 
-/* solvers.newton_increasing without its brentq fallback (CF_FALLBACK instead) */
+/* scipy.optimize.brentq (scipy/optimize/Zeros/brentq.c, Brent 1973: inverse quadratic
+ * interpolation, secant or bisection inside a shrinking bracket), the same operations:
+ * the root of f(s, .) in [xa, xb] to xtol + rtol |x|; CF_FALLBACK if f has one sign at
+ * both ends or iter iterations do not converge (scipy raises). */
+static int brentq(const stage *s, void (*fdf)(const stage *, double, double[2]), double xa,
+                  double xb, double xtol, double rtol, int iter, double *root) {
+    double xpre = xa, xcur = xb, xblk = 0.0, fblk = 0.0, spre = 0.0, scur = 0.0;
+    double f[2];
+    fdf(s, xpre, f);
+    double fpre = f[0];
+    fdf(s, xcur, f);
+    double fcur = f[0];
+    if (fpre == 0.0) return *root = xpre, CF_OK;
+    if (fcur == 0.0) return *root = xcur, CF_OK;
+    if (signbit(fpre) == signbit(fcur)) return CF_FALLBACK;
+    for (int i = 0; i < iter; i++) {
+        if (fpre != 0.0 && fcur != 0.0 && signbit(fpre) != signbit(fcur)) {
+            xblk = xpre;
+            fblk = fpre;
+            spre = scur = xcur - xpre;
+        }
+        if (fabs(fblk) < fabs(fcur)) {
+            xpre = xcur, xcur = xblk, xblk = xpre;
+            fpre = fcur, fcur = fblk, fblk = fpre;
+        }
+        const double delta = (xtol + rtol * fabs(xcur)) / 2;
+        const double sbis = (xblk - xcur) / 2;
+        if (fcur == 0.0 || fabs(sbis) < delta) return *root = xcur, CF_OK;
+        if (fabs(spre) > delta && fabs(fcur) < fabs(fpre)) {
+            double stry;
+            if (xpre == xblk) { /* interpolate */
+                stry = -fcur * (xcur - xpre) / (fcur - fpre);
+            } else { /* extrapolate */
+                const double dpre = (fpre - fcur) / (xpre - xcur);
+                const double dblk = (fblk - fcur) / (xblk - xcur);
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre));
+            }
+            const double lim = 3 * fabs(sbis) - delta;
+            if (2 * fabs(stry) < (fabs(spre) < lim ? fabs(spre) : lim)) { /* short step */
+                spre = scur;
+                scur = stry;
+            } else { /* bisect */
+                spre = sbis;
+                scur = sbis;
+            }
+        } else { /* bisect */
+            spre = sbis;
+            scur = sbis;
+        }
+        xpre = xcur;
+        fpre = fcur;
+        if (fabs(scur) > delta) xcur += scur;
+        else xcur += (sbis > 0 ? delta : -delta);
+        fdf(s, xcur, f);
+        fcur = f[0];
+    }
+    return CF_FALLBACK;
+}
+
+/* solvers.increasing_root (max_step inf): the bracket grows from u0 in steps scale,
+ * EXPAND scale, ... until the residual changes sign, then brentq closes it to
+ * SOLVE_RTOL (scale + |lo| + |hi|); CF_FALLBACK where Python raises (no sign change in
+ * max_expansions steps: no root) */
+static int increasing_root(const stage *s, void (*fdf)(const stage *, double, double[2]),
+                           double u0, double scale, double *root) {
+    const cf_params *p = s->p;
+    double f[2];
+    fdf(s, u0, f);
+    const double r0 = f[0];
+    if (r0 == 0.0) return *root = u0, CF_OK;
+    const double direction = r0 > 0.0 ? -1.0 : 1.0;
+    double step = scale, a = u0, b = u0;
+    int k = 0;
+    for (; k < p->max_expansions; k++) {
+        b = a + direction * step;
+        fdf(s, b, f);
+        if ((f[0] > 0.0) != (r0 > 0.0)) break;
+        a = b;
+        step *= p->expand;
+    }
+    if (k == p->max_expansions) return CF_FALLBACK;
+    const double lo = a < b ? a : b, hi = a < b ? b : a;
+    const double tol = p->solve_rtol * (scale + fabs(lo) + fabs(hi));
+    return brentq(s, fdf, lo, hi, tol, 4 * DBL_EPSILON, 200, root);
+}
+
+/* solvers.newton_increasing; its fallback (increasing_root) here where p->bracket,
+ * else CF_FALLBACK */
 static int newton_increasing(const stage *s, void (*fdf)(const stage *, double, double[2]),
                              double u0, double scale, double *root) {
     double lo = -INFINITY, hi = INFINITY, u = u0, jump = scale, f[2];
@@ -418,7 +513,7 @@ static int newton_increasing(const stage *s, void (*fdf)(const stage *, double, 
         }
         u = next;
     }
-    return CF_FALLBACK;
+    return s->p->bracket ? increasing_root(s, fdf, u0, scale, root) : CF_FALLBACK;
 }
 
 static double target_x(const cf_params *p, double Fx, double My) {
