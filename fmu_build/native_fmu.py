@@ -10,9 +10,9 @@ C sources (``<SourceFiles>``) that the FMU carries under ``sources/``, so that f
 build (or any importer's) compiles it on Windows or macOS; the FMI headers are fmpy's
 (``fmpy/c-code``), found at build time and not carried in this repository.
 
-What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, vy zero or
-held at a ratio, no spin, methods "full" and "quasistationary" (the scenes fig13, brake,
-fig12, railway); the contact mode on the thin-layer law without a spin input (sweep); the
+What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, methods
+"full" and "quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or
+from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the contact mode on the thin-layer law without a spin input (sweep); the
 rigid_body mode (``--full rigid_body``). Everything else is refused here with a message
 that names the scene's feature (``NativeUnsupportedError``); there is no silent fallback
 to the pythonfmu FMU.
@@ -78,10 +78,11 @@ def unsupported(cfg: ModelConfig) -> str | None:
         )
     if cfg.phase != "steady":
         return f'phase = "{cfg.phase}" (the transient traction field is not in the C kernel)'
-    if cfg.vy == "eq10":
-        return 'vy = "eq10" (Eq. 10 integrated: Vy as a stage unknown is not in the native FMU)'
-    if cfg.spin != "zero":
-        return f'spin = "{cfg.spin}" (spin is not in the native FMU)'
+    if cfg.spin == "ratio" and cfg.vy != "eq10":
+        return (
+            'spin = "ratio" without vy = "eq10" (a held spin ratio with vx the only unknown '
+            "runs in Python only, not in the C kernel)"
+        )
     if tuple(cfg.schemes) != ("lobatto3c",):
         return f"scheme {list(cfg.schemes)} (the C kernel has Lobatto IIIC only, not SDIRK2)"
     return None
@@ -139,6 +140,7 @@ def constants() -> dict[str, float | int]:
 _ROLES = {
     "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "Omega_y0",
     "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
+    "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex",
 }  # fmt: skip
 _MODES = {"body": "MODE_BODY", "contact": "MODE_CONTACT", "rigid_body": "MODE_RIGID"}
 
@@ -178,6 +180,13 @@ def header(cfg: ModelConfig, guid: str) -> str:
         f"#define CF_GUID {_cstr(guid)}",
         f"#define CF_N_VARS {len(rows)}",
         f"#define CF_MODE {_MODES[cfg.mode]}",
+        # the vector path (stepper.c, cf_advance_vector): Vy and/or Omega_z as unknowns
+        f"#define CF_DYN_VY {int(cfg.mode == 'body' and cfg.vy == 'eq10')}",
+        f"#define CF_DYN_SPIN {int(cfg.mode == 'body' and cfg.spin == 'eq11')}",
+        "#define CF_VECTOR (CF_DYN_VY || CF_DYN_SPIN)",
+        f"#define CF_SPIN_NX {layer.SPIN_GRID[0]}",
+        f"#define CF_SPIN_NY {layer.SPIN_GRID[1]}",
+        f"#define CF_TINY {_c(layer.TINY)}",
         f"#define CF_METHOD_START {('full', 'quasistationary').index(method)}",
         "static const cf_var CF_VARS[CF_N_VARS] = {",
         *rows,

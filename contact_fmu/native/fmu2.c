@@ -3,11 +3,13 @@
  * contact mode (the thin-layer law without spin, fmu/contact_model.py) and its
  * rigid_body mode (fmu/rigid_body.py), with no Python anywhere (CF_MODE picks one).
  *
- * The model is the one of fmu/body_model.py on its compiled path: the thin-layer law
- * (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
- * parameters and the load P: cf_layer_law), Lobatto IIIC, vx the only stage unknown,
- * vy held at a ratio of Vx or zero, no spin, methods "full" and "quasistationary". The
- * build refuses every other model (fmu_build/native_fmu.py). The variables, their
+ * The body model is the one of fmu/body_model.py on its compiled paths: the thin-layer
+ * law (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
+ * parameters and the load P: cf_layer_law), Lobatto IIIC, methods "full" and
+ * "quasistationary"; vx the only stage unknown (vy zero or held at a ratio, no spin:
+ * cf_advance) or Vy and/or Omega_z as unknowns too (Eqs. 10-11: cf_advance_vector, the
+ * law's spin by the strip march on its grid, built here for each load: cf_grid_build).
+ * The build refuses every other model (fmu_build/native_fmu.py). The variables, their
  * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
  * the generated cf_model.h; the constants the Python integrator uses travel in it too.
  *
@@ -47,6 +49,7 @@ enum {
     R_MU, R_RX, R_RY, R_K1, R_K2, R_KB, R_KS, R_M, R_IY, R_VY_RATIO, R_VX0, R_OMEGA_Y0,
     R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX,
     R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
+    R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
     R_COUNT
 };
 /* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
@@ -83,11 +86,24 @@ typedef struct {
     int phase, built;
     int dirty;                    /* contact mode: inputs set since the outputs */
     double rb_Vx, rb_Omega_y;     /* rigid_body mode's state */
+    cf_vstate vs;                 /* body mode with Vy and/or Omega_z as unknowns */
     double P_law;                 /* the load the law's constants are for */
     cf_params p;
     cf_state s;
     cf_body b;
 } cf_core;
+
+/* the spin grid of the vector path (layer._Grid of SPIN_GRID): a function of the
+ * parameters and the load, rebuilt for each new load, not part of the FMU state */
+#define GRID_N (CF_SPIN_NX * CF_SPIN_NY)
+typedef struct {
+    double P;                     /* the load it is for (NaN: none yet) */
+    cf_strips strips;
+    double x[CF_SPIN_NX], y[CF_SPIN_NY], dist[GRID_N], mid[GRID_N], cap[GRID_N], w[GRID_N];
+    unsigned char inside[GRID_N];
+    double tau[2 * GRID_N];       /* scratch of the adhesion's march */
+    unsigned char slip[GRID_N];
+} spin_grid;
 
 typedef struct {
     fmi2CallbackFunctions cb;
@@ -95,6 +111,7 @@ typedef struct {
     int logging;
     cf_core c;
     char method_out[METHOD_TEXT]; /* what getString hands out */
+    spin_grid *grid;              /* CF_VECTOR only */
 } Inst;
 
 /* ---- messages ---------------------------------------------------------------------- */
@@ -322,6 +339,20 @@ static int build_rigid(Inst *I) {
     return 1;
 }
 
+/* the spin grid at load P (the law's a1, a2, p0 there) into p->strips */
+static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_params *p) {
+    spin_grid *g = I->grid;
+    if (g == NULL) return;
+    if (!(g->P == law->P)) {
+        const double *v = I->c.val;
+        cf_grid_build(&g->strips, g->x, g->y, g->dist, g->mid, g->cap, g->w, g->inside,
+                      CF_SPIN_NX, CF_SPIN_NY, law->a1, b->a2, b->p0, v[R_MU], v[R_KB] + v[R_KS],
+                      CF_TINY);
+        g->P = law->P;
+    }
+    p->strips = &g->strips;
+}
+
 /* BodyModel / RollingBody set up from the parameters and inputs at the FMU's time;
  * 0 with the reasons logged (fmi2Error) where it cannot be */
 static int build(Inst *I) {
@@ -380,6 +411,40 @@ static int build(Inst *I) {
     const double P = v[R_P];
     law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = v[R_FX_EX], b.My_ex = v[R_MY_EX], b.h_max = v[R_H_MAX];
+    if (CF_VECTOR) {
+        if (CF_DYN_SPIN && !(v[R_IZ] > 0.0)) {
+            py_repr(v[R_IZ], r, sizeof r);
+            say(I, fmi2Error, "cannot initialise the model: Iz = %s is invalid: must be > 0", r);
+            return 0;
+        }
+        /* VectorKernel._path: the held ratios (0 where a rate is an unknown), Iz */
+        p.ry = CF_DYN_VY ? 0.0 : v[R_VY_RATIO];
+        p.rz = CF_DYN_SPIN ? 0.0 : v[R_SPIN_RATIO];
+        p.dyn_vy = CF_DYN_VY, p.dyn_spin = CF_DYN_SPIN;
+        p.Iz = CF_DYN_SPIN ? v[R_IZ] : 0.0;
+        ensure_grid(I, &p, &b, &p);
+        /* BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, Vy0, Omega_z0), the held ratios */
+        cf_vstate y;
+        memset(&y, 0, sizeof y);
+        y.Vx = v[R_VX0];
+        y.vx = y.Vx - v[R_OMEGA_Y0] * Rx;
+        y.Vy = CF_DYN_VY ? v[R_VY0] : p.ry * y.Vx;
+        y.Oz = CF_DYN_SPIN ? v[R_OMEGA_Z0] : p.rz * y.Vx;
+        y.t = c->time;
+        cf_initial_vforces(&p, &y);
+        cf_vbody_outputs(&p, &y, &b, I->grid->tau, I->grid->slip, I->grid->inside);
+        const char *bad = nonfinite(b.out, r, sizeof r);
+        if (bad) {
+            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+                "is not finite", bad, r);
+            return 0;
+        }
+        c->p = p, c->b = b, c->vs = y;
+        c->P_law = P;
+        c->built = 1;
+        publish(c);
+        return 1;
+    }
     /* BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, ry Vx0, 0), the forces there */
     s.Vx = v[R_VX0];
     s.vx = s.Vx - v[R_OMEGA_Y0] * Rx;
@@ -510,14 +575,24 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     /* substeps(): ceil(h / h_max (1 - slack)), at least 1, at most max_substeps */
     double q = ceil(h / b.h_max * (1.0 - b.substep_slack));
     int n = q < b.max_substeps ? (q < 1.0 ? 1 : (int)q) : b.max_substeps;
-    if (cf_advance(&p, &w, h, b.Fx_ex, b.My_ex, n) != CF_OK) {
+    cf_vstate vw = c->vs;
+    int failed;
+    if (CF_VECTOR) {
+        ensure_grid(I, &p, &b, &p);
+        const double L[4] = {b.Fx_ex, c->val[R_FY_EX], b.My_ex, c->val[R_MZ_EX]};
+        failed = cf_advance_vector(&p, &vw, h, L, n) != CF_OK;
+    } else {
+        failed = cf_advance(&p, &w, h, b.Fx_ex, b.My_ex, n) != CF_OK;
+    }
+    if (failed) {
         REPRS();
         say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
             "StageSolveError: no root: the stage residual keeps its sign (loads beyond mu P?)",
             rt, rh);
         return fmi2Discard;
     }
-    cf_body_outputs(&p, &w, &b);
+    if (CF_VECTOR) cf_vbody_outputs(&p, &vw, &b, I->grid->tau, I->grid->slip, I->grid->inside);
+    else cf_body_outputs(&p, &w, &b);
     for (int i = 0; i < CF_N_VARS; i++) {
         const cf_var *v = &CF_VARS[i];
         if (v->kind == K_OUTPUT && !isfinite(b.out[v->role - R_OUT])) {
@@ -529,7 +604,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
             return fmi2Discard;
         }
     }
-    c->p = p, c->b = b, c->s = w, c->P_law = P;
+    c->p = p, c->b = b, c->s = w, c->vs = vw, c->P_law = P;
     for (int i = 0; i < CF_N_VARS; i++)
         if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = b.out[CF_VARS[i].role - R_OUT];
     c->time = t + h;
@@ -603,6 +678,16 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         return NULL;
     }
     memcpy(I->name, probe.name, len);
+    if (CF_VECTOR) {
+        I->grid = (spin_grid *)cb->allocateMemory(1, sizeof(spin_grid));
+        if (I->grid == NULL) {
+            cb->freeMemory(I->name);
+            cb->freeMemory(I);
+            say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
+            return NULL;
+        }
+        I->grid->P = NAN;
+    }
     I->logging = logging != fmi2False;
     start_values(I);
     return I;
@@ -612,6 +697,7 @@ void fmi2FreeInstance(fmi2Component c) {
     Inst *I = (Inst *)c;
     if (I == NULL) return;
     fmi2CallbackFreeMemory release = I->cb.freeMemory;
+    if (I->grid) release(I->grid);
     release(I->name);
     release(I);
 }
@@ -1051,6 +1137,13 @@ static void sanitize(cf_core *c) {
     if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED) c->phase = PH_STEP;
     c->s.out_sliding = c->s.out_sliding != 0;
     c->s.sliding = c->s.sliding != 0;
+    c->vs.out_sliding = c->vs.out_sliding != 0;
+    c->vs.sliding = c->vs.sliding != 0;
+    c->vs.jac_valid = c->vs.jac_valid != 0;
+    c->p.ry = CF_DYN_VY ? 0.0 : c->val[R_VY_RATIO];
+    c->p.rz = CF_DYN_SPIN ? 0.0 : c->val[R_SPIN_RATIO];
+    c->p.dyn_vy = CF_VECTOR && CF_DYN_VY, c->p.dyn_spin = CF_VECTOR && CF_DYN_SPIN;
+    c->p.Iz = CF_VECTOR && CF_DYN_SPIN ? c->val[R_IZ] : 0.0;
     unsigned top = 0;
     for (int i = 0; i < CF_N_VARS; i++) top = c->bad[i] > top ? c->bad[i] : top;
     c->next_bad = top;
@@ -1078,6 +1171,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     }
     I->c = *(const cf_core *)state;
     sanitize(&I->c);
+    if (CF_VECTOR && I->c.built) ensure_grid(I, &I->c.p, &I->c.b, &I->c.p); /* its load's */
     return fmi2OK;
 }
 

@@ -1295,3 +1295,115 @@ int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *
     *y = w;
     return CF_OK;
 }
+
+/* ---- the native FMU's vector path: the spin grid and the outputs -------------------- */
+/* layer._Grid.build for the thin-layer law (a1, a2, p0, mu) on nx x ny cells, into
+ * g's arrays (x: nx, y: ny, dist, mid, cap, w: ny x nx, caller's memory) and `inside`
+ * (ny x nx bytes): cell centres (2 j + 1 - nx) a1/nx, the strip half-lengths
+ * l = a1 (1 - (y/a2)^2)^(1/2) (Eq. 37), the distance marched from the node before (or
+ * the leading edge) and its midpoint, mu p (Eq. 33) and the trapezoid weights
+ * (layer._strip_weights, times 2 a2/ny), in layer.py's operations. */
+void cf_grid_build(cf_strips *g, double *x, double *y, double *dist, double *mid, double *cap,
+                   double *w, unsigned char *inside, int nx, int ny, double a1, double a2,
+                   double p0, double mu, double k, double tiny) {
+    for (int j = 0; j < nx; j++) x[j] = (2.0 * j + 1.0 - nx) * (a1 / nx);
+    for (int i = 0; i < ny; i++) y[i] = (2.0 * i + 1.0 - ny) * (a2 / ny);
+    const double dx = x[1] - x[0], wy = 2.0 * a2 / ny;
+    for (int i = 0; i < ny; i++) {
+        const double yr = y[i] / a2, r = 1.0 - yr * yr;
+        const double ell = a1 * sqrt(r > 0.0 ? r : 0.0);
+        int j0 = -1, j1 = -1;
+        for (int j = 0; j < nx; j++) {
+            const size_t e = (size_t)i * nx + j;
+            inside[e] = fabs(x[j]) < ell;
+            const double prev = j > 0 && inside[e - 1] ? x[j - 1] : -ell;
+            dist[e] = inside[e] ? x[j] - prev : 0.0;
+            mid[e] = inside[e] ? 0.5 * (x[j] + prev) : 0.0;
+            const double xr = x[j] / a1, q = 1.0 - xr * xr - yr * yr;
+            cap[e] = mu * (p0 * (q > 0.0 ? q : 0.0));
+            w[e] = inside[e] ? dx : 0.0;
+            if (inside[e]) {
+                if (j0 < 0) j0 = j;
+                j1 = j;
+            }
+        }
+        if (j0 >= 0) {
+            const size_t e0 = (size_t)i * nx + j0, e1 = (size_t)i * nx + j1;
+            if (j0 == j1) {
+                w[e0] = ell;
+            } else {
+                w[e0] = 0.5 * dx + 0.5 * (x[j0] + ell);
+                w[e1] = 0.5 * dx + 0.5 * (ell - x[j1]);
+            }
+        }
+        for (int j = 0; j < nx; j++) w[(size_t)i * nx + j] *= wy;
+    }
+    g->ny = ny, g->nx = nx;
+    g->x = x, g->y = y, g->dist = dist, g->mid = mid, g->cap = cap, g->w = w;
+    g->k = k, g->tiny = tiny;
+}
+
+/* RollingBody.__init__'s forces at the initial state of the vector path (the law with
+ * spin by the march) and its regime flag */
+void cf_initial_vforces(const cf_params *p, cf_vstate *y) {
+    march_cache cache = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
+    const double Y[4] = {y->Vx, y->vx, y->Vy, y->Oz};
+    double T[3];
+    forces_at(p, Y, T, &cache);
+    y->Tx = T[0], y->Ty = T[1], y->Mz = T[2];
+    y->out_sliding = full_slip(p, y->vx, y->Vy, y->Vx);
+    y->sliding = 0;
+    y->dv = 0.0;
+    y->jac_valid = 0;
+}
+
+/* RollingBody.outputs() on the vector path into b->out: kinematics, forces and
+ * kinematics.contact_quantities; with spin the adhesion is the share of the area
+ * (weights) whose nodes do not slip in the strip march (LayerContact.adhesion_fraction,
+ * the same march; its sums in another order than numpy's: equal to rounding). tau, slip,
+ * inside: scratch (2 ny nx doubles, ny nx bytes) and the grid's inside mask. */
+void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double *tau,
+                      unsigned char *slip, const unsigned char *inside) {
+    const double Vx = y->Vx, vx = y->vx, Vy = y->Vy, Oz = y->Oz;
+    double *o = b->out;
+    o[O_VX] = Vx;
+    o[O_VY] = Vy;
+    o[O_OMEGA_Y] = (Vx - vx) / p->Rx;
+    o[O_OMEGA_Z] = Oz;
+    o[O_TX] = y->Tx;
+    o[O_TY] = y->Ty;
+    o[O_MZ] = y->Mz;
+    o[O_VX_SLIP] = vx;
+    o[O_VY_SLIP] = Vy;
+    const double V = py_max(fabs(Vx), b->v_creep_floor);
+    o[O_XI_X] = vx / V;
+    o[O_XI_Y] = Vy / V;
+    o[O_XI_SP] = Oz / V;
+    o[O_A1] = p->a1;
+    o[O_A2] = b->a2;
+    o[O_P0] = b->p0;
+    if (Oz == 0.0 || p->strips == NULL) {
+        o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
+    } else {
+        const cf_strips *g = (const cf_strips *)p->strips;
+        const size_t n = (size_t)g->ny * g->nx;
+        if (Vx != 0.0 && isfinite(Vx) && isfinite(vx) && isfinite(Vy) && isfinite(Oz)) {
+            double R[3];
+            march_one(g, vx, Vy, Vx, Oz, tau, slip, R);
+        } else { /* standstill (layer._march_numpy): slip wherever v != 0 */
+            for (int i = 0; i < g->ny; i++)
+                for (int j = 0; j < g->nx; j++) {
+                    const double a = vx - Oz * g->y[i], c = Vy + Oz * g->x[j];
+                    slip[(size_t)i * g->nx + j] = !(a == 0.0 && c == 0.0);
+                }
+        }
+        double stuck = 0.0, area = 0.0;
+        for (size_t e = 0; e < n; e++)
+            if (inside[e]) {
+                area += g->w[e];
+                if (!slip[e]) stuck += g->w[e];
+            }
+        o[O_ADHESION] = stuck / area;
+    }
+    o[O_REGIME] = full_slip(p, vx, Vy, Vx) ? 1.0 : 0.0;
+}
