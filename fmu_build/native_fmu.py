@@ -12,10 +12,10 @@ build (or any importer's) compiles it on Windows or macOS; the FMI headers are f
 
 What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, methods
 "full" and "quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or
-from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the contact mode on the thin-layer law without a spin input (sweep); the
-rigid_body mode (``--full rigid_body``). Everything else is refused here with a message
-that names the scene's feature (``NativeUnsupportedError``); there is no silent fallback
-to the pythonfmu FMU.
+from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the contact mode on
+the thin-layer law without a spin input (sweep); the rigid_body mode (``--full
+rigid_body``). Everything else is refused here with a message that names the scene's
+feature (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
 
 from __future__ import annotations
