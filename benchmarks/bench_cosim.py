@@ -458,8 +458,8 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
         "compiled step runs). *model*: the scene's model stepped without FMI: its "
         "compiled step through ctypes (inputs into the struct, one call; BodyModel.fast; "
         "ctypes' own call cost included, which the FMU calling it from fmi.c does not "
-        "pay) where it has one, else the Python model (step and outputs). Target of "
-        f"issue 6: the thin-layer body FMU at most {TARGET_RATIO} x the trivial FMU.",
+        "pay) where it has one, else the Python model (step and outputs). Target: the "
+        f"thin-layer body FMU at most {TARGET_RATIO} x the trivial FMU.",
         "",
         "| scene | mode | stepper | h (s) | values | step us | trivial us | ratio "
         "| floor us | floor / trivial | slave us | model us |",
@@ -517,8 +517,8 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
         "",
         "### Creep-law evaluations per second",
         "",
-        f"Best of {repeats}; random creepages up to twice the onset of full slip. Target of "
-        f"issue 6: at least {TARGET_RATE:.0e} vectorised evaluations per second for the "
+        f"Best of {repeats}; random creepages up to twice the onset of full slip. Target: "
+        f"at least {TARGET_RATE:.0e} vectorised evaluations per second for the "
         "thin-layer law. C: the law compiled (stepper.c, cf_layer_forces; where the "
         "library is); numpy: the same law without the library, in the same run.",
         "",
