@@ -1,4 +1,4 @@
-"""The figure command regenerates the paper's figures (the command of README)."""
+"""The figure command regenerates the paper's figures (make figures; docs/cli.md)."""
 
 from __future__ import annotations
 
