@@ -1,6 +1,6 @@
 """Small grids against CONTACT's published steady-rolling times: the direct path
 (contact_fmu.halfspace.direct, ``solve_rolling(method="auto")``) against the iterative
-path (``method="iterative"``, the solver before the direct path), in one run.
+path (``method="iterative"``, GMRES Newton steps), in one run.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace_small.py [--repeat 15]
 
