@@ -16,10 +16,10 @@ in the same run (the cluster started once, before; its start-up is reported apar
 
 Each timing is the fastest of ``--repeats`` (the sweeps: SWEEP_REPEATS times as many;
 the machine is shared; the minimum filters the other processes out), serial and Dask
-repeats interleaved so that both see the same machine. BLAS is single-threaded in this process as in the workers (threaded BLAS slows
-the solver's small GMRES operations down, docs/performance.md). The Dask runs are
-checked to give the serial rows and table. ``--write`` replaces the section
-"## Parameter studies on Dask" of docs/performance.md.
+repeats interleaved so that both see the same machine. BLAS is single-threaded in this
+process as in the workers (threaded BLAS slows the solver's small GMRES operations down,
+docs/performance.md). The Dask runs are checked to give the serial rows and table.
+``--write`` replaces the section "## Parameter studies on Dask" of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -116,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         times["single"], _ = _best(lambda: dask.map(_noop, [0], batch=1), 5 * args.repeats)
     finally:
         dask.__exit__(None, None, None)
-        sweep.cleanup_local()
+        serial.__exit__(None, None, None)
 
     load_after = os.getloadavg()[0]
     run_time = times["sweep_serial"] / n_runs

@@ -24,6 +24,7 @@ from contact_fmu.halfspace.table import TableData, build_table
 from contact_fmu.report.workprecision import run_scene
 from contact_fmu.scenario import ScenarioError, load, variation
 from contact_fmu.scenario.schema import Metric, Vary, sweep_values
+from contact_fmu.study import engine as engine_module
 from contact_fmu.study import metrics, sweep
 from contact_fmu.study import tables as study_tables
 from contact_fmu.study.engine import Engine, batches
@@ -176,14 +177,18 @@ def test_engine_refuses_bad_settings():
         Engine(workers=2, scheduler="tcp://localhost:8786")
 
 
-def test_runs_in_one_process_do_not_grow_sys_path():
+def test_runs_in_one_process_do_not_grow_sys_path_nor_leave_files():
     """pythonfmu prepends the FMU's resources folder at every instantiation: after 6 runs
-    at most one entry is new."""
+    at most one entry is new. The FMU is extracted once and removed at the engine's end."""
     scene = load(SCENARIOS / "fig13.toml")
     before = len(sys.path)
     with Engine(workers=0, progress=False) as serial:
         sweep.sweep(scene, (Vary("mu", (0.2, 0.3)),), serial, OUT)
+        extracted = [v for k, v in engine_module._ONCE.items() if k.startswith("fmu:")]
+        assert len(extracted) == 1 and extracted[0].is_dir()
     assert len(sys.path) - before <= 1
+    assert not extracted[0].exists()
+    assert not any(k.startswith("fmu:") for k in engine_module._ONCE)
 
 
 # ---- the study scene: Eq. (26) -------------------------------------------------------------

@@ -11,7 +11,8 @@ finish (on a terminal; ``progress=False`` silences it).
 Worker processes: one thread each (the FMUs and the solvers are single-threaded Python;
 a process per core avoids the GIL), BLAS single-threaded (dask.distributed's nanny sets
 OMP/OPENBLAS/MKL_NUM_THREADS=1 before a worker starts). ``once(key, factory)`` keeps a
-per-process value (an extracted FMU, a parsed scene) for every task of that process.
+per-process value (an extracted FMU, a parsed scene) for every task of that process;
+leaving the engine's with-block releases them on every worker and here.
 """
 
 from __future__ import annotations
@@ -23,15 +24,32 @@ from typing import Any
 
 from .._validate import InputError
 
-# Per-process values of ``once`` (in a worker: for every task it runs).
+# Per-process values of ``once`` (in a worker: for every task it runs), and how to clean
+# each up (``release``).
 _ONCE: dict[str, Any] = {}
+_CLEANUP: dict[str, Callable[[Any], None]] = {}
 
 
-def once(key: str, factory: Callable[[], Any]) -> Any:
-    """The value of ``factory()`` made once per process under ``key``."""
+def once(key: str, factory: Callable[[], Any], cleanup: Callable[[Any], None] | None = None) -> Any:
+    """The value of ``factory()`` made once per process under ``key``; ``cleanup(value)``
+    runs when it is released."""
     if key not in _ONCE:
         _ONCE[key] = factory()
+        if cleanup is not None:
+            _CLEANUP[key] = cleanup
     return _ONCE[key]
+
+
+def release(prefix: str = "") -> int:
+    """Clean up and forget this process's ``once`` values whose keys start with
+    ``prefix`` (an extracted FMU's folder is removed); the number released."""
+    keys = [k for k in _ONCE if k.startswith(prefix)]
+    for k in keys:
+        value = _ONCE.pop(k)
+        cleanup = _CLEANUP.pop(k, None)
+        if cleanup is not None:
+            cleanup(value)
+    return len(keys)
 
 
 class _Failed:
@@ -39,13 +57,6 @@ class _Failed:
 
     def __init__(self, exc: BaseException) -> None:
         self.exc = exc
-
-
-def forget(prefix: str) -> list[Any]:
-    """Remove this process's ``once`` values whose keys start with ``prefix``; returns
-    them (their owner cleans them up)."""
-    keys = [k for k in _ONCE if k.startswith(prefix)]
-    return [_ONCE.pop(k) for k in keys]
 
 
 class _Box:
@@ -129,8 +140,15 @@ class Engine:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        """Release every worker's ``once`` values (extracted FMUs: a long-lived cluster
+        keeps no copies) and this process's, then close the client (and the cluster)."""
         if self.client is not None:
+            try:
+                self.client.run(release)
+            except Exception:  # noqa: S110 - a worker gone already has nothing to clean
+                pass
             self.client.close()
+        release()
         if self._cluster is not None:
             self._cluster.close()
         self.client = self._cluster = None
