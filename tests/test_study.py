@@ -11,9 +11,11 @@ grammar, the scene's [sweep] checks, the metrics' reductions and the command lin
 from __future__ import annotations
 
 import math
+import os
 import sys
 from pathlib import Path
 
+import dask
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -162,6 +164,22 @@ def test_engine_keeps_the_order_and_reports_failures_per_item(engine):
     assert out == [0, 10, 20, "three", 40, 50, 60]
     with pytest.raises(ValueError, match="three"):
         engine.map(work, list(range(7)), shared=10)
+
+
+def _kill_at_3(shared, x):
+    if x == 3:
+        os._exit(1)  # as an FMU that crashes its process
+    return x
+
+
+def test_an_item_that_kills_its_worker_fails_alone():
+    """A batch whose worker process dies is run again one item per task: only the killing
+    item fails (the scheduler allowed no retry, to keep the test short)."""
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with Engine(workers=1, progress=False) as eng:
+            out = eng.map(_kill_at_3, list(range(6)), batch=3,
+                          on_error=lambda x, e: type(e).__name__)  # fmt: skip
+    assert out == [0, 1, 2, "KilledWorker", 4, 5]
 
 
 def test_batches_cover_the_items_in_order():
