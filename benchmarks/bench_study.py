@@ -172,7 +172,9 @@ def main(argv: list[str] | None = None) -> int:
                 "counted). The Dask runs give the serial rows and table exactly (checked).",
                 table,
                 "Cost of the engine per task (a task that returns its argument, one per "
-                "item) against the run time of one task of each kind:",
+                "item) against the run time of one task of each kind; the round trip of a "
+                "map of one item includes the two tasks that hold the function and the "
+                "shared value for the workers:",
                 overhead,
                 "A sweep's default batches hold about a quarter of each worker's runs per "
                 "task (8 tasks of 8 fig13 runs here), so the engine's cost per task is paid "
