@@ -140,7 +140,7 @@ class Engine:
                 n_workers=self.workers,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",  # None still serves HTTP on 8787 (taken: a warning)
                 silence_logs=logging.ERROR,
             )
             self.client = Client(self._cluster)
