@@ -104,8 +104,8 @@ def test_report_families_on_two_workers_give_the_serial_errors(engine):
 
 def test_a_failed_run_is_a_row_and_the_others_keep_their_values(tmp_path, engine):
     """P steps to -1000 N in one run: the FMU refuses the value with fmi2Error at its
-    setReal (Eq. 33 needs P > 0) and the row says so; mu = -0.1 is refused by the scene check; every other run is ok
-    with the values of a sweep without the failing ones."""
+    setReal (Eq. 33 needs P > 0) and the row says so; mu = -0.1 is refused by the scene
+    check; every other run is ok with the values of a sweep without the failing ones."""
     scene = load(_short_scene(tmp_path))
     vary = (Vary("P.step.height", (-500.0, -2000.0)), Vary("mu", (0.3, -0.1)))
     rows = sweep.sweep(scene, vary, engine, OUT)
