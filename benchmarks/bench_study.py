@@ -14,12 +14,12 @@ in the same run (the cluster started once, before; its start-up is reported apar
   over TRIVIAL tasks on all workers, and the round trip of a single task), against the
   run time of one sweep task (one fig13 run) and one table task (a line of nodes).
 
-Each timing is the fastest of ``--repeats`` (the machine is shared; the minimum filters
-the other processes out), serial and Dask repeats interleaved so that both see the same
-machine. BLAS is single-threaded in this process as in the workers (threaded BLAS slows
-the solver's small GMRES operations down, docs/performance.md). The Dask runs are
-checked to give the serial rows and table. ``--write`` replaces the section
-"## Parameter studies on Dask" of docs/performance.md.
+Each timing is the fastest of ``--repeats`` (the sweeps: SWEEP_REPEATS times as many;
+the machine is shared; the minimum filters the other processes out), serial and Dask
+repeats interleaved so that both see the same machine. BLAS is single-threaded in this
+process as in the workers (threaded BLAS slows the solver's small GMRES operations down,
+docs/performance.md). The Dask runs are checked to give the serial rows and table.
+``--write`` replaces the section "## Parameter studies on Dask" of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -52,6 +52,9 @@ STUDY = ROOT / "scenarios" / "studies" / "fig13_peak.toml"
 TABLE_GRID = 12
 TABLE_NODES = (13, 13, 9)
 TRIVIAL = 200
+# The sweeps take seconds: repeated this many times more than the table builds (their
+# best is the noisier on a shared machine).
+SWEEP_REPEATS = 3
 
 
 def _noop(shared, item):
@@ -87,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
         sweep.sweep(scene, vary, dask, OUT)
         sweep.sweep(scene, vary, serial, OUT)
         times: dict[str, float] = {}
-        for _ in range(args.repeats):  # interleaved: both see the same machine
+        for _ in range(SWEEP_REPEATS * args.repeats):  # interleaved: the same machine
             for label, eng, batch in (("serial", serial, None), ("dask", dask, None),
                                       ("dask1", dask, 1)):  # fmt: skip
                 t, rows = _best(lambda e=eng, b=batch: _sweep(scene, vary, e, b), 1)
@@ -113,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         times["single"], _ = _best(lambda: dask.map(_noop, [0], batch=1), 5 * args.repeats)
     finally:
         dask.__exit__(None, None, None)
-        sweep.cleanup_local()
+        serial.__exit__(None, None, None)
 
     load_after = os.getloadavg()[0]
     run_time = times["sweep_serial"] / n_runs
@@ -160,7 +163,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"{args.repeats} --write` ({when}, {platform.machine()}, {os.cpu_count()} "
                 "cores shared with other developers' CPU-heavy work at the time, 1-minute load "
                 f"average {load_before:.1f} before and {load_after:.1f} after: the numbers "
-                "vary with the load, each is the fastest of the repeats, serial and Dask "
+                "vary with the load, each is the fastest of the repeats (sweeps "
+                f"{SWEEP_REPEATS * args.repeats}, tables {args.repeats}), serial and Dask "
                 "interleaved). Serial: every task in this process, in order; Dask: a "
                 "LocalCluster of worker processes (one thread each, BLAS single-threaded "
                 "in both), started once before the timings (its start-up, "
@@ -168,7 +172,9 @@ def main(argv: list[str] | None = None) -> int:
                 "counted). The Dask runs give the serial rows and table exactly (checked).",
                 table,
                 "Cost of the engine per task (a task that returns its argument, one per "
-                "item) against the run time of one task of each kind:",
+                "item) against the run time of one task of each kind; the round trip of a "
+                "map of one item includes the two tasks that hold the function and the "
+                "shared value for the workers:",
                 overhead,
                 "A sweep's default batches hold about a quarter of each worker's runs per "
                 "task (8 tasks of 8 fig13 runs here), so the engine's cost per task is paid "

@@ -237,7 +237,6 @@ def _sweep(args: argparse.Namespace) -> int:
         rows = sweep.sweep(
             scene, vary, engine, args.fmu_out, trajectories=args.trajectories or None
         )
-    sweep.cleanup_local()
     wall = time.perf_counter() - t0
     ms = scene.sweep.metrics or metrics.defaults(scene.outputs)
     files = sweep.write(rows, vary, out, [m.name for m in ms])

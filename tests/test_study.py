@@ -11,9 +11,11 @@ grammar, the scene's [sweep] checks, the metrics' reductions and the command lin
 from __future__ import annotations
 
 import math
+import os
 import sys
 from pathlib import Path
 
+import dask
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -24,6 +26,7 @@ from contact_fmu.halfspace.table import TableData, build_table
 from contact_fmu.report.workprecision import run_scene
 from contact_fmu.scenario import ScenarioError, load, variation
 from contact_fmu.scenario.schema import Metric, Vary, sweep_values
+from contact_fmu.study import engine as engine_module
 from contact_fmu.study import metrics, sweep
 from contact_fmu.study import tables as study_tables
 from contact_fmu.study.engine import Engine, batches
@@ -101,8 +104,8 @@ def test_report_families_on_two_workers_give_the_serial_errors(engine):
 
 def test_a_failed_run_is_a_row_and_the_others_keep_their_values(tmp_path, engine):
     """P steps to -1000 N in one run: the FMU refuses the value with fmi2Error at its
-    setReal (Eq. 33 needs P > 0) and the row says so; mu = -0.1 is refused by the scene check; every other run is ok
-    with the values of a sweep without the failing ones."""
+    setReal (Eq. 33 needs P > 0) and the row says so; mu = -0.1 is refused by the scene
+    check; every other run is ok with the values of a sweep without the failing ones."""
     scene = load(_short_scene(tmp_path))
     vary = (Vary("P.step.height", (-500.0, -2000.0)), Vary("mu", (0.3, -0.1)))
     rows = sweep.sweep(scene, vary, engine, OUT)
@@ -164,6 +167,22 @@ def test_engine_keeps_the_order_and_reports_failures_per_item(engine):
         engine.map(work, list(range(7)), shared=10)
 
 
+def _kill_at_3(shared, x):
+    if x == 3:
+        os._exit(1)  # as an FMU that crashes its process
+    return x
+
+
+def test_an_item_that_kills_its_worker_fails_alone():
+    """A batch whose worker process dies is run again one item per task: only the killing
+    item fails (the scheduler allowed no retry, to keep the test short)."""
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with Engine(workers=1, progress=False) as eng:
+            out = eng.map(_kill_at_3, list(range(6)), batch=3,
+                          on_error=lambda x, e: type(e).__name__)  # fmt: skip
+    assert out == [0, 1, 2, "KilledWorker", 4, 5]
+
+
 def test_batches_cover_the_items_in_order():
     parts = batches(64, 2)
     assert [p.start for p in parts] == list(range(0, 64, 8)) and parts[-1].stop == 64
@@ -177,14 +196,18 @@ def test_engine_refuses_bad_settings():
         Engine(workers=2, scheduler="tcp://localhost:8786")
 
 
-def test_runs_in_one_process_do_not_grow_sys_path():
+def test_runs_in_one_process_do_not_grow_sys_path_nor_leave_files():
     """pythonfmu prepends the FMU's resources folder at every instantiation: after 6 runs
-    at most one entry is new."""
+    at most one entry is new. The FMU is extracted once and removed at the engine's end."""
     scene = load(SCENARIOS / "fig13.toml")
     before = len(sys.path)
     with Engine(workers=0, progress=False) as serial:
         sweep.sweep(scene, (Vary("mu", (0.2, 0.3)),), serial, OUT)
+        extracted = [v for k, v in engine_module._ONCE.items() if k.startswith("fmu:")]
+        assert len(extracted) == 1 and extracted[0].is_dir()
     assert len(sys.path) - before <= 1
+    assert not extracted[0].exists()
+    assert not any(k.startswith("fmu:") for k in engine_module._ONCE)
 
 
 # ---- the study scene: Eq. (26) -------------------------------------------------------------

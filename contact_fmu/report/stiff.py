@@ -19,7 +19,6 @@ Checks (each with its measured quantity; see the constants for the tolerances):
 
 from __future__ import annotations
 
-import atexit
 import dataclasses
 import gc
 import json
@@ -45,7 +44,7 @@ from ..layer import SPIN_GRID, LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
 from ..solvers import SOLVE_RTOL
-from ..study.engine import Engine, forget, once
+from ..study.engine import Engine, once, release
 from .metrics import oscillation
 from .stiff_cases import StiffCase, cases
 
@@ -394,14 +393,9 @@ def prepare(out_dir: Path) -> Path:
 
 
 def _extracted(fmus: dict[str, str]) -> Path:
-    """``_extract`` once in this process (removed at its exit, or by run_all)."""
-
-    def extract() -> Path:
-        tmp = _extract(fmus)
-        atexit.register(shutil.rmtree, tmp, True)
-        return tmp
-
-    return once("stiff:" + json.dumps(fmus, sort_keys=True), extract)
+    """``_extract`` once in this process (removed when released: run_all, the engine)."""
+    key = "stiff:" + json.dumps(fmus, sort_keys=True)
+    return once(key, lambda: _extract(fmus), lambda d: shutil.rmtree(d, True))
 
 
 def _run_task(fmus: dict[str, str], case: StiffCase) -> Result:
@@ -421,8 +415,7 @@ def run_all(
         results = engine.map(_run_task, list(selected or cases()), shared=fmus,
                              desc="stiff cases", batch=1)  # fmt: skip
     finally:
-        for d in forget("stiff:"):  # this process's copies (a worker's go at its exit)
-            shutil.rmtree(d, ignore_errors=True)
+        release("stiff:")  # this process's copies (a worker's: at the engine's end)
     for r in results:
         log(row_text(r))
     return results

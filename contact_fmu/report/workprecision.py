@@ -28,7 +28,6 @@ skipped and listed as such.
 
 from __future__ import annotations
 
-import atexit
 import json
 import math
 import shutil
@@ -48,7 +47,7 @@ from ..fmu.config import ModelConfig
 from ..scenario import runner
 from ..scenario.schema import Case, Scene
 from ..study import tables as study_tables
-from ..study.engine import Engine, forget, once
+from ..study.engine import Engine, once, release
 from . import reference as ref
 from .metrics import norms, observed_order, pairwise_orders
 from .sweep import Family, Ladder, Rung, families, for_report, point, rungs
@@ -280,8 +279,7 @@ def run_scene(
     try:
         results = engine.map(_family_rows, fams, shared=ctx, desc=f"report {scene.name}", batch=1)
     finally:
-        for d in forget("report-fmu:"):  # this process's copies (a worker's go at its exit)
-            shutil.rmtree(d, ignore_errors=True)
+        release("report-fmu:")  # this process's copies (a worker's: at the engine's end)
     for rows in results:
         for r in rows:
             report.rows.append(r)
@@ -312,15 +310,14 @@ class _FamilyContext:
 
 
 def _extracted(path: str) -> Path:
-    """The FMU file ``path`` extracted once in this process (removed at its exit)."""
+    """The FMU file ``path`` extracted once in this process (removed when released)."""
 
     def extract() -> Path:
         d = Path(tempfile.mkdtemp(prefix="report-fmu-"))
-        atexit.register(shutil.rmtree, d, True)
         fmpy.extract(path, str(d))
         return d
 
-    return once(f"report-fmu:{path}", extract)
+    return once(f"report-fmu:{path}", extract, lambda d: shutil.rmtree(d, True))
 
 
 def _family_rows(ctx: _FamilyContext, fam: Family) -> list[Row]:

@@ -4,14 +4,18 @@ running Dask cluster (dask.distributed).
 The engine knows nothing of what it runs: ``map(fn, items, shared=...)`` calls
 ``fn(shared, item)`` for every item and returns the results in the items' order, so a
 result never depends on how many workers there are or which finished first. ``shared``
-(a scene, an FMU's bytes, a contact) and ``fn`` are sent to each worker once
-(scattered, broadcast), not once per task. Progress: a tqdm bar over the tasks as they
-finish (on a terminal; ``progress=False`` silences it).
+(a scene, an FMU's bytes, a contact) and ``fn`` reach each worker once, not once per
+task. Items go in batches (fewer tasks for short runs); the items of a task whose worker
+died (a crashing FMU) run again one by one, alone, so that only an item that crashes by
+itself fails. Progress:
+a tqdm bar over the items as their tasks finish (on a terminal; ``progress=False``
+silences it).
 
 Worker processes: one thread each (the FMUs and the solvers are single-threaded Python;
 a process per core avoids the GIL), BLAS single-threaded (dask.distributed's nanny sets
 OMP/OPENBLAS/MKL_NUM_THREADS=1 before a worker starts). ``once(key, factory)`` keeps a
-per-process value (an extracted FMU, a parsed scene) for every task of that process.
+per-process value (an extracted FMU, a parsed scene) for every task of that process;
+leaving the engine's with-block releases them on every worker and here.
 """
 
 from __future__ import annotations
@@ -23,15 +27,32 @@ from typing import Any
 
 from .._validate import InputError
 
-# Per-process values of ``once`` (in a worker: for every task it runs).
+# Per-process values of ``once`` (in a worker: for every task it runs), and how to clean
+# each up (``release``).
 _ONCE: dict[str, Any] = {}
+_CLEANUP: dict[str, Callable[[Any], None]] = {}
 
 
-def once(key: str, factory: Callable[[], Any]) -> Any:
-    """The value of ``factory()`` made once per process under ``key``."""
+def once(key: str, factory: Callable[[], Any], cleanup: Callable[[Any], None] | None = None) -> Any:
+    """The value of ``factory()`` made once per process under ``key``; ``cleanup(value)``
+    runs when it is released."""
     if key not in _ONCE:
         _ONCE[key] = factory()
+        if cleanup is not None:
+            _CLEANUP[key] = cleanup
     return _ONCE[key]
+
+
+def release(prefix: str = "") -> int:
+    """Clean up and forget this process's ``once`` values whose keys start with
+    ``prefix`` (an extracted FMU's folder is removed); the number released."""
+    keys = [k for k in _ONCE if k.startswith(prefix)]
+    for k in keys:
+        value = _ONCE.pop(k)
+        cleanup = _CLEANUP.pop(k, None)
+        if cleanup is not None:
+            cleanup(value)
+    return len(keys)
 
 
 class _Failed:
@@ -41,18 +62,15 @@ class _Failed:
         self.exc = exc
 
 
-def forget(prefix: str) -> list[Any]:
-    """Remove this process's ``once`` values whose keys start with ``prefix``; returns
-    them (their owner cleans them up)."""
-    keys = [k for k in _ONCE if k.startswith(prefix)]
-    return [_ONCE.pop(k) for k in keys]
-
-
 class _Box:
-    """A value scattered as one object (scatter splits lists, tuples and dicts)."""
+    """A value passed as one object (Dask would look into lists, tuples and dicts)."""
 
     def __init__(self, value: Any) -> None:
         self.value = value
+
+
+def _hold(box: _Box) -> _Box:
+    return box
 
 
 def _call_batch(batch: list[Any], fn: _Box, shared: _Box) -> list[Any]:
@@ -122,15 +140,22 @@ class Engine:
                 n_workers=self.workers,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",  # None still serves HTTP on 8787 (taken: a warning)
                 silence_logs=logging.ERROR,
             )
             self.client = Client(self._cluster)
         return self
 
     def __exit__(self, *exc: object) -> None:
+        """Release every worker's ``once`` values (extracted FMUs: a long-lived cluster
+        keeps no copies) and this process's, then close the client (and the cluster)."""
         if self.client is not None:
+            try:
+                self.client.run(release)
+            except Exception:  # noqa: S110 - a worker gone already has nothing to clean
+                pass
             self.client.close()
+        release()
         if self._cluster is not None:
             self._cluster.close()
         self.client = self._cluster = None
@@ -150,9 +175,10 @@ class Engine:
         batch: int | None = None,
     ) -> list[Any]:
         """[fn(shared, item) for item in items], in the items' order; on workers, items
-        go in consecutive batches (``batches``: ``batch`` items per task). An item that
-        raises (or whose worker died) gives on_error(item, exception) when given, else
-        the exception is raised (the remaining tasks are cancelled)."""
+        go in consecutive batches (``batches``: ``batch`` items per task; the items of a
+        task whose worker died run again one by one, alone). An item that raises (or
+        kills its worker by itself) gives on_error(item, exception) when given, else the
+        exception is raised (the remaining tasks are cancelled)."""
         items = list(items)
         with self._bar(len(items), desc) as bar:
             if self.serial:
@@ -174,33 +200,51 @@ class Engine:
         return max(1, len(self.client.scheduler_info()["workers"]))
 
     def _distributed(self, fn, items, shared, on_error, bar, batch) -> list[Any]:
-        from dask.distributed import as_completed
+        from dask.distributed import as_completed, wait
 
         if self.client is None:
             raise RuntimeError("Engine.map outside its with-block")
         parts = batches(len(items), self.n_workers(), batch)
-        fn_f = self.client.scatter(_Box(fn), broadcast=True, hash=False)
-        shared_f = self.client.scatter(_Box(shared), broadcast=True, hash=False)
+        # fn and shared as results of tasks that hold them (sent to the scheduler once,
+        # fetched once by each worker): a worker that dies takes no only copy with it,
+        # the scheduler makes it again (scattered data would be lost with it)
+        fn_f = self.client.submit(_hold, _Box(fn), pure=False)
+        shared_f = self.client.submit(_hold, _Box(shared), pure=False)
         futures = self.client.map(
             _call_batch, [items[s] for s in parts], fn=fn_f, shared=shared_f, pure=False
         )
         where = {f.key: s for f, s in zip(futures, parts, strict=True)}
         out: list[Any] = [None] * len(items)
+        suspects: list[int] = []  # items of tasks whose worker died
+
+        def settle(i: int, r: Any) -> None:
+            if isinstance(r, _Failed):
+                if on_error is None:
+                    raise r.exc
+                r = on_error(items[i], r.exc)
+            out[i] = r
+
         try:
             for f in as_completed(futures):
                 s = where[f.key]
                 if f.status == "finished":
-                    results = f.result()
-                else:  # the task itself failed: its worker died
-                    results = [_Failed(f.exception())] * (s.stop - s.start)
-                for i, r in zip(range(s.start, s.stop), results, strict=True):
-                    if isinstance(r, _Failed):
-                        if on_error is None:
-                            raise r.exc
-                        r = on_error(items[i], r.exc)
-                    out[i] = r
+                    for i, r in zip(range(s.start, s.stop), f.result(), strict=True):
+                        settle(i, r)
+                    bar.update(s.stop - s.start)
+                else:  # the task failed as a whole: its worker died (or its result broke)
+                    suspects += range(s.start, s.stop)
                 f.release()
-                bar.update(s.stop - s.start)
+            # A worker's death fails every task it held, not only the one that killed it
+            # (an FMU that crashes its process): each such item again, alone on the
+            # cluster, so that only an item that kills its worker by itself fails.
+            for i in suspects:
+                g = self.client.submit(_call_batch, [items[i]], fn=fn_f, shared=shared_f,
+                                       pure=False)  # fmt: skip
+                futures.append(g)
+                wait([g])
+                settle(i, g.result()[0] if g.status == "finished" else _Failed(g.exception()))
+                g.release()
+                bar.update()
         finally:
             self.client.cancel([f for f in futures if not f.done()])
             del fn_f, shared_f

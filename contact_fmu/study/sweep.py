@@ -18,7 +18,6 @@ number of workers.
 
 from __future__ import annotations
 
-import atexit
 import hashlib
 import itertools
 import json
@@ -34,7 +33,7 @@ import numpy as np
 from ..scenario import variation
 from ..scenario.schema import Metric, ScenarioError, Scene, Vary, from_data
 from . import metrics as mt
-from .engine import Engine, forget, once
+from .engine import Engine, once
 from .run import run_case
 
 
@@ -95,7 +94,6 @@ def _fmu_dir(ref: FmuRef) -> Path:
         import fmpy
 
         d = Path(tempfile.mkdtemp(prefix=f"study-{ref.key[:12]}-"))
-        atexit.register(shutil.rmtree, d, True)
         src = Path(ref.path)
         if ref.data is not None:  # shipped: the worker may not see the path
             src = d / "shipped.fmu"
@@ -105,7 +103,7 @@ def _fmu_dir(ref: FmuRef) -> Path:
         fmpy.extract(str(src), str(d / "fmu"))
         return d / "fmu"
 
-    return once(f"fmu:{ref.key}", extract)
+    return once(f"fmu:{ref.key}", extract, lambda p: shutil.rmtree(p.parent, True))
 
 
 def _base(ctx: Context) -> Scene:
@@ -233,10 +231,3 @@ def read(path: Path) -> list[dict[str, Any]]:
 def strip(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Rows without their trajectories."""
     return [{k: v for k, v in r.items() if k != "_columns"} for r in rows]
-
-
-def cleanup_local() -> None:
-    """Remove the FMUs this process extracted (a serial sweep's; a worker's go when it
-    exits)."""
-    for d in forget("fmu:"):
-        shutil.rmtree(Path(d).parent, ignore_errors=True)
