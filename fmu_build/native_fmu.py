@@ -15,8 +15,9 @@ What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, met
 from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the half-space
 creep-force table of one load node without layers, body and contact mode (rail_traction,
 rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
-law without a spin input (sweep); the rigid_body mode (``--full rigid_body``). Everything else is refused here with a message that names the scene's
-feature (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
+law without a spin input (sweep); the rigid_body mode (``--full rigid_body``). Everything
+else is refused here with a message that names the scene's feature
+(``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
 
 from __future__ import annotations
