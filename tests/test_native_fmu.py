@@ -250,16 +250,23 @@ def steps(inst: Instance, n: int, h: float = 1.75e-4) -> None:
     ],
 )
 def test_bad_input_gives_discard_a_named_message_and_recovery(fig13, name, value, requirement):
-    """A bad or impossible input: doStep answers fmi2Discard with a message naming the
-    variable and the value (or the failed step), the outputs stay, and once the input is
-    corrected the instance steps to the same doubles as one that never saw it."""
+    """A bad or impossible input: fmi2Error at its setReal where its declared range
+    refuses it, and doStep answers fmi2Discard with a message naming the variable and
+    the value (or the failed step), the outputs stay, and once the input is corrected
+    the instance steps to the same doubles as one that never saw it."""
+    from fmpy.fmi1 import FMICallException
+
     with body(fig13) as clean:  # one at a time: pythonfmu logs to the last instance
         steps(clean, 3)
         expected = clean.outputs()
     with body(fig13) as b:
         steps(b, 1)
         good, before = b.get(name), b.outputs()
-        b.set(name, value)
+        try:
+            b.set(name, value)
+            assert requirement is None  # out of the declared range: refused at once
+        except FMICallException as e:
+            assert requirement is not None and e.status == ERROR
         assert b.step(1.75e-4) == DISCARD
         if requirement is not None:
             text = f"{name} = {value!r} is invalid: must be {requirement}"
@@ -281,21 +288,22 @@ def test_a_step_not_in_0_inf_gives_discard(fig13, h):
         assert b.step(1.75e-4) == OK
 
 
-def test_bad_parameter_gives_discard_until_corrected(fig13):
-    """A parameter out of its range: the native FMU answers fmi2Error at
-    exitInitializationMode (the model cannot start), naming it; the pythonfmu FMU
-    answers fmi2Discard at each doStep until it is corrected."""
+def test_bad_parameter_gives_error_until_corrected(fig13):
+    """A parameter out of its range: fmi2Error at its setter and at
+    exitInitializationMode (the model cannot start), naming it; doStep before a
+    successful initialisation fmi2Error; corrected, the model starts. Both targets."""
     from fmpy.fmi1 import FMICallException
 
-    if "native" in fig13.name:
-        with pytest.raises(FMICallException) as e:
-            Instance(fig13, "bad", {"mu": -0.3})
-        assert e.value.status == ERROR
-        return
-    with body(fig13, mu=-0.3) as b:
-        assert b.step(1.75e-4) == DISCARD
+    with Instance(fig13, "bad", initialise=False) as b:
+        for call in (lambda: b.set("mu", -0.3), b.initialise):
+            with pytest.raises(FMICallException) as e:
+                call()
+            assert e.value.status == ERROR
         assert any("mu = -0.3 is invalid: must be > 0" in m for _, m in b.messages)
+        assert b.step(1.75e-4) == ERROR
         b.set("mu", 0.3)
+        b.initialise()
+        b.set("Fx_ex", F)
         assert b.step(1.75e-4) == OK
         assert abs(b.get("Tx")) <= MU_P
 
@@ -676,7 +684,9 @@ def test_contact_fmu_outputs_follow_the_inputs_directly(native_fmus, python_fmus
     """Contact mode (direct feedthrough): outputs read after setReal, before any doStep,
     are the law at the new inputs, the pythonfmu FMU's doubles without lateral slip; a
     new load P changes Tx at the same creepage (the ellipse of Eq. 34 follows it); a bad
-    input keeps the last outputs."""
+    input answers fmi2Error at getReal (the last outputs are kept, not to be used)."""
+    from fmpy.fmi1 import FMICallException
+
     got = []
     for path in (native_fmus["sweep"], python_fmus["sweep"]):
         with Instance(path, "c") as c:
@@ -685,8 +695,12 @@ def test_contact_fmu_outputs_follow_the_inputs_directly(native_fmus, python_fmus
                 c.set("P", P)
                 c.set("Omega_y", ex.speed_unit() / ex.Rx * (1.0 - xi))
                 rows.append(c.outputs())
-            c.set("Vx", math.nan)
-            assert c.outputs() == rows[-1]
+            with pytest.raises(FMICallException):
+                c.set("Vx", math.nan)
+            with pytest.raises(FMICallException) as e:
+                c.get("Tx")
+            assert e.value.status == ERROR
+            assert "no outputs for the current inputs: Vx = nan is invalid" in c.messages[-1][1]
             got.append(rows)
     assert got[0] == got[1]
     assert got[0][2]["Tx"] != got[0][1]["Tx"]

@@ -13,12 +13,15 @@
  * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
  * the generated cf_model.h; the constants the Python integrator uses travel in it too.
  *
- * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py):
- * - an inadmissible value (non-finite, out of its declared range) is stored with a
- *   logged error naming the variable and the value; while it is held every doStep
- *   answers fmi2Discard with that message and changes nothing; once corrected the
- *   instance steps normally;
- * - doStep with a step not in (0, inf) or not at the FMU's time: fmi2Discard;
+ * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py, docs/reliability.md):
+ * - an inadmissible value (non-finite, out of its declared range) answers fmi2Error at
+ *   its setter and is held, with a logged error naming the variable and the value;
+ *   while it is held every doStep answers fmi2Discard with that message and changes
+ *   nothing, getReal of it (and, in contact mode, of the outputs) fmi2Error; once
+ *   corrected the instance steps normally;
+ * - doStep before a successful exitInitializationMode or after fmi2Terminate:
+ *   fmi2Error; with a step not in (0, inf) or not at the FMU's time (64 ulp of t):
+ *   fmi2Discard; loads beyond integrator.LOAD_LIMIT mu P: fmi2Discard;
  * - a step with no stage root (loads beyond mu P with an eta = inf body; a stage whose
  *   Newton iteration does not converge is bracketed and closed by brentq, as in Python)
  *   or with non-finite outputs: fmi2Discard, state unchanged;
@@ -86,6 +89,7 @@ typedef struct {
     char method_text[METHOD_TEXT]; /* the string set (cut at METHOD_TEXT - 1) */
     double time;
     int phase, built;
+    int init_tried;               /* fmi2ExitInitializationMode was called */
     int dirty;                    /* contact mode: inputs set since the outputs */
     double rb_Vx, rb_Omega_y;     /* rigid_body mode's state */
     cf_vstate vs;                 /* body mode with Vy and/or Omega_z as unknowns */
@@ -540,23 +544,31 @@ static fmi2Status other_step(Inst *I, double t, double h) {
 /* ContactSlave._refresh (direct feedthrough): the outputs for the inputs set, unless an
  * input is bad (then the last ones stay); an output that is not finite keeps them too,
  * with a logged error */
-static void refresh(Inst *I) {
+/* Contact mode's outputs for the current inputs; fmi2Error (the outputs kept are the
+ * last good inputs', not to be used) where they cannot be had: slave._refresh */
+static fmi2Status refresh(Inst *I) {
     cf_core *c = &I->c;
     for (int i = 0; i < CF_N_VARS; i++)
-        if (c->bad[i] && CF_VARS[i].kind == K_INPUT) return;
+        if (c->bad[i] && CF_VARS[i].kind == K_INPUT) {
+            char list[1536];
+            bad_list(I, list, sizeof list);
+            say(I, fmi2Error, "no outputs for the current inputs: %s", list);
+            return fmi2Error;
+        }
     cf_params p = c->p;
     cf_body b = c->b;
     double out[N_OUT];
     char r[40];
     const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
     if (bad) {
-        say(I, fmi2Error, "outputs not updated for the new inputs: FloatingPointError: output "
+        say(I, fmi2Error, "no outputs for the current inputs: FloatingPointError: output "
             "%s = %s is not finite", bad, r);
-        return;
+        return fmi2Error;
     }
     c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
     memcpy(c->b.out, out, sizeof out);
     publish(c);
+    return fmi2OK;
 }
 
 /* BodyModel.step + the outputs, committed only when all is well */
@@ -566,23 +578,28 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
      * microseconds: more than the step) */
     char rt[40], rh[40];
 #define REPRS() (py_repr(t, rt, sizeof rt), py_repr(h, rh, sizeof rh))
+    if (c->phase == PH_TERMINATED || !c->built) { /* slave._do_step's first refusal */
+        REPRS();
+        say(I, fmi2Error, "doStep at t = %s refused: called %s", rt,
+            c->phase == PH_TERMINATED ? "after fmi2Terminate"
+            : c->init_tried ? "before the model is initialised (fmi2ExitInitializationMode "
+                              "failed: see its messages)"
+                            : "before the model is initialised (fmi2ExitInitializationMode "
+                              "not called)");
+        return fmi2Error;
+    }
     if (!(h > 0.0 && h <= DBL_MAX)) {
         REPRS();
         say(I, fmi2Discard, "communicationStepSize = %s is invalid: must be > 0 and finite", rh);
         return fmi2Discard;
     }
-    double scale = fmax(1.0, fmax(fabs(t), h));
+    double scale = fmax(fabs(t), fabs(c->time)); /* slave.TIME_RTOL: ulps of t */
     if (!isfinite(t) || fabs(t - c->time) > CF_TIME_RTOL * scale) {
         char now[40];
         REPRS();
         py_repr(c->time, now, sizeof now);
         say(I, fmi2Discard, "currentCommunicationPoint = %s is invalid: must be the FMU's time "
             "%s", rt, now);
-        return fmi2Discard;
-    }
-    if (!c->built && !build(I)) {
-        REPRS();
-        say(I, fmi2Discard, "doStep at t = %s discarded: the model is not initialised", rt);
         return fmi2Discard;
     }
     if (c->next_bad && any_bad(c)) {
@@ -599,6 +616,21 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     const double P = c->val[R_P];
     if (P != c->P_law) law_at_load(c, P, &p, &b); /* set_load: Eq. (34) at the new P */
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
+    { /* integrator.LOAD_LIMIT: beyond it the eliminated form loses Eq. (8)'s balance */
+        const double cap = CF_LOAD_LIMIT * p.mu * P;
+        const char *name = fabs(b.Fx_ex) <= cap ? NULL : "Fx_ex";
+        if (name == NULL && !(fabs(b.My_ex) <= cap * p.Rx)) name = "My_ex";
+        if (name != NULL) {
+            char rv[40];
+            const int fx = name[0] == 'F';
+            py_repr(fx ? b.Fx_ex : b.My_ex, rv, sizeof rv);
+            REPRS();
+            say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: %s = "
+                "%s is invalid: must be <= %g mu P%s = %.6g %s in magnitude", rt, rh, name, rv,
+                CF_LOAD_LIMIT, fx ? "" : " Rx", fx ? cap : cap * p.Rx, fx ? "N" : "N m");
+            return fmi2Discard;
+        }
+    }
     /* substeps(): ceil(h / h_max (1 - slack)), at least 1, at most max_substeps */
     double q = ceil(h / b.h_max * (1.0 - b.substep_slack));
     int n = q < b.max_substeps ? (q < 1.0 ? 1 : (int)q) : b.max_substeps;
@@ -838,6 +870,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     INST(fmi2ExitInitializationMode);
+    I->c.init_tried = 1;
     if (!build(I)) return fmi2Error;
     I->c.phase = PH_STEP;
     return fmi2OK;
@@ -861,28 +894,40 @@ static int vr_ok(const Inst *I, fmi2ValueReference vr, int type, const char *fn)
     return 0;
 }
 
+/* A value that was refused is held, not to be used: fmi2Error (slave._get) */
+static fmi2Status held_bad(const Inst *I, fmi2ValueReference vr) {
+    if (!I->c.bad[vr]) return fmi2OK;
+    char msg[256];
+    bad_text(&CF_VARS[vr], I->c.var[vr], msg, sizeof msg);
+    say(I, fmi2Error, "%s: %s (held until corrected)", CF_VARS[vr].name, msg);
+    return fmi2Error;
+}
+
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[]) {
     INST(fmi2GetReal);
     if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
+    fmi2Status status = fmi2OK;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_REAL, "fmi2GetReal")) return fmi2Error;
         v[i] = I->c.var[vr[i]];
+        if (held_bad(I, vr[i]) != fmi2OK) status = fmi2Error;
     }
-    return fmi2OK;
+    return status;
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                           fmi2Integer v[]) {
     INST(fmi2GetInteger);
     if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
+    fmi2Status status = fmi2OK;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_INTEGER, "fmi2GetInteger")) return fmi2Error;
         double x = I->c.var[vr[i]];
         v[i] = x > 0.5 ? 1 : 0; /* the only Integer: regime, 0 or 1 */
     }
-    return fmi2OK;
+    return status;
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n,
@@ -953,10 +998,11 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
         const int bad = requirement(var, v[k]) != NULL;
         mark(C, i, bad);
         if (var->kind == K_INPUT) C->dirty = 1;
-        if (bad) {
+        if (bad) { /* refused: fmi2Error, the value held (as the pythonfmu FMU) */
             char msg[256];
             bad_text(var, v[k], msg, sizeof msg);
             say(I, fmi2Error, "%s; doStep answers fmi2Discard until it is corrected", msg);
+            status = fmi2Error;
         }
     }
     return status;
@@ -1007,9 +1053,11 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
             if (strcmp(s, METHOD_NAMES[m]) == 0) C->method = m;
         /* RollingBody's check, at set-up in Python: here at once, the same words */
         mark(C, (int)vr[k], C->method < 0);
-        if (C->method < 0)
+        if (C->method < 0) {
             say(I, fmi2Error, "method = '%s' is invalid: must be \"full\" or \"quasistationary\"; "
                 "doStep answers fmi2Discard until it is corrected", C->method_text);
+            status = fmi2Error;
+        }
     }
     return status;
 }
