@@ -12,10 +12,12 @@ build (or any importer's) compiles it on Windows or macOS; the FMI headers are f
 
 What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, methods
 "full" and "quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or
-from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the contact mode on
-the thin-layer law without a spin input (sweep); the rigid_body mode (``--full
-rigid_body``). Everything else is refused here with a message that names the scene's
-feature (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
+from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the half-space
+creep-force table of one load node without layers, body and contact mode (rail_traction,
+rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
+law without a spin input (sweep); the rigid_body mode (``--full rigid_body``). Everything
+else is refused here with a message that names the scene's feature
+(``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import ast
 import hashlib
 import importlib.util
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -66,12 +69,16 @@ def unsupported(cfg: ModelConfig) -> str | None:
     """Why the native FMU cannot carry ``cfg``'s model, or None."""
     if cfg.mode == "rigid_body":
         return None  # Eqs. (8)-(9) alone: no law
-    if cfg.contact_law != "layer":
-        return (
-            f'contact_law = "{cfg.contact_law}" (the native FMU has the thin-layer law only; '
-            "the half-space creep-force table is not carried)"
-        )
-    if cfg.mode == "contact" and "Omega_z" in cfg.inputs:
+    if cfg.has_table:
+        spec = cfg.table_spec
+        if len(spec.loads) != 1:
+            return (
+                f"[halfspace] loads = {list(spec.loads)} (a table of several load nodes is "
+                "interpolated in P by a spline the native FMU does not carry)"
+            )
+        if spec.kb + spec.ks > 0.0:
+            return "[halfspace] kb + ks > 0 (a table with layers has a load range to check)"
+    if cfg.mode == "contact" and "Omega_z" in cfg.inputs and not cfg.has_table:
         return (
             "input Omega_z (spin: the strip march of the thin-layer law needs its grid, "
             "which the native FMU does not build)"
@@ -160,7 +167,11 @@ def header(cfg: ModelConfig, guid: str) -> str:
     types = {"Real": "T_REAL", "Integer": "T_INTEGER", "String": "T_STRING"}
     rows = []
     for v in cfg.variables:
-        lo, hi = cfg.bounds(v)
+        lo, hi = v.min, v.max  # Var.check's range; a fixed value is checked after it
+        fix, fix_req = 0.0, "NULL"
+        if v.name in cfg.fixed:
+            fix = cfg.fixed[v.name]
+            fix_req = _cstr(cfg.check(v.name, math.nextafter(fix, math.inf)))
         # outputs start at their declared value before set-up (slave.py's _out)
         start = v.start if v.causality[cfg.mode] == fv.OUTPUT else cfg.start(v)
         lo_req = hi_req = "NULL"
@@ -172,7 +183,7 @@ def header(cfg: ModelConfig, guid: str) -> str:
             f"    {{{_cstr(v.name)}, {kinds[v.causality[cfg.mode]]}, {types[v.type]}, "
             f"{_role(cfg, v)}, {_c(0.0 if v.type == 'String' else float(start))}, "
             f"{_c(-float('inf') if lo is None else lo)}, {_c(float('inf') if hi is None else hi)}, "
-            f"{int(v.open_min)}, {lo_req}, {hi_req}}},"
+            f"{int(v.open_min)}, {lo_req}, {hi_req}, {_c(fix)}, {fix_req}}},"
         )
     method = cfg.start(fv.BY_NAME["method"]) if "method" in fv.BY_NAME else cfg.methods[0]
     lines = [
@@ -187,6 +198,7 @@ def header(cfg: ModelConfig, guid: str) -> str:
         f"#define CF_SPIN_NX {layer.SPIN_GRID[0]}",
         f"#define CF_SPIN_NY {layer.SPIN_GRID[1]}",
         f"#define CF_TINY {_c(layer.TINY)}",
+        *_table_header(cfg),
         f"#define CF_METHOD_START {('full', 'quasistationary').index(method)}",
         "static const cf_var CF_VARS[CF_N_VARS] = {",
         *rows,
@@ -196,6 +208,70 @@ def header(cfg: ModelConfig, guid: str) -> str:
         lit = str(value) if isinstance(value, int) else _c(value)
         lines.append(f"#define CF_{name} {lit}")
     return "\n".join(lines) + "\n"
+
+
+_TABLE_LAWS: dict[str, object] = {}
+
+
+def _table_law(cfg: ModelConfig):
+    """The creep-force table of a half-space FMU, as the pythonfmu FMU loads it (kept per
+    table key: the identity and the build read it)."""
+    from contact_fmu.halfspace.table import TableData
+
+    from . import tables
+
+    key = tables.key(cfg)
+    if key not in _TABLE_LAWS:
+        _TABLE_LAWS[key] = cfg.table_spec.law(TableData.load(tables.ensure(cfg)))
+    return _TABLE_LAWS[key]
+
+
+def _table_header(cfg: ModelConfig) -> list[str]:
+    """The table's constants: sizes, the Hertz ellipse's geometry (eccentricity
+    parameter m, kfac = (K - E)/m, hertz.Hertz._axes), the elastic constants, the onset
+    of full slip; CF_TABLE 0 without a table."""
+    from contact_fmu.halfspace.table import SATURATION_WIDTH
+
+    lines = [f"#define CF_SAT_WIDTH {_c(SATURATION_WIDTH)}"]
+    if not cfg.has_table:
+        return (
+            [*lines, "#define CF_TABLE 0"]
+            + [f"#define CF_T_{n} 1" for n in ("N1", "N2", "N3", "NCOEF", "A_LE_B")]
+            + [f"#define CF_T_{n} 1.0" for n in ("KFAC", "M", "AMIN", "ESTAR", "G", "ONSET")]
+        )
+    from scipy.special import ellipe, ellipk
+
+    law = _table_law(cfg)
+    d, h = law.data, law.hertz
+    m = h.m
+    kfac = math.pi / 4.0 if m == 0.0 else (ellipk(m) - ellipe(m)) / m  # hertz.Hertz._axes
+    n1, n2, n3 = (len(a) for a in d.axes)
+    return [*lines, "#define CF_TABLE 1"] + [
+        f"#define CF_T_N1 {n1}", f"#define CF_T_N2 {n2}", f"#define CF_T_N3 {n3}",
+        f"#define CF_T_NCOEF {law._coef_flat.size}",
+        f"#define CF_T_KFAC {_c(float(kfac))}", f"#define CF_T_M {_c(m)}",
+        f"#define CF_T_AMIN {_c(min(d.A, d.B))}", f"#define CF_T_A_LE_B {int(d.A <= d.B)}",
+        f"#define CF_T_ESTAR {_c(d.Estar)}", f"#define CF_T_G {_c(d.G)}",
+        f"#define CF_T_ONSET {_c(float(d.onset[0]))}",
+    ]  # fmt: skip
+
+
+def table_bytes(cfg: ModelConfig) -> bytes:
+    """The table resource read by fmu2.c (load_table): magic, sizes, the axes and the
+    patch coefficients as doubles, a CRC-32 (zlib's) of all before it (host byte
+    order)."""
+    import struct
+    import zlib
+
+    import numpy as np
+
+    law = _table_law(cfg)
+    axes = [np.ascontiguousarray(a, float) for a in law.data.axes]
+    coef = np.ascontiguousarray(law._coef_flat, float).ravel()
+    data = np.concatenate([*axes, coef])
+    head = b"cfmuTBL1" + struct.pack("=3IQ", *(len(a) for a in axes), data.size)
+    body = head + data.tobytes()
+    return body + struct.pack("=Q", zlib.crc32(body))
 
 
 def _skeleton(cfg: ModelConfig, identifier: str, guid: str) -> bytes:
@@ -337,6 +413,8 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeB
         files[f"binaries/{PLATFORM}/{identifier}.so"] = lib.read_bytes()
         for name in (*SOURCES, HEADER):
             files[f"sources/{name}"] = (src / name).read_bytes()
+        if cfg.has_table:
+            files["resources/table.bin"] = table_bytes(cfg)
         final = work / "final.fmu"
         _zip(final, files)
         os.replace(final, target)

@@ -16,6 +16,8 @@
  * "run" prints each step's outputs as hex floats, one line per step; "fuzz" prints a
  * count of the statuses. Exit status: 0 fine, 2 usage, 3 an FMI answer not allowed
  * (fmi2Fatal, a non-finite output served with fmi2OK, damaged bytes accepted).
+ * FMU_RESOURCES in the environment: the resource location (a file URI) to instantiate
+ * with.
  */
 #include <math.h>
 #include <time.h>
@@ -144,7 +146,9 @@ static int read_spec(FILE *f, spec *s) {
 
 static fmi2Component start(const api *f, const char *guid, const char *ident,
                            const fmi2CallbackFunctions *cb, const spec *s) {
-    fmi2Component c = f->Instantiate(ident, fmi2CoSimulation, guid, "", cb, fmi2False, fmi2True);
+    const char *res = getenv("FMU_RESOURCES"); /* the resources folder's URI, if any */
+    fmi2Component c = f->Instantiate(ident, fmi2CoSimulation, guid, res ? res : "", cb,
+                                     fmi2False, fmi2True);
     if (c == NULL) return NULL;
     f->SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
     f->EnterInit(c);

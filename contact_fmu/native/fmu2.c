@@ -13,12 +13,15 @@
  * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
  * the generated cf_model.h; the constants the Python integrator uses travel in it too.
  *
- * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py):
- * - an inadmissible value (non-finite, out of its declared range) is stored with a
- *   logged error naming the variable and the value; while it is held every doStep
- *   answers fmi2Discard with that message and changes nothing; once corrected the
- *   instance steps normally;
- * - doStep with a step not in (0, inf) or not at the FMU's time: fmi2Discard;
+ * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py, docs/reliability.md):
+ * - an inadmissible value (non-finite, out of its declared range) answers fmi2Error at
+ *   its setter and is held, with a logged error naming the variable and the value;
+ *   while it is held every doStep answers fmi2Discard with that message and changes
+ *   nothing, getReal of it (and, in contact mode, of the outputs) fmi2Error; once
+ *   corrected the instance steps normally;
+ * - doStep before a successful exitInitializationMode or after fmi2Terminate:
+ *   fmi2Error; with a step not in (0, inf) or not at the FMU's time (64 ulp of t):
+ *   fmi2Discard; loads beyond integrator.LOAD_LIMIT mu P: fmi2Discard;
  * - a step with no stage root (loads beyond mu P with an eta = inf body; a stage whose
  *   Newton iteration does not converge is bracketed and closed by brentq, as in Python)
  *   or with non-finite outputs: fmi2Discard, state unchanged;
@@ -63,6 +66,8 @@ typedef struct {
     double lo, hi;             /* declared range (-inf, inf where none) */
     int open_lo;               /* lo itself excluded */
     const char *lo_req, *hi_req; /* Var.check's requirement texts: "> 0", "<= 1" */
+    double fix;                  /* a value the build fixes (ModelConfig.fixed) ... */
+    const char *fix_req;         /* ... and the requirement text, or NULL */
 } cf_var;
 
 #include "cf_model.h"
@@ -84,6 +89,7 @@ typedef struct {
     char method_text[METHOD_TEXT]; /* the string set (cut at METHOD_TEXT - 1) */
     double time;
     int phase, built;
+    int init_tried;               /* fmi2ExitInitializationMode was called */
     int dirty;                    /* contact mode: inputs set since the outputs */
     double rb_Vx, rb_Omega_y;     /* rigid_body mode's state */
     cf_vstate vs;                 /* body mode with Vy and/or Omega_z as unknowns */
@@ -111,8 +117,20 @@ typedef struct {
     int logging;
     cf_core c;
     char method_out[METHOD_TEXT]; /* what getString hands out */
-    spin_grid *grid;              /* CF_VECTOR only */
+    spin_grid *grid;              /* CF_VECTOR with the thin-layer law only */
+    double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
 } Inst;
+
+/* the creep-force table's arrays into p (after set_constants) */
+static void attach_table(const Inst *I, cf_params *p) {
+    if (!CF_TABLE || I->table == NULL) return;
+    p->ax1 = I->table;
+    p->ax2 = p->ax1 + CF_T_N1;
+    p->ax3 = p->ax2 + CF_T_N2;
+    p->coef = p->ax3 + CF_T_N3;
+    p->n1 = CF_T_N1, p->n2 = CF_T_N2, p->n3 = CF_T_N3;
+    p->ext1 = p->ax1[CF_T_N1 - 1], p->ext2 = p->ax2[CF_T_N2 - 1], p->ext3 = p->ax3[CF_T_N3 - 1];
+}
 
 /* ---- messages ---------------------------------------------------------------------- */
 /* Python's repr of a float: the shortest digits that read back, its layout */
@@ -196,6 +214,7 @@ static const char *requirement(const cf_var *v, double x) {
     if (v->type == T_INTEGER && x != floor(x)) return "an integer";
     if (v->lo_req && (x < v->lo || (v->open_lo && x == v->lo))) return v->lo_req;
     if (v->hi_req && x > v->hi) return v->hi_req;
+    if (v->fix_req && x != v->fix) return v->fix_req;
     return NULL;
 }
 
@@ -255,8 +274,9 @@ static void set_constants(cf_params *p, cf_body *b) {
     p->algebraic_key = CF_ALGEBRAIC_KEY;
     p->bracket = 1; /* a stage Newton cannot close: bracket and brentq, as Python does */
     p->max_expansions = CF_MAX_EXPANSIONS;
-    p->law = LAW_LAYER;
-    p->coef = p->ax1 = p->ax2 = p->ax3 = NULL;
+    p->law = CF_TABLE ? LAW_TABLE : LAW_LAYER;
+    p->saturation_width = CF_SAT_WIDTH;
+    p->coef = p->ax1 = p->ax2 = p->ax3 = NULL; /* the table's: attach_table */
     p->strips = NULL;
     p->dyn_vy = p->dyn_spin = 0;
     p->rz = 0.0;
@@ -269,6 +289,11 @@ static void set_constants(cf_params *p, cf_body *b) {
 /* the law at load P into p and b (its reported a2, p0) */
 static void law_at_load(const cf_core *c, double P, cf_params *p, cf_body *b) {
     const double *v = c->val;
+    if (CF_TABLE) { /* the table's coefficients do not depend on P (one load node) */
+        cf_table_law(p, P, v[R_MU], CF_T_KFAC, CF_T_M, CF_T_AMIN, CF_T_A_LE_B, CF_T_ESTAR,
+                     CF_T_G, CF_T_ONSET, &b->a2, &b->p0);
+        return;
+    }
     cf_layer_law(p, P, v[R_RX], v[R_RY], v[R_K1], v[R_K2], v[R_KB], v[R_KS], v[R_MU], &b->a2,
                  &b->p0);
 }
@@ -303,15 +328,20 @@ static const char *contact_outputs(const cf_core *c, cf_params *p, cf_body *b,
     if (v[R_P] != p->P) law_at_load(c, v[R_P], p, b);
     const double Vx = v[R_VX], vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY];
     const double Omega_z = v[R_OMEGA_Z];
-    double T[3];
-    forces(p, vx, vy, Vx, T);
+    double T[3], tab[4];
+    if (CF_TABLE) {
+        table_scalar(p, vx, vy, Omega_z, Vx, tab); /* CreepTable._scalar, spin included */
+        T[0] = tab[0], T[1] = tab[1], T[2] = tab[2];
+    } else {
+        forces(p, vx, vy, Vx, T);
+    }
     for (int i = 0; i < N_OUT; i++) out[i] = 0.0;
     out[O_TX] = T[0], out[O_TY] = T[1], out[O_MZ] = T[2];
     out[O_VX_SLIP] = vx, out[O_VY_SLIP] = vy;
     const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
     out[O_XI_X] = vx / V, out[O_XI_Y] = vy / V, out[O_XI_SP] = Omega_z / V;
     out[O_A1] = p->a1, out[O_A2] = b->a2, out[O_P0] = b->p0;
-    out[O_ADHESION] = adhesion_fraction(p, vx, vy, Vx);
+    out[O_ADHESION] = CF_TABLE ? tab[3] : adhesion_fraction(p, vx, vy, Vx);
     out[O_REGIME] = full_slip(p, vx, vy, Vx) ? 1.0 : 0.0;
     return nonfinite(out, r, n);
 }
@@ -367,13 +397,13 @@ static int build(Inst *I) {
     char r[40];
     if (CF_MODE == MODE_RIGID) return build_rigid(I);
     /* LayerContact.__post_init__ beyond the declared ranges */
-    if (!(v[R_K1] + v[R_K2] > 0.0)) {
+    if (!CF_TABLE && !(v[R_K1] + v[R_K2] > 0.0)) {
         py_repr(v[R_K1] + v[R_K2], r, sizeof r);
         say(I, fmi2Error, "cannot initialise the model: k1 + k2 = %s is invalid: must be > 0 "
             "(a Winkler layer carries the load)", r);
         return 0;
     }
-    if (!(v[R_KB] + v[R_KS] > 0.0)) {
+    if (!CF_TABLE && !(v[R_KB] + v[R_KS] > 0.0)) {
         py_repr(v[R_KB] + v[R_KS], r, sizeof r);
         say(I, fmi2Error, "cannot initialise the model: kb + ks = %s is invalid: must be > 0 "
             "(tangential layer compliance)", r);
@@ -386,6 +416,7 @@ static int build(Inst *I) {
     memset(&b, 0, sizeof b);
     memset(&s, 0, sizeof s);
     set_constants(&p, &b);
+    attach_table(I, &p);
     if (CF_MODE == MODE_CONTACT) {
         law_at_load(c, v[R_P], &p, &b);
         double out[N_OUT];
@@ -513,23 +544,31 @@ static fmi2Status other_step(Inst *I, double t, double h) {
 /* ContactSlave._refresh (direct feedthrough): the outputs for the inputs set, unless an
  * input is bad (then the last ones stay); an output that is not finite keeps them too,
  * with a logged error */
-static void refresh(Inst *I) {
+/* Contact mode's outputs for the current inputs; fmi2Error (the outputs kept are the
+ * last good inputs', not to be used) where they cannot be had: slave._refresh */
+static fmi2Status refresh(Inst *I) {
     cf_core *c = &I->c;
     for (int i = 0; i < CF_N_VARS; i++)
-        if (c->bad[i] && CF_VARS[i].kind == K_INPUT) return;
+        if (c->bad[i] && CF_VARS[i].kind == K_INPUT) {
+            char list[1536];
+            bad_list(I, list, sizeof list);
+            say(I, fmi2Error, "no outputs for the current inputs: %s", list);
+            return fmi2Error;
+        }
     cf_params p = c->p;
     cf_body b = c->b;
     double out[N_OUT];
     char r[40];
     const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
     if (bad) {
-        say(I, fmi2Error, "outputs not updated for the new inputs: FloatingPointError: output "
+        say(I, fmi2Error, "no outputs for the current inputs: FloatingPointError: output "
             "%s = %s is not finite", bad, r);
-        return;
+        return fmi2Error;
     }
     c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
     memcpy(c->b.out, out, sizeof out);
     publish(c);
+    return fmi2OK;
 }
 
 /* BodyModel.step + the outputs, committed only when all is well */
@@ -539,23 +578,28 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
      * microseconds: more than the step) */
     char rt[40], rh[40];
 #define REPRS() (py_repr(t, rt, sizeof rt), py_repr(h, rh, sizeof rh))
+    if (c->phase == PH_TERMINATED || !c->built) { /* slave._do_step's first refusal */
+        REPRS();
+        say(I, fmi2Error, "doStep at t = %s refused: called %s", rt,
+            c->phase == PH_TERMINATED ? "after fmi2Terminate"
+            : c->init_tried ? "before the model is initialised (fmi2ExitInitializationMode "
+                              "failed: see its messages)"
+                            : "before the model is initialised (fmi2ExitInitializationMode "
+                              "not called)");
+        return fmi2Error;
+    }
     if (!(h > 0.0 && h <= DBL_MAX)) {
         REPRS();
         say(I, fmi2Discard, "communicationStepSize = %s is invalid: must be > 0 and finite", rh);
         return fmi2Discard;
     }
-    double scale = fmax(1.0, fmax(fabs(t), h));
+    double scale = fmax(fabs(t), fabs(c->time)); /* slave.TIME_RTOL: ulps of t */
     if (!isfinite(t) || fabs(t - c->time) > CF_TIME_RTOL * scale) {
         char now[40];
         REPRS();
         py_repr(c->time, now, sizeof now);
         say(I, fmi2Discard, "currentCommunicationPoint = %s is invalid: must be the FMU's time "
             "%s", rt, now);
-        return fmi2Discard;
-    }
-    if (!c->built && !build(I)) {
-        REPRS();
-        say(I, fmi2Discard, "doStep at t = %s discarded: the model is not initialised", rt);
         return fmi2Discard;
     }
     if (c->next_bad && any_bad(c)) {
@@ -572,6 +616,21 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     const double P = c->val[R_P];
     if (P != c->P_law) law_at_load(c, P, &p, &b); /* set_load: Eq. (34) at the new P */
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
+    { /* integrator.LOAD_LIMIT: beyond it the eliminated form loses Eq. (8)'s balance */
+        const double cap = CF_LOAD_LIMIT * p.mu * P;
+        const char *name = fabs(b.Fx_ex) <= cap ? NULL : "Fx_ex";
+        if (name == NULL && !(fabs(b.My_ex) <= cap * p.Rx)) name = "My_ex";
+        if (name != NULL) {
+            char rv[40];
+            const int fx = name[0] == 'F';
+            py_repr(fx ? b.Fx_ex : b.My_ex, rv, sizeof rv);
+            REPRS();
+            say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: %s = "
+                "%s is invalid: must be <= %g mu P%s = %.6g %s in magnitude", rt, rh, name, rv,
+                CF_LOAD_LIMIT, fx ? "" : " Rx", fx ? cap : cap * p.Rx, fx ? "N" : "N m");
+            return fmi2Discard;
+        }
+    }
     /* substeps(): ceil(h / h_max (1 - slack)), at least 1, at most max_substeps */
     double q = ceil(h / b.h_max * (1.0 - b.substep_slack));
     int n = q < b.max_substeps ? (q < 1.0 ? 1 : (int)q) : b.max_substeps;
@@ -645,6 +704,82 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const 
     return fmi2OK;
 }
 
+/* the table resource (fmu_build/native_fmu.py, table_bytes): "cfmuTBL1", n1, n2, n3
+ * (u32), the count of doubles (u64), the axes and the patch coefficients (doubles), the
+ * CRC-32 (zlib's) of all before it (u64); read from the resources folder (a file URI) at
+ * instantiation into memory of the importer's; 0 with a logged reason */
+static uint64_t crc32_of(const unsigned char *p, size_t n) {
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; i++) {
+        c ^= p[i];
+        for (int k = 0; k < 8; k++) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+    }
+    return (uint64_t)(c ^ 0xFFFFFFFFu);
+}
+
+static int load_table(Inst *I, const char *uri, const Inst *probe) {
+    char path[4096];
+    const char *s = uri ? uri : "";
+    if (strncmp(s, "file://localhost/", 17) == 0) s += 16;
+    else if (strncmp(s, "file:///", 8) == 0) s += 7;
+    else if (strncmp(s, "file:/", 6) == 0) s += 5;
+    size_t k = 0;
+    for (; *s && k + 1 < sizeof path; s++) { /* percent-decoding */
+        int hi, lo;
+        if (s[0] == '%' && s[1] && s[2] && sscanf(s + 1, "%1x%1x", &hi, &lo) == 2) {
+            path[k++] = (char)(hi * 16 + lo);
+            s += 2;
+        } else {
+            path[k++] = *s;
+        }
+    }
+#ifdef _WIN32
+    if (k > 2 && path[0] == '/' && path[2] == ':') memmove(path, path + 1, k--); /* /C:/ */
+#endif
+    path[k] = '\0';
+    const char *name = "/table.bin";
+    if (k && path[k - 1] == '/') name++;
+    if (k + strlen(name) + 1 > sizeof path) {
+        say(probe, fmi2Error, "fmi2Instantiate: the resource path is too long");
+        return 0;
+    }
+    strcat(path, name);
+    const size_t n_data = (size_t)CF_T_N1 + CF_T_N2 + CF_T_N3 + CF_T_NCOEF;
+    const size_t size = 8 + 12 + 8 + 8 * n_data + 8;
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) {
+        say(probe, fmi2Error, "fmi2Instantiate: the creep-force table %s cannot be opened", path);
+        return 0;
+    }
+    unsigned char *buf = (unsigned char *)I->cb.allocateMemory(size + 1, 1);
+    size_t got = buf ? fread(buf, 1, size + 1, f) : 0;
+    fclose(f);
+    const char *why = NULL;
+    uint32_t n[3] = {0, 0, 0};
+    uint64_t count = 0, sum = 0;
+    if (buf == NULL) why = "out of memory";
+    else if (got != size || memcmp(buf, "cfmuTBL1", 8) != 0) why = "not this FMU's table";
+    else {
+        memcpy(n, buf + 8, 12);
+        memcpy(&count, buf + 20, 8);
+        memcpy(&sum, buf + size - 8, 8);
+        if (n[0] != CF_T_N1 || n[1] != CF_T_N2 || n[2] != CF_T_N3 || count != n_data)
+            why = "its sizes are not this FMU's";
+        else if (crc32_of(buf, size - 8) != sum) why = "damaged: its checksum does not match";
+    }
+    if (why) {
+        say(probe, fmi2Error, "fmi2Instantiate: the creep-force table %s is refused: %s", path,
+            why);
+        if (buf) I->cb.freeMemory(buf);
+        return 0;
+    }
+    I->table = (double *)I->cb.allocateMemory(n_data, sizeof(double));
+    if (I->table) memcpy(I->table, buf + 28, 8 * n_data);
+    I->cb.freeMemory(buf);
+    if (I->table == NULL) say(probe, fmi2Error, "fmi2Instantiate: out of memory");
+    return I->table != NULL;
+}
+
 fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
                               fmi2String resources, const fmi2CallbackFunctions *cb,
                               fmi2Boolean visible, fmi2Boolean logging) {
@@ -678,7 +813,12 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         return NULL;
     }
     memcpy(I->name, probe.name, len);
-    if (CF_VECTOR) {
+    if (CF_TABLE && !load_table(I, resources, &probe)) {
+        cb->freeMemory(I->name);
+        cb->freeMemory(I);
+        return NULL;
+    }
+    if (CF_VECTOR && !CF_TABLE) {
         I->grid = (spin_grid *)cb->allocateMemory(1, sizeof(spin_grid));
         if (I->grid == NULL) {
             cb->freeMemory(I->name);
@@ -687,6 +827,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
             return NULL;
         }
         I->grid->P = NAN;
+        I->grid->strips.ny = 0;
     }
     I->logging = logging != fmi2False;
     start_values(I);
@@ -698,6 +839,7 @@ void fmi2FreeInstance(fmi2Component c) {
     if (I == NULL) return;
     fmi2CallbackFreeMemory release = I->cb.freeMemory;
     if (I->grid) release(I->grid);
+    if (I->table) release(I->table);
     release(I->name);
     release(I);
 }
@@ -728,6 +870,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     INST(fmi2ExitInitializationMode);
+    I->c.init_tried = 1;
     if (!build(I)) return fmi2Error;
     I->c.phase = PH_STEP;
     return fmi2OK;
@@ -751,28 +894,40 @@ static int vr_ok(const Inst *I, fmi2ValueReference vr, int type, const char *fn)
     return 0;
 }
 
+/* A value that was refused is held, not to be used: fmi2Error (slave._get) */
+static fmi2Status held_bad(const Inst *I, fmi2ValueReference vr) {
+    if (!I->c.bad[vr]) return fmi2OK;
+    char msg[256];
+    bad_text(&CF_VARS[vr], I->c.var[vr], msg, sizeof msg);
+    say(I, fmi2Error, "%s: %s (held until corrected)", CF_VARS[vr].name, msg);
+    return fmi2Error;
+}
+
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[]) {
     INST(fmi2GetReal);
     if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
+    fmi2Status status = fmi2OK;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_REAL, "fmi2GetReal")) return fmi2Error;
         v[i] = I->c.var[vr[i]];
+        if (held_bad(I, vr[i]) != fmi2OK) status = fmi2Error;
     }
-    return fmi2OK;
+    return status;
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                           fmi2Integer v[]) {
     INST(fmi2GetInteger);
     if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
+    fmi2Status status = fmi2OK;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_INTEGER, "fmi2GetInteger")) return fmi2Error;
         double x = I->c.var[vr[i]];
         v[i] = x > 0.5 ? 1 : 0; /* the only Integer: regime, 0 or 1 */
     }
-    return fmi2OK;
+    return status;
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n,
@@ -843,10 +998,11 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
         const int bad = requirement(var, v[k]) != NULL;
         mark(C, i, bad);
         if (var->kind == K_INPUT) C->dirty = 1;
-        if (bad) {
+        if (bad) { /* refused: fmi2Error, the value held (as the pythonfmu FMU) */
             char msg[256];
             bad_text(var, v[k], msg, sizeof msg);
             say(I, fmi2Error, "%s; doStep answers fmi2Discard until it is corrected", msg);
+            status = fmi2Error;
         }
     }
     return status;
@@ -897,9 +1053,11 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
             if (strcmp(s, METHOD_NAMES[m]) == 0) C->method = m;
         /* RollingBody's check, at set-up in Python: here at once, the same words */
         mark(C, (int)vr[k], C->method < 0);
-        if (C->method < 0)
+        if (C->method < 0) {
             say(I, fmi2Error, "method = '%s' is invalid: must be \"full\" or \"quasistationary\"; "
                 "doStep answers fmi2Discard until it is corrected", C->method_text);
+            status = fmi2Error;
+        }
     }
     return status;
 }
@@ -1010,7 +1168,7 @@ static int analytic_row(const cf_core *c, int role, double row[3]) {
     case O_VY_SLIP: row[0] = 0.0, row[1] = 1.0, row[2] = 0.0; return 1;
     default: return 0;
     }
-    if (Vx == 0.0) return 0; /* standstill: the blend of the law is not this */
+    if (Vx == 0.0 || CF_TABLE) return 0; /* standstill, or the table: differences */
     double J[3][3];
     law_jacobian(&c->p, vx, vy, Vx, J);
     /* chain rule: vx = Vx - Omega_y Rx, vy = Vy, V = Vx */
@@ -1171,6 +1329,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     }
     I->c = *(const cf_core *)state;
     sanitize(&I->c);
+    attach_table(I, &I->c.p);
     if (CF_VECTOR && I->c.built) ensure_grid(I, &I->c.p, &I->c.b, &I->c.p); /* its load's */
     return fmi2OK;
 }

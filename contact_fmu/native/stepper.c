@@ -673,6 +673,31 @@ void cf_layer_law(cf_params *p, double P, double Rx, double Ry, double k1, doubl
     p->beta_per_creep = p->beta_full_slip / cfs;
 }
 
+/* The half-space creep-force table (halfspace/table.py, TableLaw) at load P and friction
+ * mu, for a table of one load node (its patches independent of P) into p, with a2, p0:
+ * the Hertz ellipse (halfspace/hertz.py: major = (3 P kfac/(2 pi Amin E*))^(1/3), minor =
+ * major (1 - m)^(1/2), the eccentricity parameter m and kfac = (K - E)/m fixed by the
+ * geometry, computed by the build), p0 = 3 P/(2 pi a1 a2), c = (a1 a2)^(1/2), xi_ref =
+ * mu P/(G c^2), phi_ref = xi_ref/c, creep_full_slip = onset xi_ref; the operations of
+ * hertz.py and table.py: the same doubles. */
+void cf_table_law(cf_params *p, double P, double mu, double kfac, double m, double Amin,
+                  int a_le_b, double Estar, double G, double onset, double *a2, double *p0) {
+    const double major = pow(3.0 * P * kfac / (2.0 * M_PI * Amin * Estar), 1.0 / 3.0);
+    const double minor = major * sqrt(1.0 - m);
+    const double a1 = a_le_b ? major : minor;
+    *a2 = a_le_b ? minor : major;
+    *p0 = 3.0 * P / (2.0 * M_PI * a1 * *a2);
+    const double c = sqrt(a1 * *a2);
+    const double xi_ref = mu * P / (G * pow(c, 2.0));
+    p->mu = mu;
+    p->P = P;
+    p->a1 = a1;
+    p->c = c;
+    p->xi_ref = xi_ref;
+    p->phi_ref = xi_ref / c;
+    p->creep_full_slip = 1.0 * onset * xi_ref; /* np.dot([1.0], onset) * xi_ref */
+}
+
 /* dynamics.Body: A1 = M Rx^2/(M Rx^2 + Iy) (1 for Iy = 0), A2 = Iy/(M Rx^2 + Iy),
  * m_slip = M A2 (Eq. 23), in its operations (Rx**2 is pow there) */
 void cf_body_inertia(cf_params *p, double M, double Rx, double Iy) {
@@ -1387,7 +1412,11 @@ void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double
     o[O_A1] = p->a1;
     o[O_A2] = b->a2;
     o[O_P0] = b->p0;
-    if (Oz == 0.0 || p->strips == NULL) {
+    if (p->law == LAW_TABLE) {
+        double t[4];
+        table_scalar(p, vx, Vy, Oz, Vx, t);
+        o[O_ADHESION] = t[3];
+    } else if (Oz == 0.0 || p->strips == NULL) {
         o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
     } else {
         const cf_strips *g = (const cf_strips *)p->strips;
