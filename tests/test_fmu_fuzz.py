@@ -196,3 +196,12 @@ def test_checker_roundtrip_is_bit_for_bit():
     assert "roundtrip_not_bitexact" not in classes(same)
     assert "roundtrip_not_bitexact" in classes(last_bit)
     assert "roundtrip_not_bitexact" in classes(signed_zero)
+
+
+def test_checker_rigid_body_update_is_exact():
+    """The rigid body's update with Tx held (Eqs. 8-9) is exact up to rounding: Fx_ex =
+    0, Tx = 0 (the start values) leave Vx unchanged; a change of 1e-12 m/s is flagged."""
+    base = {"Vx": 5.6418958354775635, "Omega_y": 112.83791670955127}
+    assert "momentum_balance" not in _check("full_rigid_body", [(0, base, base)])
+    moved = dict(base, Vx=base["Vx"] + 1e-12)
+    assert "momentum_balance" in _check("full_rigid_body", [(0, base, moved)])

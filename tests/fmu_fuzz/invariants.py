@@ -311,10 +311,11 @@ class Checker:
             return
         if self.kind.mode == "rigid_body":
             Tx = float(v["Tx"])
-            checks = [("Vx", h * (Fx - Tx) / M, 0.0, 4.0, h * (abs(Fx) + abs(Tx)) / M)]
+            checks = [("Vx", h * (Fx - Tx) / M, 0.0, 4.0, h * (abs(Fx) + abs(Tx)) / M, 0.0)]
             if Iy > 0.0:
                 d = h * (My + Rx * Tx) / Iy
-                checks.append(("Omega_y", d, 0.0, 4.0, h * (abs(My) + abs(Rx * Tx)) / Iy))
+                terms = h * (abs(My) + abs(Rx * Tx)) / Iy
+                checks.append(("Omega_y", d, 0.0, 4.0, terms, 0.0))
         else:
             mu, P = float(p["mu"]), float(v["P"])
             n = 16.0 * N_BODY
