@@ -247,7 +247,8 @@ class Checker:
             T = math.hypot(values["Tx"], values.get("Ty", 0.0))
             mu, P = load
             if T > mu * P * (1.0 + 1e-12):
-                self.flag("T_exceeds_muP", k, f"|T| = {T!r} = {T / (mu * P)!r} mu P (P = {P!r})")
+                ratio = T / (mu * P) if mu * P > 0.0 else math.inf  # mu P may underflow
+                self.flag("T_exceeds_muP", k, f"|T| = {T!r} = {ratio!r} mu P (P = {P!r})")
 
     # ---- steps ---------------------------------------------------------------------------
     def on_doStep(self, k, rec, op, tr):
