@@ -169,7 +169,10 @@ class Checker:
             tr.phase = "ready"
             tr.inforce = {n: tr.values[n] for n in self.kind.names("parameter")}
             tr.load = self._load(tr)
-            tr.known = True
+            # accepted with a bad value held (flagged above): whether a model was set up,
+            # and with what, is unknown from then on (parameters may still be settable)
+            tr.known = not bad
+            tr.tainted = bool(bad)
         else:
             tr.phase = "error"
 
