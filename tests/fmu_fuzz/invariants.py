@@ -169,7 +169,10 @@ class Checker:
             tr.phase = "ready"
             tr.inforce = {n: tr.values[n] for n in self.kind.names("parameter")}
             tr.load = self._load(tr)
-            tr.known = True
+            # accepted with a bad value held (flagged above): whether a model was set up,
+            # and with what, is unknown from then on (parameters may still be settable)
+            tr.known = not bad
+            tr.tainted = bool(bad)
         else:
             tr.phase = "error"
 
@@ -247,7 +250,8 @@ class Checker:
             T = math.hypot(values["Tx"], values.get("Ty", 0.0))
             mu, P = load
             if T > mu * P * (1.0 + 1e-12):
-                self.flag("T_exceeds_muP", k, f"|T| = {T!r} = {T / (mu * P)!r} mu P (P = {P!r})")
+                ratio = T / (mu * P) if mu * P > 0.0 else math.inf  # mu P may underflow
+                self.flag("T_exceeds_muP", k, f"|T| = {T!r} = {ratio!r} mu P (P = {P!r})")
 
     # ---- steps ---------------------------------------------------------------------------
     def on_doStep(self, k, rec, op, tr):
@@ -311,10 +315,11 @@ class Checker:
             return
         if self.kind.mode == "rigid_body":
             Tx = float(v["Tx"])
-            checks = [("Vx", h * (Fx - Tx) / M, 0.0, 4.0, h * (abs(Fx) + abs(Tx)) / M)]
+            checks = [("Vx", h * (Fx - Tx) / M, 0.0, 4.0, h * (abs(Fx) + abs(Tx)) / M, 0.0)]
             if Iy > 0.0:
                 d = h * (My + Rx * Tx) / Iy
-                checks.append(("Omega_y", d, 0.0, 4.0, h * (abs(My) + abs(Rx * Tx)) / Iy))
+                terms = h * (abs(My) + abs(Rx * Tx)) / Iy
+                checks.append(("Omega_y", d, 0.0, 4.0, terms, 0.0))
         else:
             mu, P = float(p["mu"]), float(v["P"])
             n = 16.0 * N_BODY

@@ -3,8 +3,8 @@
 A run instantiates, sets up, initialises (with parameters and inputs drawn from their
 declared ranges or from the hostile values below) and then calls at random: inputs,
 parameters and outputs set, doSteps of any size at or off the FMU's time, marches of
-5 to 60 equal steps (for slip and the transient field to build up), outputs read,
-FMU states got, set, freed (twice, or set after free), serialized, damaged (a byte
+5 to 60 equal steps (for slip and the transient field to build up), load drops, outputs
+read, FMU states got, set, freed (twice, or set after free), serialized, damaged (a byte
 changed, truncated), crafted (the pickled state rewritten), taken from a second
 instance with other parameters, round trips (get, step, set, step), bad inputs then
 corrected, terminate and reset. Some runs call doStep before initialisation.
@@ -89,10 +89,11 @@ def nominal(kind: Kind, name: str) -> st.SearchStrategy:
     P0 = kind.start("P") if "P" in kind.variables else 1000.0
     mu = kind.start("mu") if "mu" in kind.variables else 0.3
     Rx = kind.start("Rx")
+    # loads up to 6 mu P: beyond Eq. (27)'s admissible strip the body slides (Tx = mu P)
     if name in ("Fx_ex", "Fy_ex", "Tx"):
-        return _uniform(-1.5 * mu * P0, 1.5 * mu * P0)
+        return _uniform(-6.0 * mu * P0, 6.0 * mu * P0)
     if name in ("My_ex", "Mz_ex"):
-        return _uniform(-1.5 * mu * P0 * Rx, 1.5 * mu * P0 * Rx)
+        return _uniform(-6.0 * mu * P0 * Rx, 6.0 * mu * P0 * Rx)
     if name == "Omega_y" and kind.mode == "contact":  # creepages up to +-2 %
         Vx = kind.start("Vx")
         return _uniform(-0.02, 0.02).map(lambda xi: Vx / Rx * (1.0 - xi))
@@ -179,7 +180,7 @@ def runs(draw, kind: Kind) -> list[dict]:
                 ["step"] * 6
                 + ["set_input"] * 3
                 + ["get", "set_param", "set_output", "state", "state", "serial", "craft"]
-                + ["roundtrip", "badfix", "terminate", "reset", "march"]
+                + ["roundtrip", "badfix", "terminate", "reset", "march", "march", "unload"]
                 + (["foreign"] * 2 if foreign else [])
             )
         )
@@ -188,6 +189,11 @@ def runs(draw, kind: Kind) -> list[dict]:
         elif what == "march":  # long enough for slip and the transient field to build up
             hh = draw(st.floats(-6.0, -4.0).map(lambda e: 10.0**e))
             ops += [{"op": "step", "h": hh}] * draw(st.integers(5, 60))
+        elif what == "unload" and "P" in inputs:  # the load drops while the body slides
+            hh = draw(st.floats(-6.0, -4.0).map(lambda e: 10.0**e))
+            P = kind.start("P") * draw(_uniform(0.1, 0.7))
+            ops += [{"op": "set", "name": "P", "value": P}, {"op": "step", "h": hh}]
+            ops += [{"op": "step", "h": hh}] * draw(st.integers(0, 10)) + [{"op": "get"}]
         elif what == "set_input" and inputs:
             name = draw(st.sampled_from(inputs))
             ops.append({"op": "set", "name": name, "value": draw(value(kind, name))})
