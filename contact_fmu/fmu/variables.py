@@ -38,6 +38,12 @@ UNITS: dict[str, dict[str, int]] = {
     "m/Pa": {"kg": -1, "m": 2, "s": 2},
 }
 
+# Physical ranges of the initial speeds and rates: beyond them the body's state (Vx and
+# the slip vx, Eq. 20) no longer resolves Omega_y = (Vx - vx)/Rx to the changes one
+# step makes (eps |Vx| / Rx against h Rx mu P / Iy; docs/reliability.md)
+SPEED_MAX = 1e4  # m/s
+RATE_MAX = 1e7  # rad/s
+
 # Contact-mode inputs that the contact forces depend on directly (direct feedthrough).
 _KIN = ("P", "Vx", "Vy", "Omega_y", "Omega_z")
 
@@ -213,22 +219,43 @@ VARIABLES: tuple[Var, ...] = (
         modes=_BODY,
         needs="spin_ratio",
     ),
-    _p("Vx0", "m/s", "Initial speed of the centre of mass", 5.6418958354775635, modes=_BODY_RB),
+    _p(
+        "Vx0",
+        "m/s",
+        "Initial speed of the centre of mass (abs <= 1e4 m/s)",
+        5.6418958354775635,
+        modes=_BODY_RB,
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
+    ),
     _p(
         "Omega_y0",
         "rad/s",
-        "Initial angular velocity about the axle (Vx0/Rx: pure rolling)",
+        "Initial angular velocity about the axle (Vx0/Rx: pure rolling; abs <= 1e7 rad/s)",
         112.83791670955127,
         modes=_BODY_RB,
+        min=-RATE_MAX,
+        max=RATE_MAX,
     ),
-    _p("Vy0", "m/s", "Initial lateral speed, Eq. (10)", 0.0, modes=_BODY, needs="vy_eq10"),
+    _p(
+        "Vy0",
+        "m/s",
+        "Initial lateral speed, Eq. (10) (abs <= 1e4 m/s)",
+        0.0,
+        modes=_BODY,
+        needs="vy_eq10",
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
+    ),
     _p(
         "Omega_z0",
         "rad/s",
-        "Initial angular velocity about the vertical, Eq. (11)",
+        "Initial angular velocity about the vertical, Eq. (11) (abs <= 1e7 rad/s)",
         0.0,
         modes=_BODY,
         needs="spin_eq11",
+        min=-RATE_MAX,
+        max=RATE_MAX,
     ),
     _p(
         "h_max",
@@ -318,10 +345,11 @@ VARIABLES: tuple[Var, ...] = (
     Var(
         "P",
         "N",
-        "Normal load (> 0)",
+        "Normal load (> 0, <= 1e9 N)",
         {"body": INPUT, "contact": INPUT},
         1000.0,
         min=0.0,
+        max=1e9,
         open_min=True,
     ),
     Var(
