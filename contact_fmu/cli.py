@@ -49,7 +49,7 @@ def run_scene(path: Path, out: Path, rebuild: bool = False, make_plot: bool = Tr
     size = built.path.stat().st_size
     print(f"{scene.name}: {scene.title}")
     state = "cached" if built.cached else f"built in {t_build:.1f} s"
-    print(f"  FMU  {built.path} ({state}; {n_vars} variables, {size / 1024:.0f} KiB)")
+    print(f"  FMU  {built.stable} ({state}; {n_vars} variables, {size / 1024:.0f} KiB)")
     t0 = time.perf_counter()
     field_dir = out / "scenes" / scene.name / "fields"  # the FMU's field files, if any
     results = runner.simulate(built.path, scene, field_dir=field_dir)

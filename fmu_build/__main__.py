@@ -57,7 +57,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {e}", file=sys.stderr)
             return 1
         state = "cached" if built.cached else "built"
-        print(f"{built.path}  ({state}; {len(cfg.variables)} variables; class {built.class_name})")
+        print(
+            f"{built.stable}  ({state}; {len(cfg.variables)} variables; "
+            f"modelIdentifier {built.identifier}; cache {built.path.name})"
+        )
     return 0
 
 

@@ -158,15 +158,8 @@ class ContactSlave(Fmi2Slave):
     # ---- registration ------------------------------------------------------------------
     def _fmi_variable(self, v: fv.Var) -> Any:
         c = self._causality[v.name]
-        if c == fv.PARAMETER:
-            variability, initial = Fmi2Variability.fixed, None
-        elif c == fv.INPUT:
-            variability, initial = Fmi2Variability.continuous, None
-        else:
-            variability = (
-                Fmi2Variability.continuous if v.type == "Real" else Fmi2Variability.discrete
-            )
-            initial = Fmi2Initial.calculated
+        variability = Fmi2Variability[fv.variability(v, self.cfg.mode)]
+        initial = Fmi2Initial.calculated if c == fv.OUTPUT else None
         # the per-step calls (Real inputs and outputs) take no detour
         if c == fv.OUTPUT and v.type == "Real":
             # replaced by a read of the compiled step's outputs while it runs

@@ -81,7 +81,8 @@ class Var:
     depends on directly (ModelStructure/Outputs dependencies). ``laws``: the contact
     laws whose models have the variable (None: every law); the half-space law's
     geometry and materials are structural, so the layer law's Ry, k1, k2, kb, ks are
-    parameters of the layer law only.
+    parameters of the layer law only. ``tunable``: a parameter the FMU takes between
+    steps too (variability "tunable"; else "fixed").
     """
 
     name: str
@@ -96,6 +97,7 @@ class Var:
     needs: str | None = None
     feedthrough: tuple[str, ...] = field(default=())
     laws: tuple[str, ...] | None = None
+    tunable: bool = False
 
     def check(self, value: object) -> str | None:
         """None if ``value`` is admissible, else the requirement it violates."""
@@ -500,6 +502,15 @@ VARIABLES: tuple[Var, ...] = (
 )
 
 BY_NAME: dict[str, Var] = {v.name: v for v in VARIABLES}
+
+
+def variability(var: Var, mode: str) -> str:
+    """FMI variability of ``var`` in ``mode``: parameters fixed (or tunable), Real inputs
+    and outputs continuous, others discrete."""
+    c = var.causality[mode]
+    if c == PARAMETER:
+        return "tunable" if var.tunable else "fixed"
+    return "continuous" if var.type == "Real" else "discrete"
 
 
 def applicable(var: Var, s: Structure) -> bool:
