@@ -108,7 +108,9 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
     for rel in cfg.generated_files:  # the generated data's content key (no build needed)
         h.update(rel.encode() + b"\0" + tables.key(cfg).encode() + b"\0")
-    for own in sorted(p for p in HERE.glob("*.py") if p.name != "__main__.py") + [SHIM]:
+    # this package's modules that shape an FMU (not the command line, not the systems)
+    own_files = sorted(p for p in HERE.glob("*.py") if p.name not in ("__main__.py", "system.py"))
+    for own in own_files + [SHIM]:
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
     for doc in documentation.sources(cfg):  # the licence, the scene's figure
         h.update(doc.name.encode() + b"\0" + doc.read_bytes() + b"\0")
