@@ -19,6 +19,8 @@ fmi2OK or fmi2Fatal. So nothing here raises to pythonfmu:
   and answers fmi2Discard;
 - parameters are fixed: once the model is set up, setting one is ignored with a
   logged error; while it cannot be set up (bad parameters) they may still be set.
+  Tunable parameters (``Var.tunable``: mu) go into the running model (``tune``) and
+  apply from the next step (a force element's outputs follow at once).
 
 FMU state (get/set) holds everything: the model's snapshot, parameter and input values,
 outputs, time and flags; get state, step, set state, step again repeats bit for bit.
@@ -257,13 +259,13 @@ class ContactSlave(Fmi2Slave):
         if c == fv.OUTPUT:
             self._error(f"{name} is an output of this FMU: the value {value!r} set is ignored")
             return
-        if c == fv.PARAMETER and self._model is not None:
+        var = self._vars[name]
+        if c == fv.PARAMETER and self._model is not None and not var.tunable:
             self._error(
                 f"{name} is a fixed parameter and the model is initialised: "
                 f"{name} = {value!r} is ignored ({name} stays {self._values[name]!r})"
             )
             return
-        var = self._vars[name]
         problem = self.cfg.check(name, value)
         self._values[name] = (
             value if var.type == "String" or problem == "a number" else float(value)
@@ -281,6 +283,27 @@ class ContactSlave(Fmi2Slave):
             self.log(f"{msg}; doStep answers fmi2Discard until it is corrected", Fmi2Status.error)
         if c == fv.INPUT:
             self._dirty = True
+        elif problem is None and self._model is not None:  # a tunable parameter
+            self._tune(name, self._values[name])
+
+    def _tune(self, name: str, value: Any) -> None:
+        """A tunable parameter's new value into the running model (from the next step;
+        a force element's outputs are recomputed); refused, nothing changed, if the model
+        does not take it."""
+        self._fast_pull()
+        snap = self._model.snapshot()
+        try:
+            self._model.tune({name: value})
+        except Exception as e:
+            self._model.restore(snap)
+            self._values[name] = self._model_params[name]
+            self._refuse(f"{name} = {value!r} is refused: {_describe(e)}")
+            return
+        finally:
+            if self._fast is not None:
+                self._fast_push()
+        self._model_params = {**self._model_params, name: value}
+        self._dirty = True
 
     def set_real(self, vrs: list[int], values: list[float]) -> None:
         """fmi2SetReal, the per-step call: a Real input's float is tested here against

@@ -129,7 +129,16 @@ _ALL = ("body", "contact", "rigid_body")
 
 VARIABLES: tuple[Var, ...] = (
     # ---- parameters ------------------------------------------------------------------
-    _p("mu", "1", "Coefficient of friction (> 0)", 0.3, min=0.0, open_min=True),
+    _p(
+        "mu",
+        "1",
+        "Coefficient of friction (> 0); tunable: a new value between steps (a wet or "
+        "contaminated patch) applies from the next step, the bound becomes mu P",
+        0.3,
+        min=0.0,
+        open_min=True,
+        tunable=True,
+    ),
     _p(
         "Rx",
         "m",
@@ -151,7 +160,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "k1",
         "m/Pa",
-        "Normal compliance of the body's layer, Eq. (32)",
+        "Normal compliance of the body's layer, Eq. (32) (>= 0, with k1 + k2 > 0)",
         5.0e-13,
         min=0.0,
         laws=_LAYER,
@@ -159,7 +168,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "k2",
         "m/Pa",
-        "Normal compliance of the substrate's layer, Eq. (32)",
+        "Normal compliance of the substrate's layer, Eq. (32) (>= 0, with k1 + k2 > 0)",
         5.0e-13,
         min=0.0,
         laws=_LAYER,
@@ -167,7 +176,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "kb",
         "m/Pa",
-        "Tangential compliance of the body's layer, Eq. (31)",
+        "Tangential compliance of the body's layer, Eq. (31) (>= 0, with kb + ks > 0)",
         3.2e-13,
         min=0.0,
         laws=_LAYER,
@@ -175,7 +184,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "ks",
         "m/Pa",
-        "Tangential compliance of the substrate's layer, Eq. (31)",
+        "Tangential compliance of the substrate's layer, Eq. (31) (>= 0, with kb + ks > 0)",
         3.2e-13,
         min=0.0,
         laws=_LAYER,
@@ -184,7 +193,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "Iy",
         "kg.m2",
-        "Moment of inertia about the axle; eta = M Rx^2/Iy, Iy = 0 is eta = inf",
+        "Moment of inertia about the axle (>= 0); eta = M Rx^2/Iy, Iy = 0 is eta = inf",
         0.05**2 / 3.0,
         modes=_BODY_RB,
         min=0.0,
@@ -217,10 +226,12 @@ VARIABLES: tuple[Var, ...] = (
     ),
     _p("Vx0", "m/s", "Initial speed of the centre of mass", 5.6418958354775635, modes=_BODY_RB),
     _p(
-        "Omega_y0",
-        "rad/s",
-        "Initial angular velocity about the axle (Vx0/Rx: pure rolling)",
-        112.83791670955127,
+        "vx0",
+        "m/s",
+        "Initial rigid slip at the contact centre, Vx0 - Omega_y0 Rx (Eq. 3): the body "
+        "starts with Omega_y0 = (Vx0 - vx0)/Rx; 0 is pure rolling at any Vx0 (initial "
+        "creepage xi_x0 = vx0/abs(Vx0))",
+        0.0,
         modes=_BODY_RB,
     ),
     _p("Vy0", "m/s", "Initial lateral speed, Eq. (10)", 0.0, modes=_BODY, needs="vy_eq10"),
