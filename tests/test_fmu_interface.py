@@ -142,6 +142,26 @@ def test_fmu_state_carries_mu(fmus):
         b.free_state(state)
 
 
+def test_state_taken_after_mu_is_lowered_is_restored(fmus):
+    """A master's rollback across a wet patch: mu lowered while the body slides at
+    Tx = -0.3 P, the state taken before the next step (its outputs still at the old
+    bound), a step, the state set again: accepted (the bound of the outputs' own mu),
+    and the step repeats bit for bit with Tx = -0.15 P."""
+    brake = {"Fx_ex": 0.0, "My_ex": -2.0 * MU_P * ex.Rx}
+    with Instance(fmus["fig13"], "rollback", brake) as b:
+        for _ in range(10):
+            assert b.step(1.75e-4) == OK
+        b.set("mu", 0.15)
+        state = b.get_state()
+        assert abs(b.get("Tx")) == pytest.approx(MU_P, rel=1e-12)  # computed at mu = 0.3
+        assert b.step(1.75e-4) == OK
+        first = b.outputs()
+        b.set_state(state)
+        assert b.step(1.75e-4) == OK and b.outputs() == first
+        assert abs(first["Tx"]) == pytest.approx(0.15 * ex.P, rel=1e-12)
+        b.free_state(state)
+
+
 def test_mu_is_fixed_where_the_model_does_not_take_it(fmus):
     """A fixed parameter (M) set after initialisation is refused with fmi2Error; mu is
     the only tunable one."""

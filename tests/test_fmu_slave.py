@@ -591,6 +591,7 @@ def test_fmu_state_is_checked_whole_and_refused_without_a_trace():
         (crafted(values={**good["values"], "mu": "0.3"}), "is not a number"),
         (crafted(model=(good["model"][0], "not a snapshot")), "cannot be restored"),
         ({k: v for k, v in good.items() if k != "dirty"}, "fields differ"),
+        (crafted(out_mu=-0.3), "is not a positive float"),
         (crafted(values={k: v for k, v in good["values"].items() if k != "mu"}), "differ"),
     ]
     for state, reason in cases:

@@ -87,7 +87,7 @@ _PACKAGE = __name__.split(".")[0]
 # the entry of _bad that a refused FMU state holds (no variable has this name)
 _STATE = "FMU state"
 # the fields of an FMU state (_get_fmu_state)
-_STATE_FIELDS = frozenset({"time", "values", "bad", "out", "dirty", "model"})
+_STATE_FIELDS = frozenset({"time", "values", "bad", "out", "out_mu", "dirty", "model"})
 
 
 class ContactSlave(Fmi2Slave):
@@ -119,6 +119,8 @@ class ContactSlave(Fmi2Slave):
             n: float(v.start) for n, v in self._vars.items() if self._causality[n] == fv.OUTPUT
         }
         self._bad: dict[str, str] = {}  # inadmissible values held: name -> message
+        # the mu the outputs were computed with (a tuned mu applies from the next step)
+        self._out_mu: float | None = self._values.get("mu")
         self._model: Any = None
         self._model_params: dict[str, Any] | None = None
         # the model's compiled step (model.fast(), e.g. native.FastBody) or None; while
@@ -267,6 +269,8 @@ class ContactSlave(Fmi2Slave):
             )
             return
         problem = self.cfg.check(name, value)
+        if c == fv.PARAMETER and self._model is not None:
+            self._fast_pull()  # the outputs of the mu they were computed with (_out_mu)
         self._values[name] = (
             value if var.type == "String" or problem == "a number" else float(value)
         )
@@ -390,6 +394,7 @@ class ContactSlave(Fmi2Slave):
             self._error(f"cannot initialise the model: {_describe(e)}")
             return False
         self._model, self._model_params, self._out, self._dirty = model, self._params(), out, False
+        self._out_mu = self._values.get("mu")
         self._fast_enable()
         return True
 
@@ -447,6 +452,7 @@ class ContactSlave(Fmi2Slave):
     def _sync_out(self) -> None:
         if self._out_stale:
             self._out = {n: self._fast_out[i] for n, i in self._fast_index.items()}
+            self._out_mu = self._values.get("mu")  # _tune pulls before mu changes
             self._out_stale = False
 
     def _collect(self, outputs: dict[str, float]) -> dict[str, float]:
@@ -471,6 +477,7 @@ class ContactSlave(Fmi2Slave):
         try:
             self._model.evaluate(self._inputs())
             self._out = self._collect(self._model.outputs())
+            self._out_mu = self._values.get("mu")
             self._dirty = False
         except Exception as e:
             self._model.restore(snap)
@@ -564,6 +571,7 @@ class ContactSlave(Fmi2Slave):
                 f"doStep at t = {t!r} with h = {h!r} discarded, state unchanged: {_describe(e)}"
             )
         self._out, self._time, self._dirty = out, t + h, False
+        self._out_mu = self._values.get("mu")
         if self._fast is not None:
             self._fast_push()
         if note:
@@ -582,6 +590,7 @@ class ContactSlave(Fmi2Slave):
                 "values": self._values,
                 "bad": self._bad,
                 "out": self._out,
+                "out_mu": self._out_mu,
                 "dirty": self._dirty,
                 "model": model,
             }
@@ -635,12 +644,19 @@ class ContactSlave(Fmi2Slave):
         for n, v in out.items():
             if type(v) is not float or not math.isfinite(v):
                 return f"its output {n} = {v!r} is not a finite float"
+        out_mu = state["out_mu"]
+        if out_mu is not None and (type(out_mu) is not float or not 0.0 < out_mu < math.inf):
+            return f"its outputs' mu {out_mu!r} is not a positive float"
         model, params = None, None
         if state["model"] is not None:
             model, params = self._state_model(state["model"], values, bad, t)
             if isinstance(model, str):
                 return model
-            bound = _coulomb_excess(out, values.get("mu"), getattr(model, "P", None))
+            # outputs taken after mu was tuned, before the next step: the earlier mu's bound
+            mu = values.get("mu")
+            if isinstance(mu, float) and out_mu is not None:
+                mu = max(mu, out_mu)
+            bound = _coulomb_excess(out, mu, getattr(model, "P", None))
             if bound is not None:
                 self._restore_own(model)
                 return bound
@@ -648,7 +664,7 @@ class ContactSlave(Fmi2Slave):
         self._time, self._values, self._bad = t, copy.deepcopy(values), bad
         self._in = self._input_values()
         self._model, self._model_params = model, params
-        self._out, self._dirty = dict(out), dirty
+        self._out, self._dirty, self._out_mu = dict(out), dirty, out_mu
         self._fast_enable()
         return None
 
