@@ -171,3 +171,18 @@ def test_mu_is_fixed_where_the_model_does_not_take_it(fmus):
             b.set("M", 2.0)
         assert e.value.status == ERROR
         assert b.step(1e-4) == OK
+
+
+def test_mu_step_in_the_half_space_contact_fmu():
+    """The half-space table is normalised by mu P (Kalker's similarity in mu): at gross
+    sliding (xi = 1) a step of mu from 0.3 to 0.15 halves Tx exactly (the table's value
+    at xi = 1, 0.9999992 mu P, scaled) and keeps abs(Tx) <= mu P."""
+    path = fmu_build.build(load(ROOT / "scenarios" / "rail_creep.toml").config, OUT).path
+    sliding = {"P": 100e3, "Vx": 30.0, "Vy": 0.0, "Omega_y": 0.0}
+    with Instance(path, "rail", sliding) as c:
+        assert c.step(1e-3) == OK
+        dry = c.get("Tx")
+        c.set("mu", 0.15)
+        wet = c.get("Tx")
+        assert wet == pytest.approx(0.5 * dry, rel=1e-12)
+        assert 0.999 * 0.15 * 100e3 <= abs(wet) <= 0.15 * 100e3
