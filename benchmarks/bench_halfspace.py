@@ -2,7 +2,6 @@
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace.py [--grids 16 32 64 128]
         [--repeat 3] [--dense-limit-mb 1500] [--json out.json]
-    ... bench_halfspace.py --sweep [--grids 32 64 128 256 512]   (``sweep_report``)
     ... bench_halfspace.py --table N N1 N2 N3 [--points 60]       (``table_report``)
 
 Steady rolling of the railway wheel on rail (contact_fmu.halfspace.railway, Hertz,
@@ -21,9 +20,7 @@ elements per side give the initial guess, docs/halfspace.md); "single-level" is 
 same solver started from the calibrated FASTSIM guess on the fine grid
 (``replace(patch, coarsen=None)``), and "previous" the solver as it was before nested
 iteration (single level, slip rows preconditioned by their diagonal alone, no
-oversolving guard), and the default with the multigrid preconditioner
-(``RollingPatch(preconditioner="multigrid")``, contact_fmu.halfspace.multigrid), all
-four timed alternately. Newton and GMRES counts are the fine
+oversolving guard), all three timed alternately. Newton and GMRES counts are the fine
 grid's; "GMRES all levels" weights each coarse level's iterations by its share of the
 elements.
 
@@ -49,8 +46,7 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from contact_fmu.halfspace import multigrid, rolling  # noqa: E402
-from contact_fmu.halfspace.krylov import fgmres  # noqa: E402
+from contact_fmu.halfspace import rolling  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
 
@@ -87,7 +83,7 @@ def _previous(patch, *args):
     saved = rolling.OVERSOLVE, rolling.SLIP_BLOCK_RATIO
     rolling.OVERSOLVE, rolling.SLIP_BLOCK_RATIO = 0.0, 0.0
     try:
-        return solve_rolling(patch, *args)
+        return solve_rolling(patch, *args, method="iterative")
     finally:
         rolling.OVERSOLVE, rolling.SLIP_BLOCK_RATIO = saved
 
@@ -112,13 +108,6 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
             _ = lev.op.symbols, lev.op.inverse_symbols, lev.op.inverse_offsets
         _ = levels[-1].flexibilities
         setup = time.perf_counter() - t0
-        # the multigrid preconditioner (its kernels built here, as the patch's are above)
-        mg_patch = replace(patch, preconditioner="multigrid")
-        t0 = time.perf_counter()
-        for lev in _levels(mg_patch):
-            _ = lev.op.symbols, lev.mg_kernels
-        _levels(mg_patch)[-1].__dict__["flexibilities"] = levels[-1].flexibilities
-        mg_setup = time.perf_counter() - t0
         # the single-level solver (FASTSIM guess on the fine grid, no coarse levels)
         single = replace(patch, coarsen=None)
         t0 = time.perf_counter()
@@ -140,19 +129,17 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
         results["setup"][n] = {
             "elements_in_contact": m,
             "fft_setup_s": setup,
-            "multigrid_setup_s": mg_setup,
             "single_setup_s": single_setup,
             "dense_matrix_MB": dense_mb,
             "dense_setup_s": dense_setup,
         }
         for name, w in CASES.items():
             args = (w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
-            (t_fft, sol), (t_single, s1), (t_prev, s0), (t_mg, smg) = _time_interleaved(
+            (t_fft, sol), (t_single, s1), (t_prev, s0) = _time_interleaved(
                 [
-                    lambda a=args, p=patch: solve_rolling(p, *a),
-                    lambda a=args, p=single: solve_rolling(p, *a),
+                    lambda a=args, p=patch: solve_rolling(p, *a, method="iterative"),
+                    lambda a=args, p=single: solve_rolling(p, *a, method="iterative"),
                     lambda a=args, p=single: _previous(p, *a),
-                    lambda a=args, p=mg_patch: solve_rolling(p, *a),
                 ],
                 repeat,
             )
@@ -171,11 +158,6 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
                 "previous_newton": s0.newton_iterations,
                 "previous_gmres": s0.gmres_iterations,
                 "max_dtau_previous_over_g": float(np.abs(s0.tau - sol.tau).max() / g),
-                "multigrid_s": t_mg,
-                "multigrid_newton": smg.newton_iterations,
-                "multigrid_gmres": smg.gmres_iterations,
-                "multigrid_levels": [list(lv) for lv in smg.levels],
-                "max_dtau_multigrid_over_g": float(np.abs(smg.tau - sol.tau).max() / g),
                 "Tx/muP": sol.Tx / (contact.mu * contact.P),
                 "Ty/muP": sol.Ty / (contact.mu * contact.P),
                 "adhesion": sol.adhesion_fraction,
@@ -196,9 +178,7 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
                 f"previous {s0.newton_iterations:2d})  "
                 f"GMRES {sol.gmres_iterations:4d} (single {s1.gmres_iterations:4d}, "
                 f"previous {s0.gmres_iterations:4d}, "
-                f"all levels {sol.gmres_work:.0f} fine-equivalent)  levels {sol.levels}  "
-                f"multigrid {t_mg:8.4f} s Newton {smg.newton_iterations} "
-                f"GMRES {smg.gmres_iterations} levels {smg.levels}",
+                f"all levels {sol.gmres_work:.0f} fine-equivalent)  levels {sol.levels}",
                 flush=True,
             )
     return results
@@ -239,41 +219,20 @@ def markdown(res: dict) -> str:
                 f" | {e['gmres']} ({e['single_gmres']}, {e['previous_gmres']})"
                 f" | {e['gmres'] / max(e['newton'], 1):.1f} | {e['gmres_work']:.0f} | {coarse} |"
             )
-        lines.append(
-            "\nThe same solves with the multigrid preconditioner "
-            '(`RollingPatch(preconditioner="multigrid")`), timed alternately with the above:\n'
-        )
-        lines.append(
-            "| grid | multigrid (s) | multigrid/FFT | Newton | GMRES | GMRES/Newton "
-            "| coarse levels Newton/GMRES | max abs(dtau)/max g vs FFT |"
-        )
-        lines.append("|---|---|---|---|---|---|---|---|")
-        for n in res["grids"]:
-            e = res["cases"][case][n]
-            coarse = ", ".join(f"{lv[0]}: {lv[2]}/{lv[3]}" for lv in e["multigrid_levels"][:-1])
-            lines.append(
-                f"| {n}x{n} | {e['multigrid_s']:.4f} | {e['multigrid_s'] / e['fft_s']:.1f} "
-                f"| {e['multigrid_newton']} | {e['multigrid_gmres']} "
-                f"| {e['multigrid_gmres'] / max(e['multigrid_newton'], 1):.1f} | {coarse or '-'} "
-                f"| {e['max_dtau_multigrid_over_g']:.1e} |"
-            )
         fx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "fft_s", case))
-        mx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "multigrid_s", case))
         dx = ", ".join(f"{a}->{b}: {p:.2f}" for a, b, p in exponents(res, "dense_s", case))
         lines.append(
-            f"\nScaling exponent p of time ~ N^p (N = n^2 elements): FFT {fx}; dense {dx}; "
-            f"multigrid {mx}."
+            f"\nScaling exponent p of time ~ N^p (N = n^2 elements): FFT {fx}; dense {dx}."
         )
     lines.append(
-        "\n| grid | FFT setup, all levels (s) | multigrid kernels, all levels (s) "
+        "\n| grid | FFT setup, all levels (s) "
         "| single-level setup (s) | dense matrix (MB) | dense setup (s) |"
     )
-    lines.append("|---|---|---|---|---|---|")
+    lines.append("|---|---|---|---|---|")
     for n in res["grids"]:
         s = res["setup"][n]
         lines.append(
-            f"| {n}x{n} | {s['fft_setup_s']:.3f} | {s['multigrid_setup_s']:.3f} "
-            f"| {s['single_setup_s']:.3f} "
+            f"| {n}x{n} | {s['fft_setup_s']:.3f} | {s['single_setup_s']:.3f} "
             f"| {s['dense_matrix_MB']:.0f} | {s['dense_setup_s']:.3f} |"
         )
     return "\n".join(lines)
@@ -327,106 +286,11 @@ def table_report(n: int, nodes: tuple[int, int, int], points: int, seed: int = 1
     }
 
 
-def _fine_newton_systems(n: int, case: str) -> tuple:
-    """The railway contact on n x n and the fine-grid Newton systems (multigrid.Level) of
-    its multigrid solve of ``case``, recorded as rolling.py builds them."""
-    contact = wheel_on_rail(n=n)
-    xref = contact.mu * contact.P / (contact.elastic.G * contact.c**2)
-    w = CASES[case]
-    patch = replace(contact.patch, preconditioner="multigrid")
-    made, build = [], multigrid.newton_level
-    multigrid.newton_level = lambda *a: made.append(build(*a)) or made[-1]
-    try:
-        solve_rolling(patch, w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
-    finally:
-        multigrid.newton_level = build
-    return patch, [lev for lev in made if lev.kern.shape == (n, n)]
-
-
-def _vcycle(patch, lev, spread: float):
-    """The V-cycle on ``lev`` with the smoother's weight ``spread`` (multigrid.Level:
-    its row blocks of J C factorised afresh; the coarse levels inherit the weight)."""
-    lev.weight = spread
-    lev.__dict__.pop("row_factors", None)
-    return multigrid.VCycle(lev, patch.mg_kernels)
-
-
-def sweep_report(grids: list[int], repeat: int) -> dict:
-    """The multigrid smoother's sweep (multigrid.Level._sweep, forward and backward) on
-    the third fine-grid Newton system of the longitudinal case: the far bands on their
-    nodes (FAR_RATIO) against every band at full resolution (FAR_RATIO None, exact),
-    timed alternately; and the V-cycle's contraction on that system and the combined
-    case's (the residual's reduction per stationary cycle, geometric mean of cycles
-    2-5; GMRES iterations with one cycle per iteration to 1e-2 and 1e-6), with the
-    smoother's spread (multigrid.SPREAD) and without ("plain_")."""
-    out = {}
-    ratio = multigrid.FAR_RATIO
-    for n in grids:
-        row = {}
-        for case in CASES:
-            patch, systems = _fine_newton_systems(n, case)
-            lev = systems[min(2, len(systems) - 1)]
-            b = np.random.default_rng(5).standard_normal(lev.n)
-            row[case] = {"unknowns": lev.n}
-            for prefix, spread in (("", multigrid.SPREAD), ("plain_", 0.0)):
-                cycle = _vcycle(patch, lev, spread)
-                x, res = np.zeros_like(b), []
-                for _ in range(6):
-                    x = x + cycle(b - lev.apply(x))
-                    res.append(float(np.linalg.norm(b - lev.apply(x))))
-                row[case] |= {
-                    prefix + "contraction": (res[-1] / res[1]) ** 0.25,
-                    prefix + "gmres_1e-2": fgmres(lev.apply, b, cycle, 1e-2, 40)[1],
-                    prefix + "gmres_1e-6": fgmres(lev.apply, b, cycle, 1e-6, 40)[1],
-                }
-            lev.weight = multigrid.SPREAD  # the sweeps timed below: the default weight
-            lev.__dict__.pop("row_factors", None)
-            if case != "longitudinal":
-                continue
-
-            def sweeps(r=ratio, lv=lev, v=b):
-                multigrid.FAR_RATIO = r
-                try:
-                    return lv._sweep(v, True), lv._sweep(v, False)
-                finally:
-                    multigrid.FAR_RATIO = ratio
-
-            sweeps(None), sweeps()  # the bands' symbols built outside the timing
-            (t_exact, d0), (t_far, d1) = _time_interleaved([lambda: sweeps(None), sweeps], repeat)
-            N = n * n
-            row["sweep"] = {
-                "exact_ms": 1e3 * t_exact,
-                "far_ms": 1e3 * t_far,
-                "far_ns_per_N_log2N": 1e9 * t_far / (N * math.log2(N)),
-                "exact_ns_per_N_log2N": 1e9 * t_exact / (N * math.log2(N)),
-                "rel_diff": max(
-                    float(np.abs(a - c).max() / np.abs(a).max())
-                    for a, c in zip(d0, d1, strict=True)
-                ),
-            }
-        out[n] = row
-        sw, lo, co = row["sweep"], row["longitudinal"], row["combined+spin"]
-        print(
-            f"n={n:4d} unknowns {lo['unknowns']:7d}  sweep pair: exact {sw['exact_ms']:8.1f} ms "
-            f"far bands {sw['far_ms']:8.1f} ms ({sw['far_ms'] / sw['exact_ms']:.2f}), "
-            f"per N log2 N {sw['exact_ns_per_N_log2N']:.1f} / {sw['far_ns_per_N_log2N']:.1f} ns, "
-            f"difference {sw['rel_diff']:.1e}  V-cycle contraction {lo['contraction']:.3f} / "
-            f"{co['contraction']:.3f} (plain {lo['plain_contraction']:.3f} / "
-            f"{co['plain_contraction']:.3f}), GMRES to 1e-2 {lo['gmres_1e-2']} / "
-            f"{co['gmres_1e-2']}, to 1e-6 {lo['gmres_1e-6']} / {co['gmres_1e-6']} (plain "
-            f"{lo['plain_gmres_1e-6']} / {co['plain_gmres_1e-6']})",
-            flush=True,
-        )
-    return out
-
-
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    ap.add_argument(
-        "--grids", type=int, nargs="+", default=None, help="default 16 32 64 128 (--sweep: to 512)"
-    )
+    ap.add_argument("--grids", type=int, nargs="+", default=None, help="default 16 32 64 128")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dense-limit-mb", type=float, default=1500.0)
     ap.add_argument("--json", type=str, default=None)
@@ -440,19 +304,7 @@ def main(argv: list[str] | None = None) -> None:
         "and report its cost and interpolation error",
     )
     ap.add_argument("--points", type=int, default=60, help="random points for --table")
-    ap.add_argument(
-        "--sweep",
-        action="store_true",
-        help="instead: time the multigrid smoother's sweep and measure the V-cycle's "
-        "contraction on the grids (default 32 64 128 256 512)",
-    )
     args = ap.parse_args(argv)
-    if args.sweep:
-        rep = sweep_report(args.grids or [32, 64, 128, 256, 512], args.repeat)
-        if args.json:
-            with open(args.json, "w") as f:
-                json.dump(rep, f, indent=1)
-        return
     if args.table:
         rep = table_report(args.table[0], tuple(args.table[1:]), args.points)
         print(json.dumps(rep, indent=1))

@@ -14,6 +14,11 @@ contact-fmu report [--quick] [--stiff | --workprecision]
                                          error against run time of every scene's FMU
                                          (reports/workprecision/), and the stiff and
                                          extreme cases with pass/fail (reports/stiff.md)
+contact-fmu sweep SCENE.toml --vary NAME=VALUES [--vary ...]
+      [--workers N | --scheduler tcp://host:8786] --out DIR
+                                         every combination of the values times every
+                                         case as Dask tasks: DIR/results.parquet (one
+                                         row per run) and a plot of a metric
 """
 
 from __future__ import annotations
@@ -164,10 +169,14 @@ def _system(args: argparse.Namespace) -> int:
 
 
 def _report(args: argparse.Namespace) -> int:
+    from . import InputError
     from .report import command
+    from .study.engine import Engine
 
     if args.write_docs and (args.quick or args.scenes or args.case):
         raise SystemExit("--write-docs needs the full report (no --quick, scenes or --case)")
+    if args.write_docs and (args.workers or args.scheduler):
+        raise SystemExit("--write-docs needs the times of runs one at a time (no --workers)")
     if args.repeats < 1:
         raise SystemExit(f"--repeats = {args.repeats} is invalid: must be >= 1")
     if not args.budget > 0:
@@ -175,16 +184,30 @@ def _report(args: argparse.Namespace) -> int:
     both = not (args.stiff or args.workprecision)
     reports = results = None
     fmu_dir = args.fmu_out
-    if args.workprecision or both:
-        paths = command.scene_paths(args.scenes, args.scenarios)
-        reports = command.workprecision(
-            paths, args.out, fmu_dir, args.quick, args.repeats, args.held, budget=args.budget
-        )
-    if args.stiff or both:
-        try:
-            results = command.stiff_suite(args.out, fmu_dir, args.quick, args.case)
-        except ValueError as e:
-            raise SystemExit(str(e)) from e
+    try:
+        engine = Engine(None if args.scheduler else args.workers, args.scheduler)
+    except InputError as e:
+        raise SystemExit(f"contact-fmu report: {e}") from None
+    with engine:
+        if args.workprecision or both:
+            paths = command.scene_paths(args.scenes, args.scenarios)
+            reports = command.workprecision(
+                paths,
+                args.out,
+                fmu_dir,
+                args.quick,
+                args.repeats,
+                args.held,
+                budget=args.budget,
+                engine=engine,
+            )
+        if args.stiff or both:
+            try:
+                results = command.stiff_suite(
+                    args.out, fmu_dir, args.quick, args.case, engine=engine
+                )
+            except ValueError as e:
+                raise SystemExit(str(e)) from e
     if args.write_docs:
         cmd = "contact-fmu report" + (" --stiff" if args.stiff else "")
         cmd += " --workprecision" if args.workprecision else ""
@@ -193,6 +216,74 @@ def _report(args: argparse.Namespace) -> int:
     if failed:
         print(f"stiff cases failed: {', '.join(failed)}", file=sys.stderr)
         return 1
+    return 0
+
+
+def _vary(text: str):
+    """--vary NAME=VALUES: a list "0.1,0.2" or a range "start:stop:n"."""
+    from . import InputError
+    from .scenario.schema import Vary, sweep_values
+
+    name, sep, values = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"--vary {text!r}: expected NAME=VALUES")
+    try:
+        return Vary(name.strip(), sweep_values(f"--vary {name.strip()}", values))
+    except InputError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from . import InputError
+    from .scenario import ScenarioError, load, variation
+    from .study import metrics, sweep, tables
+    from .study.engine import Engine
+    from .study.plot import plot
+
+    try:
+        scene = load(args.scene)
+        vary = sweep.merge_vary(scene, args.vary)
+        if not vary:
+            raise ScenarioError(
+                f"{args.scene}: nothing varied (--vary NAME=VALUES or [sweep].vary)"
+            )
+        variation.check(scene, [v.name for v in vary])
+        engine = Engine(args.workers, args.scheduler, progress=not args.no_progress)
+    except (ScenarioError, InputError) as e:
+        raise SystemExit(f"contact-fmu sweep: {e}") from None
+    out = args.out or DEFAULT_OUT / "sweeps" / scene.name
+    n_runs = len(sweep.runs(scene, vary))
+    print(f"{scene.name}: {n_runs} runs ({' x '.join(str(len(v.values)) for v in vary)} "
+          f"values x {len(scene.cases)} case(s))")  # fmt: skip
+    t0 = time.perf_counter()
+    with engine:
+        print(f"  on {engine.describe()}")
+        table = tables.ensure(scene.config, engine)
+        if table is not None:
+            print(f"  creep-force table {table}")
+        rows = sweep.sweep(
+            scene, vary, engine, args.fmu_out, trajectories=args.trajectories or None
+        )
+    sweep.cleanup_local()
+    wall = time.perf_counter() - t0
+    ms = scene.sweep.metrics or metrics.defaults(scene.outputs)
+    files = sweep.write(rows, vary, out, [m.name for m in ms])
+    failed = [r for r in rows if r["status"] != "ok"]
+    print(f"  {len(rows) - len(failed)} ok, {len(failed)} failed, in {wall:.1f} s")
+    for r in failed[:5]:
+        print(f"    run {r['run']} ({r['case']}): {r['status']}")
+    for f in files:
+        print(f"  {f}")
+    spec = dict(scene.sweep.plot)
+    metric = args.plot or spec.get("metric") or ms[0].name
+    if metric not in {m.name for m in ms}:
+        raise SystemExit(f"contact-fmu sweep: --plot {metric!r} is not a metric")
+    names = [v.name for v in vary]
+    x = spec.get("x") if spec.get("x") in names else names[0]
+    y = spec.get("y") if spec.get("y") in names else next((n for n in names if n != x), None)
+    print(
+        f"  PNG {plot(sweep.strip(rows), names, metric, x, y, out / f'{metric}.png', scene.title)}"
+    )
     return 0
 
 
@@ -266,7 +357,41 @@ def parser() -> argparse.ArgumentParser:
     rep.add_argument(
         "--write-docs", action="store_true", help="update README.md, docs/performance.md"
     )
+    rep_where = rep.add_mutually_exclusive_group()
+    rep_where.add_argument(
+        "--workers", type=int, default=0, help="the work-precision families and the stiff "
+        "cases on a LocalCluster of N worker processes (default 0: in this process; times "
+        "are then measured with N runs at once)"
+    )  # fmt: skip
+    rep_where.add_argument("--scheduler", help="... or on a running Dask scheduler (tcp://...)")
     rep.set_defaults(func=_report)
+
+    sw = sub.add_parser(
+        "sweep", help="a parameter study of a scene on Dask: results.parquet and a plot"
+    )
+    sw.add_argument("scene", type=Path, help="scene file (TOML); its [sweep] is the default")
+    sw.add_argument(
+        "--vary",
+        type=_vary,
+        action="append",
+        default=[],
+        metavar="NAME=VALUES",
+        help="a parameter, an input (held at the value) or INPUT.piece.field; VALUES a "
+        "list 0.1,0.2,0.3 or a range start:stop:n (repeat; replaces the scene's [sweep] "
+        "values of that name, or adds it)",
+    )
+    where = sw.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers", type=int, help="worker processes of a LocalCluster (default: one per "
+        "CPU; 0: serial, in this process)"
+    )  # fmt: skip
+    where.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://...)")
+    sw.add_argument("--out", type=Path, help="output folder (default out/sweeps/<scene>)")
+    sw.add_argument("--fmu-out", type=Path, default=DEFAULT_OUT / "fmu", help="FMU cache")
+    sw.add_argument("--trajectories", action="store_true", help="also trajectories.parquet")
+    sw.add_argument("--plot", metavar="METRIC", help="the metric plotted (default: the scene's)")
+    sw.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sw.set_defaults(func=_sweep)
     return ap
 
 

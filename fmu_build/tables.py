@@ -47,10 +47,15 @@ def key(cfg: ModelConfig) -> str:
     return h.hexdigest()
 
 
+def path(cfg: ModelConfig, cache: str | Path = DEFAULT_CACHE) -> Path:
+    """Where the table file of ``cfg`` lies in ``cache`` (built or not)."""
+    return Path(cache).resolve() / f"{cfg.contact_law}-{key(cfg)[:16]}.npz"
+
+
 def ensure(cfg: ModelConfig, cache: str | Path = DEFAULT_CACHE) -> Path:
     """The table file of ``cfg`` in ``cache``, built there first if it is missing."""
     cache = Path(cache).resolve()
-    target = cache / f"{cfg.contact_law}-{key(cfg)[:16]}.npz"
+    target = path(cfg, cache)
     if target.is_file():
         return target
     cache.mkdir(parents=True, exist_ok=True)

@@ -18,6 +18,7 @@ from pathlib import Path
 import fmpy
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 import fmu_build
@@ -26,7 +27,7 @@ from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import GENERATED_DATA, ModelConfig
 from contact_fmu.halfspace.railway import wheel_on_rail
 from contact_fmu.scenario import ScenarioError, load, runner
-from contact_fmu.scenario.instance import DISCARD, FATAL, OK, Instance
+from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -174,7 +175,7 @@ def test_fmu_reads_its_own_table_not_the_build_cache(built, tmp_path):
     """An FMU of the rail declaration under a name of its own (its own content key, so
     nothing of it is imported yet in this process), built with a table cache that is
     deleted afterwards. An extraction whose table is removed from the resources refuses
-    to initialise (fmi2Discard, the file named); a second, intact extraction of the same
+    to initialise (fmi2Error, the file named); a second, intact extraction of the same
     FMU then runs, reading its own table (not the first extraction's, not the cache), and
     gives the outputs of the rail_creep FMU."""
     base = SCENES["rail_creep"].config
@@ -189,10 +190,12 @@ def test_fmu_reads_its_own_table_not_the_build_cache(built, tmp_path):
     unzipped = tmp_path / "unzipped"
     fmpy.extract(str(own.path), str(unzipped))
     (unzipped / "resources" / own.package / TABLE).unlink()
-    inst = Instance(own.path, "no_table", unzip_dir=unzipped)
+    inst = Instance(own.path, "no_table", unzip_dir=unzipped, initialise=False)
     try:
         set_creepage(inst, 0.002)
-        assert inst.step(1e-3) == DISCARD
+        with pytest.raises(FMICallException) as e:
+            inst.initialise()
+        assert e.value.status == ERROR
         text = " ".join(m for _, m in inst.messages)
         assert "cannot initialise the model" in text and "creep_table.npz" in text, text
         assert all(s < FATAL for s, _ in inst.messages)
@@ -274,16 +277,22 @@ def test_fmu_state_get_step_set_step_is_bit_identical(built, name):
 @pytest.mark.parametrize("name", ["rail_creep", "rail_traction"])
 def test_other_rolling_radius_is_refused_until_corrected(built, name):
     scene = SCENES[name]
-    starts = {**runner.start_values(scene, scene.cases[0]), "Rx": 0.5}
-    with Instance(built[name].path, "rx", starts) as inst:
+    starts = runner.start_values(scene, scene.cases[0])
+    with Instance(built[name].path, "rx", starts, initialise=False) as inst:
         if scene.config.mode == "contact":
             set_creepage(inst, 0.001)
-        assert inst.step(1e-3) == DISCARD
+        for call in (lambda: inst.set("Rx", 0.5), inst.initialise):
+            with pytest.raises(FMICallException) as e:
+                call()
+            assert e.value.status == ERROR
+        assert inst.step(1e-3) == ERROR
         text = "Rx = 0.5 is invalid: must be 0.46, the value this FMU's creep-force table"
         assert any(text in m for _, m in inst.messages), inst.messages  # logged at setReal
         inst.set("Rx", 0.46)  # not initialised yet: a parameter may still be corrected
+        inst.initialise()
         assert inst.step(1e-3) == OK, inst.messages[-1:]
-        inst.set("Rx", 0.5)  # initialised: fixed parameters are ignored, with an error
+        with pytest.raises(FMICallException):  # initialised: a fixed parameter is ignored
+            inst.set("Rx", 0.5)
         assert inst.get("Rx") == 0.46 and inst.step(1e-3) == OK
         assert any("Rx = 0.5 is ignored" in m for _, m in inst.messages)
         assert all(s < FATAL for s, _ in inst.messages)
@@ -302,21 +311,28 @@ def test_bad_input_gives_discard_a_named_message_and_recovery(built, name, value
         set_creepage(inst, 0.002)
         assert inst.step(1e-3) == OK
         before = inst.outputs()
-        inst.set(name, value)
+        try:  # out of its declared range: fmi2Error here already (else at the step)
+            inst.set(name, value)
+        except FMICallException as e:
+            assert e.status == ERROR
         assert inst.step(1e-3) == DISCARD
         assert any(fragment in m for s, m in inst.messages if s == DISCARD), inst.messages
-        assert inst.outputs() == before  # outputs kept, instance usable
+        with pytest.raises(FMICallException):  # no outputs for the held input: an error
+            inst.get("Tx")
         set_creepage(inst, 0.002)
         assert inst.step(1e-3) == OK and inst.outputs() == before
         assert all(s < FATAL for s, _ in inst.messages)
 
 
 def test_bad_mu_is_refused_until_corrected(built):
-    with Instance(built["rail_creep"].path, "mu", {"mu": -0.3}) as inst:
+    with Instance(built["rail_creep"].path, "mu", initialise=False) as inst:
         set_creepage(inst, 0.001)
-        assert inst.step(1e-3) == DISCARD
+        for call in (lambda: inst.set("mu", -0.3), inst.initialise):
+            with pytest.raises(FMICallException):
+                call()
         assert any("mu = -0.3 is invalid: must be > 0" in m for _, m in inst.messages)
         inst.set("mu", 0.3)
+        inst.initialise()
         assert inst.step(1e-3) == OK
 
 

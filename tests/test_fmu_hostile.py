@@ -152,6 +152,36 @@ def test_communication_point_is_checked_in_ulps_of_t_not_in_h():
         assert b.step(1e-4, time=t) == OK
 
 
+def test_infinite_communication_point_is_discarded_on_the_compiled_path():
+    """t = inf passed the compiled path's check (inf <= rtol inf) and stepped with OK."""
+    with Instance(scene_fmu("fig13"), "inf") as b:
+        assert b.step(1e-4) == OK  # the compiled step is in place
+        assert b.step(1e-4, time=math.inf) == DISCARD
+        assert b.step(1e-4) == OK
+
+
+def test_a_refused_value_is_not_returned_with_ok():
+    """getReal of an input whose NaN was refused returned the NaN with fmi2OK."""
+    with Instance(scene_fmu("fig13"), "held") as b:
+        with pytest.raises(FMICallException):
+            b.set("P", math.nan)
+        with pytest.raises(FMICallException) as e:
+            b.get("P")
+        assert e.value.status == ERROR and "P = nan is invalid" in b.messages[-1][1]
+        b.set("P", ex.P)
+        assert b.get("P") == ex.P and b.step(1e-4) == OK
+
+
+def test_transient_grid_has_a_declared_maximum():
+    """ny = 2147483647 (a legal Integer >= 2) allocated until the kernel killed the
+    process; nx and ny are declared with a maximum and refused beyond it."""
+    with Instance(scene_fmu("fig12_transient"), "grid", initialise=False) as b:
+        for name, value in (("ny", 2147483647), ("nx", 1025)):
+            with pytest.raises(FMICallException) as e:
+                b.set(name, value)
+            assert e.value.status == ERROR and f"{name} = {value}" in b.messages[-1][1]
+
+
 def test_internal_step_cap_answers_warning():
     """One doStep capped at MAX_SUBSTEPS internal steps answered fmi2OK with only a
     logged note while the accuracy it promised (h_max) was not kept."""

@@ -250,6 +250,8 @@ class ContactSlave(Fmi2Slave):
             value = self._out[name]
         else:
             value = self._values[name]
+            if name in self._bad:  # the value set was refused: not a value to use
+                self._refuse(f"{name}: {self._bad[name]} (held until corrected)")
         if var.type == "Integer":
             return int(value)
         if var.type == "String":
@@ -521,6 +523,7 @@ class ContactSlave(Fmi2Slave):
             t, h = current_time, step_size
             if (
                 0.0 < h < _INF
+                and -_INF < t < _INF
                 and abs(t - self._time) <= TIME_RTOL * max(abs(t), abs(self._time))
                 and step(h) == 0
             ):

@@ -20,12 +20,24 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import root
 
-from .._validate import InputError, finite, nonnegative, positive
-from .hertz import CombinedElastic, Hertz, Material, relative_curvatures
+from .._validate import (
+    InputError,
+    array,
+    count,
+    counts,
+    finite,
+    flag,
+    instance,
+    nonnegative,
+    positive,
+)
+from .hertz import CombinedElastic, Hertz, Material, ellipse_curvatures, relative_curvatures
 from .rolling import (
     NEWTON_TOL,
     RollingPatch,
@@ -39,6 +51,12 @@ FloatArray = NDArray[np.float64]
 # Default elements of the potential contact area per direction (docs/halfspace.md:
 # about 1 % discretisation error of the creep forces on 32 x 32).
 DEFAULT_N = 32
+# creepages_for: root tolerance on the creepages relative to their scale, and the
+# largest force residual (in units of rtol mu P) accepted as converged.
+FORCE_RTOL = 1e-8
+FORCE_ACCEPT = 100.0
+# Fewest elements per direction of a grid.
+MIN_N = 8
 # Adhesion fraction at or below which a solution counts as full slip: none of the
 # elements adheres (the bisection for the onset resolves one element).
 FULL_SLIP_ADHESION = 0.0
@@ -53,9 +71,19 @@ class HalfSpaceContact:
     P: normal load (N); Rx, Ry: principal radii of the body at the contact (m, inf for
     a flat direction); body, substrate: their materials; mu: friction coefficient (-);
     Rsx, Rsy: radii of the substrate (m, default flat); kb, ks: tangential layer
-    compliances of Eqs. (6)-(7) (m/Pa); n: elements per direction of the potential
-    contact area; coupling: include the pressure-to-tangential coupling B(p) of the
-    Appendix (zero for quasi-identical bodies; it breaks the odd symmetry of T).
+    compliances of Eqs. (6)-(7) (m/Pa); coupling: include the pressure-to-tangential
+    coupling B(p) of the Appendix (zero for quasi-identical bodies; it breaks the odd
+    symmetry of T).
+
+    n: the grid. ``(mx, my)``: mx elements along x and my along y over the potential
+    contact area, the Hertz ellipse's bounding box with one element to spare on every
+    side (the box is (mx - 2) x (my - 2) elements, dx = 2 a1/(mx - 2), dy = 2 a2/(my -
+    2); CONTACT's mx x my over its potential contact area). An int n: the n x n grid
+    of earlier versions, one element to spare along x only (dx = 2 a1/(n - 2), dy =
+    2 a2/n); the tables and scenes use it.
+
+    Other ways in: ``from_ellipse`` (semi-axes and the load or the approach),
+    ``from_curvatures`` (the relative curvatures A, B).
     """
 
     P: float
@@ -68,17 +96,58 @@ class HalfSpaceContact:
     Rsy: float = math.inf
     kb: float = 0.0
     ks: float = 0.0
-    n: int = DEFAULT_N
+    n: int | tuple[int, int] = DEFAULT_N
     coupling: bool = True
 
     def __post_init__(self) -> None:
         positive("P", self.P)
+        instance("body", self.body, Material, "a halfspace.Material")
+        instance("substrate", self.substrate, Material, "a halfspace.Material")
         positive("mu", self.mu)
         nonnegative("kb", self.kb)
         nonnegative("ks", self.ks)
-        if int(self.n) != self.n or self.n < 8:
-            raise InputError("n", self.n, "an integer >= 8")
+        if isinstance(self.n, int | np.integer) and not isinstance(self.n, bool):
+            count("n", self.n, MIN_N)
+        else:
+            object.__setattr__(self, "n", counts("n", self.n, MIN_N))
+        flag("coupling", self.coupling)
         relative_curvatures(self.Rx, self.Ry, self.Rsx, self.Rsy)
+
+    @classmethod
+    def from_curvatures(
+        cls, A: float, B: float, body: Material, substrate: Material, mu: float, P: float, **kw
+    ) -> HalfSpaceContact:
+        """The contact of the principal relative curvatures A along x and B along y
+        (1/m; the gap is A x^2 + B y^2, Johnson Eq. 4.3) at the load P (N). ``kw``: the
+        other fields (kb, ks, n, coupling)."""
+        A, B = positive("A", A), positive("B", B)
+        _no_radii(kw)
+        return cls(P, 0.5 / A, 0.5 / B, body, substrate, mu, **kw)
+
+    @classmethod
+    def from_ellipse(
+        cls,
+        a1: float,
+        a2: float,
+        body: Material,
+        substrate: Material,
+        mu: float,
+        P: float | None = None,
+        delta: float | None = None,
+        **kw,
+    ) -> HalfSpaceContact:
+        """The Hertz contact with semi-axes a1 along x (rolling) and a2 along y (m),
+        given its normal load P (N) or its approach delta (m) (one of the two): the
+        curvatures follow from ``hertz.ellipse_curvatures``, and ``a1``, ``a2`` of the
+        result reproduce the given ones (to 1e-12, 1e-9 within 1e-6 of a circle).
+        ``kw``: the other fields (kb, ks, n, coupling)."""
+        _no_radii(kw)
+        Estar = CombinedElastic.of(
+            instance("body", body, Material, "a halfspace.Material"),
+            instance("substrate", substrate, Material, "a halfspace.Material"),
+        ).Estar
+        A, B, P = ellipse_curvatures(a1, a2, Estar, P, delta)
+        return cls.from_curvatures(A, B, body, substrate, mu, P, **kw)
 
     # ---- normal contact ------------------------------------------------------------
     @cached_property
@@ -115,14 +184,20 @@ class HalfSpaceContact:
         """kb + ks (m/Pa)."""
         return self.kb + self.ks
 
+    @property
+    def elements(self) -> tuple[int, int]:
+        """(mx, my): elements of the grid along x and y."""
+        return self.n if isinstance(self.n, tuple) else (int(self.n), int(self.n))
+
     @cached_property
     def patch(self) -> RollingPatch:
-        """Hertz pressure on the n x n grid, scaled so that sum p dA = P exactly."""
+        """Hertz pressure on the grid ``n``, scaled so that sum p dA = P exactly."""
         e = self.elastic
+        mx, my = self.elements
         patch = ellipse_patch(
             self.a1,
             self.a2,
-            self.n,
+            mx,
             self.hertz.pressure,
             self.mu,
             e.G,
@@ -130,6 +205,8 @@ class HalfSpaceContact:
             k=self.k,
             kappa=e.kappa if self.coupling else 0.0,
             P=self.P,
+            ny=my,
+            spare_y=isinstance(self.n, tuple),
         )
         return patch
 
@@ -144,9 +221,28 @@ class HalfSpaceContact:
         phi: float = 0.0,
         tau0: FloatArray | None = None,
         tol: float = NEWTON_TOL,
+        richardson: bool = False,
     ) -> RollingSolution:
-        """Steady rolling in +x for creepages xi, eta (-) and spin phi (1/m)."""
-        return solve_rolling(self.patch, xi, eta, phi, tau0=tau0, tol=tol)
+        """Steady rolling in +x for creepages xi, eta (-) and spin phi (1/m).
+
+        richardson: also solve on the grid of half the elements per side (same rule,
+        same potential contact area) and return, with this grid's solution, the error
+        estimate F(n/2) - F(n) of F(n) and the extrapolated forces 2 F(n) - F(n/2) (``error``,
+        ``extrapolated`` of RollingSolution; the scheme is first order, docs/
+        validation.md). The coarse solve costs about a quarter of the fine one."""
+        sol = solve_rolling(self.patch, xi, eta, phi, tau0=tau0, tol=tol)
+        if not flag("richardson", richardson):
+            return sol
+        mx, my = self.elements
+        if min(mx, my) // 2 < MIN_N:
+            raise InputError("n", self.n, f">= {2 * MIN_N} per side for richardson=True")
+        half = (mx // 2, my // 2) if isinstance(self.n, tuple) else mx // 2
+        coarse = replace(self, n=half).solve(xi, eta, phi, tol=tol)
+        fine = np.array([sol.Tx, sol.Ty, sol.Mz])
+        err = np.array([coarse.Tx, coarse.Ty, coarse.Mz]) - fine  # F(n) - F for order 1
+        return replace(
+            sol, error=tuple(map(float, err)), extrapolated=tuple(map(float, fine - err))
+        )
 
     def traction(self, vx: float, vy: float, phi: float, Vx: float) -> RollingSolution:
         """The solution for rigid slip (vx, vy) (m/s), Omega_z = phi (rad/s), speed Vx (m/s),
@@ -167,7 +263,7 @@ class HalfSpaceContact:
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(Tx, Ty, Mz) in N, N m (Eq. 8 convention), one solve per element of the
         broadcast inputs."""
-        vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
+        vx, vy, phi, Vx = _broadcast(vx=vx, vy=vy, phi=phi, Vx=Vx)
         out = np.zeros((3, *vx.shape))
         for idx in np.ndindex(vx.shape):
             s = self.traction(vx[idx], vy[idx], phi[idx], Vx[idx])
@@ -176,7 +272,7 @@ class HalfSpaceContact:
 
     def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike, phi: ArrayLike = 0.0):
         """Adhesion area over contact area (-)."""
-        vx, vy, phi, Vx = np.broadcast_arrays(*(np.asarray(a, float) for a in (vx, vy, phi, Vx)))
+        vx, vy, phi, Vx = _broadcast(vx=vx, vy=vy, phi=phi, Vx=Vx)
         out = np.zeros(vx.shape)
         for idx in np.ndindex(vx.shape):
             out[idx] = self.traction(vx[idx], vy[idx], phi[idx], Vx[idx]).adhesion_fraction
@@ -191,6 +287,7 @@ class HalfSpaceContact:
     def onset(self, angle: float) -> float:
         """Creepage magnitude at which the adhesion area vanishes for the creepage
         direction (cos angle, sin angle), no spin (-)."""
+        angle = finite("angle", angle)
         ca, sa = math.cos(angle), math.sin(angle)
 
         def adh(s: float) -> float:
@@ -223,25 +320,113 @@ class HalfSpaceContact:
         S = np.stack([wx, wy])
         return RollingSolution(patch.grid, tau, S, C, C & ~moving, moving, Tx, Ty, Mz, 0, 0)
 
-    def linear_coefficients(self) -> tuple[float, float, float]:
-        """Kalker's C11, C22, C23 (-) of this patch from full-adhesion solves:
-        Tx = G c^2 C11 xi, Ty = G c^2 (C22 eta + c C23 phi) (force on the substrate)."""
+    def creepages_for(
+        self, Fx: float, Fy: float, phi: float = 0.0, rtol: float = FORCE_RTOL
+    ) -> tuple[float, float, RollingSolution]:
+        """The creepages (xi, eta) (-) of steady rolling in +x at spin phi (1/m) whose
+        force on the substrate is (Tx, Ty) = (Fx, Fy) (N), and the solution there.
+
+        scipy.optimize.root (Powell's hybrid method) on the forces in units of mu P,
+        from the linear theory stretched by Carter's inverse 1 - (1 - f)^(1/2) (f =
+        |F|/(mu P)), each solve warm-started from the last; converged to ``rtol`` of
+        mu P. |(Fx, Fy)| must be below mu P; a force the spin leaves out of reach
+        answers InputError naming it. Within about 1e-4 mu P of saturation the
+        creepage is ill-conditioned (the force hardly changes with it) and the root
+        finder may stop short: also InputError, with the closest force reached."""
+        Fx, Fy, phi = finite("Fx", Fx), finite("Fy", Fy), finite("phi", phi)
+        rtol = positive("rtol", rtol)
+        muP = self.mu * self.P
+        f = math.hypot(Fx, Fy) / muP
+        if f >= 1.0:
+            raise InputError("Fx, Fy", (Fx, Fy), f"of magnitude below mu P = {muP:.6g} N")
+        G, c = self.elastic.G, self.c
+        k = self._coefficients
+        stretch = 2.0 * (1.0 - math.sqrt(1.0 - f)) / f if f > 0.0 else 1.0
+        x0 = stretch * np.array(
+            [Fx / (G * c * c * k.C11), (Fy / (G * c * c) - c * k.C23 * phi) / k.C22]
+        )
+        xref = muP / (G * c * c)
+        last: dict[str, RollingSolution] = {}
+
+        def residual(u: FloatArray) -> FloatArray:
+            tau0 = last["sol"].tau if last else None
+            sol = self.solve(float(u[0]) * xref, float(u[1]) * xref, phi, tau0=tau0)
+            last["sol"] = sol
+            return np.array([sol.Tx - Fx, sol.Ty - Fy]) / muP
+
+        res = root(residual, x0 / xref, method="hybr", options={"xtol": rtol})
+        r = residual(res.x)
+        if float(np.abs(r).max()) > FORCE_ACCEPT * rtol:
+            raise InputError(
+                "Fx, Fy",
+                (Fx, Fy),
+                f"attainable at phi = {phi:.6g} 1/m (closest: {r[0] * muP + Fx:.6g}, "
+                f"{r[1] * muP + Fy:.6g} N)",
+            )
+        return float(res.x[0]) * xref, float(res.x[1]) * xref, last["sol"]
+
+    @cached_property
+    def _coefficients(self) -> CreepCoefficients:
+        return self.creep_coefficients()
+
+    def creep_coefficients(self) -> CreepCoefficients:
+        """Kalker's C11, C22, C23, C33 (-) of this patch from full-adhesion solves (the
+        linear theory; Kalker 1967, Johnson 1985 Sec. 8.4), force on the substrate:
+
+            Tx = G c^2 C11 xi,  Ty = G c^2 (C22 eta + c C23 phi),
+            Mz = G c^3 (-C23 eta + c C33 phi).
+
+        The spin load is the whole rigid slip of the spin, w = phi (-y, x): with nu > 0
+        its longitudinal part -phi y also loads Ty (C23 at nu = 0.28 is 4 % larger than
+        from the lateral part phi x alone). Mz from eta gives -C23 again (reciprocity of
+        the symmetric influence operator, tested)."""
         patch = self.patch
         C = patch.contact
-        X, _ = patch.grid.mesh()
+        X, Y = patch.grid.mesh()
         dx, dA = patch.grid.dx, patch.grid.area
-        out = []
-        for a, w in (
-            (0, np.where(C, dx, 0.0)),
-            (1, np.where(C, dx, 0.0)),
-            (1, np.where(C, X * dx, 0.0)),
-        ):
-            W = np.zeros((2, *patch.grid.shape))
-            W[a] = w
-            tau, _ = patch.solve_adhesion(W)
-            out.append(float(tau[a].sum() * dA))
+        ones, zero = np.where(C, dx, 0.0), np.zeros(patch.grid.shape)
+        spin = np.stack([np.where(C, -Y * dx, 0.0), np.where(C, X * dx, 0.0)])
+        (t_xi, _), (t_eta, _), (t_phi, _) = (
+            patch.solve_adhesion(W) for W in (np.stack([ones, zero]), np.stack([zero, ones]), spin)
+        )
         G, c = self.elastic.G, self.c
-        return out[0] / (G * c * c), out[1] / (G * c * c), out[2] / (G * c**3)
+        return CreepCoefficients(
+            C11=float(t_xi[0].sum() * dA) / (G * c * c),
+            C22=float(t_eta[1].sum() * dA) / (G * c * c),
+            C23=float(t_phi[1].sum() * dA) / (G * c**3),
+            C33=float(np.sum(X * t_phi[1] - Y * t_phi[0]) * dA) / (G * c**4),
+        )
+
+    def linear_coefficients(self) -> tuple[float, float, float]:
+        """(C11, C22, C23) of ``creep_coefficients``."""
+        k = self.creep_coefficients()
+        return k.C11, k.C22, k.C23
+
+
+class CreepCoefficients(NamedTuple):
+    """Kalker's creep coefficients of the linear theory (-), ``creep_coefficients``."""
+
+    C11: float
+    C22: float
+    C23: float
+    C33: float
+
+
+def _broadcast(**arrays: ArrayLike) -> list[FloatArray]:
+    """The named inputs as finite float arrays broadcast together (InputError naming the
+    first bad one, or all of them when their shapes do not broadcast)."""
+    checked = [array(name, a) for name, a in arrays.items()]
+    try:
+        return np.broadcast_arrays(*checked)
+    except ValueError:
+        shapes = tuple(a.shape for a in checked)
+        raise InputError(", ".join(arrays), shapes, "shapes that broadcast") from None
+
+
+def _no_radii(kw: dict) -> None:
+    for name in ("Rx", "Ry", "Rsx", "Rsy"):
+        if name in kw:
+            raise InputError(name, kw[name], "not given: the curvatures or the ellipse fix it")
 
 
 def _mirror(sol: RollingSolution) -> RollingSolution:
@@ -267,4 +452,10 @@ def _mirror(sol: RollingSolution) -> RollingSolution:
         sol.newton_iterations,
         sol.gmres_iterations,
         sol.levels,
+        None if sol.error is None else (-sol.error[0], sol.error[1], -sol.error[2]),
+        None if sol.extrapolated is None else _flip_x(sol.extrapolated),
     )
+
+
+def _flip_x(F: tuple[float, float, float]) -> tuple[float, float, float]:
+    return (-F[0], F[1], -F[2])

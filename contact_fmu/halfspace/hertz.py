@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
-from .._validate import InputError, finite, positive
+from .._validate import InputError, finite, positive, real
 
 FloatArray = NDArray[np.float64]
 
@@ -42,6 +42,10 @@ CIRCLE_RTOL = 1e-12
 # Bracket of the eccentricity parameter m = e^2 for brentq; 1 - M_MAX corresponds to a
 # semi-axis ratio b/a = 1e-6, far beyond any contact of practical interest.
 M_MAX = 1.0 - 1e-12
+# Below m = M_LINEAR (b/a > 0.9999995) N/M - 1 loses digits to cancellation and is
+# linear in m to 1e-6 relative: Hertz.m interpolates there instead of root finding (a
+# bracket down to m = 1e-14 failed for curvature ratios within 1e-7 of 1).
+M_LINEAR = 1e-6
 
 
 @dataclass(frozen=True)
@@ -96,7 +100,7 @@ class CombinedElastic:
 
 def _curvature(name: str, R: float) -> float:
     """1/R (1/m) for a radius R (m): inf is flat, a negative radius is concave."""
-    R = float(R)
+    R = real(name, R)
     if R == 0.0 or math.isnan(R):
         raise InputError(name, R, "non-zero (inf for a flat surface)")
     return 0.0 if math.isinf(R) else 1.0 / R
@@ -147,7 +151,10 @@ class Hertz:
         ratio = max(self.A, self.B) / min(self.A, self.B)
         if ratio - 1.0 <= CIRCLE_RTOL:
             return 0.0
-        return float(brentq(lambda m: _ratio(m) - ratio, 1e-14, M_MAX, xtol=1e-15, rtol=1e-15))
+        r_lo = _ratio(M_LINEAR)
+        if ratio <= r_lo:  # nearly circular: N/M - 1 is linear in m below M_LINEAR
+            return M_LINEAR * (ratio - 1.0) / (r_lo - 1.0)
+        return float(brentq(lambda m: _ratio(m) - ratio, M_LINEAR, M_MAX, xtol=1e-15, rtol=1e-15))
 
     @cached_property
     def _axes(self) -> tuple[float, float, float]:
@@ -202,3 +209,35 @@ class Hertz:
 
     def with_load(self, P: float) -> Hertz:
         return Hertz(P, self.A, self.B, self.Estar)
+
+
+def ellipse_curvatures(
+    a1: float, a2: float, Estar: float, P: float | None = None, delta: float | None = None
+) -> tuple[float, float, float]:
+    """The principal relative curvatures (A, B) (1/m) and the load P (N) of the Hertz
+    contact with semi-axes a1 along x and a2 along y (m), given the load P or the
+    approach delta (m) (exactly one): the module's relations read backwards,
+
+        A, B = p0 (M, N)/E* (major axis first),  delta = p0 L/E*,  p0 = 3 P/(2 pi a b),
+
+    L = b K, M = b (K - E)/(e^2 a^2), N = b ((a/b)^2 E - K)/(e^2 a^2), a >= b."""
+    a1, a2, Estar = positive("a1", a1), positive("a2", a2), positive("Estar", Estar)
+    if (P is None) == (delta is None):
+        raise InputError("P, delta", (P, delta), "exactly one of them given")
+    major, minor = max(a1, a2), min(a1, a2)
+    m = 1.0 - (minor / major) ** 2
+    K, E = float(ellipk(m)), float(ellipe(m))
+    if m < 1e-8:  # circle: (K - E)/e^2 and ((a/b)^2 E - K)/e^2 both tend to pi/4
+        fM = fN = math.pi / 4.0
+    else:
+        fM, fN = (K - E) / m, (E / (1.0 - m) - K) / m
+    if P is not None:
+        P = positive("P", P)
+        p0 = 3.0 * P / (2.0 * math.pi * major * minor)
+    else:
+        p0 = positive("delta", delta) * Estar / (minor * K)
+        P = 2.0 * math.pi * major * minor * p0 / 3.0
+    k_major = p0 * minor * fM / (major * major * Estar)
+    k_minor = p0 * minor * fN / (major * major * Estar)
+    A, B = (k_major, k_minor) if a1 >= a2 else (k_minor, k_major)
+    return A, B, P

@@ -42,7 +42,7 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import NDArray
 
-from .._validate import InputError, positive
+from .._validate import InputError, count, finite, positive
 
 FloatArray = NDArray[np.float64]
 
@@ -65,10 +65,12 @@ class Grid:
     y0: float
 
     def __post_init__(self) -> None:
-        if self.nx < 1 or self.ny < 1:
-            raise InputError("nx, ny", (self.nx, self.ny), ">= 1")
+        count("nx", self.nx, 1)
+        count("ny", self.ny, 1)
         positive("dx", self.dx)
         positive("dy", self.dy)
+        finite("x0", self.x0)
+        finite("y0", self.y0)
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validate import InputError, nonnegative, positive
+from .._validate import array, count, instance, nonnegative, positive
 from .influence import Grid, normal_operator
 
 FloatArray = NDArray[np.float64]
@@ -64,9 +64,10 @@ def solve_normal(
     positive("P", P)
     positive("Estar", Estar)
     nonnegative("k_layers", k_layers)
-    h = np.asarray(h, float)
-    if h.shape != grid.shape:
-        raise InputError("h.shape", h.shape, f"the grid shape {grid.shape}")
+    instance("grid", grid, Grid, "an influence.Grid")
+    h = array("h", h, grid.shape)
+    tol = positive("tol", tol)
+    maxit = count("maxit", maxit, 1)
     op = normal_operator(grid, Estar, k_layers)
     dA = grid.area
     p = np.full(grid.shape, P / (grid.nx * grid.ny * dA))

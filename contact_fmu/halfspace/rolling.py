@@ -44,11 +44,8 @@ over each adhesion interval (a small dense system, one unknown per interval and
 component), and the march from the leading edge that turns differences into
 tractions. For the thin layer this preconditioner is the exact inverse (the march of
 LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
-|F| globalises the iteration. ``RollingPatch(preconditioner="multigrid")`` replaces the
-block preconditioner by a multigrid V-cycle (multigrid.py) with GMRES on the right
-(krylov.py): 1-2 GMRES iterations per Newton step on 16..256 per side, a V-cycle
-contraction below 0.05 on 32..512, at 1.7-5.9 times the time (docs/halfspace.md,
-"Iteration counts").
+|F| globalises the iteration. Contacts of at most DIRECT_MAX_ELEMENTS elements take
+dense direct Newton steps instead (direct.py).
 
 Nested iteration: a patch from ellipse_patch carries its coarse levels (n/2, n/4, ...
 elements per side over the same ellipse, down to NESTED_MIN_N); solve_rolling solves the
@@ -61,7 +58,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
@@ -70,8 +67,17 @@ import scipy.linalg as sla
 import scipy.ndimage as ndi
 from numpy.typing import NDArray
 
-from .._validate import InputError, finite, nonnegative, positive
-from . import multigrid
+from .._validate import (
+    InputError,
+    array,
+    count,
+    finite,
+    instance,
+    nonnegative,
+    one_of,
+    positive,
+)
+from . import direct
 from .influence import (
     BlockConvolution,
     Grid,
@@ -79,7 +85,7 @@ from .influence import (
     difference,
     tangential_operator,
 )
-from .krylov import fgmres, gmres
+from .krylov import gmres
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -105,14 +111,13 @@ OVERSOLVE = 0.1
 SLIP_BLOCK_RATIO = 0.5
 # GMRES restart length and cap on the total number of inner iterations per Newton step.
 GMRES_RESTART = 60
-# With the multigrid preconditioner: at most MULTIGRID_MAXIT V-cycles per Newton step
-# (measured 1-3 on every grid, docs/halfspace.md); a step whose cycle stalls then ends
-# with GMRES's best iterate, and backtracking on |F| takes over, for a bounded cost.
-MULTIGRID_MAXIT = 20
 GMRES_MAXIT = 600
 # Backtracking: sufficient decrease factor on |F|_2 and the smallest step fraction.
 ARMIJO = 1e-4
 MIN_STEP = 1.0 / 64.0
+# Direct path (direct.py) for contacts of at most this many elements (solve_rolling,
+# method "auto"): measured crossover against the iterative path, docs/performance.md.
+DIRECT_MAX_ELEMENTS = 200
 # Nested iteration (docs/halfspace.md): ellipse_patch grids of n elements per side get a
 # coarse level of n/2 while n/2 >= NESTED_MIN_N, recursively. A 16 x 16 level costs
 # about what it saves (measured: 32 x 32 15-20 % slower nested from 16 x 16, 64 x 64 no
@@ -133,7 +138,10 @@ class RollingSolution:
     mask; forces Tx, Ty (N) and the spin moment Mz = sum (x tau_y - y tau_x) dA (N m);
     Newton and total GMRES iteration counts on this grid. ``levels``: with nested
     iteration, (nx, ny, Newton, GMRES) per level from the coarsest to this grid (the last
-    entry repeats the two counts above); empty for a single-level solve.
+    entry repeats the two counts above); empty for a single-level solve. ``error``:
+    with ``HalfSpaceContact.solve(richardson=True)``, the estimated discretisation error
+    (Tx, Ty, Mz) of this grid's forces, F(n/2) - F(n) for the scheme's first order, and
+    ``extrapolated`` the Richardson values 2 F(n) - F(n/2); None otherwise.
     """
 
     grid: Grid
@@ -148,6 +156,8 @@ class RollingSolution:
     newton_iterations: int
     gmres_iterations: int
     levels: tuple[tuple[int, int, int, int], ...] = ()
+    error: tuple[float, float, float] | None = None
+    extrapolated: tuple[float, float, float] | None = None
 
     @property
     def adhesion_fraction(self) -> float:
@@ -176,12 +186,10 @@ class RollingPatch:
     nx): fraction of an element between its centre and the leading edge (1 inside,
     (0, 1] in the leading elements; None: 1); kappa: Kalker's difference parameter
     (pressure coupling, 0: quasi-identical bodies); backend "fft" or "dense" (the same
-    solver with an explicit influence matrix, for benchmarks); preconditioner of the
-    Newton systems: "block" (default) or "multigrid" (multigrid.py: 1-2 GMRES iterations
-    per Newton step on 16..256 per side, 1.7-5.9 times slower there, coarse levels
-    included); coarsen: builds the same problem on a grid of about half the
-    elements per side over the same potential contact area, for the backend given
-    (nested iteration, ``solve_rolling``; None: none, as for the coarsest level).
+    solver with an explicit influence matrix, for benchmarks); coarsen: builds the
+    same problem on a grid of about half the elements per side over the same potential
+    contact area, for the backend given (nested iteration, ``solve_rolling``; None:
+    none, as for the coarsest level).
     Derived quantities are cached: treat a patch as immutable once built.
     """
 
@@ -197,15 +205,12 @@ class RollingPatch:
     use_closure: bool = False
     operator: BlockConvolution | None = None
     coarsen: Callable[[str], RollingPatch] | None = field(default=None, repr=False, compare=False)
-    # last, so that the fields before it keep their positions
-    preconditioner: str = "block"
 
     def __post_init__(self) -> None:
-        self.p = np.asarray(self.p, float)
-        if self.p.shape != self.grid.shape:
-            raise InputError("p.shape", self.p.shape, f"the grid shape {self.grid.shape}")
-        if np.any(self.p < 0.0) or not np.all(np.isfinite(self.p)):
-            raise InputError("p", "negative or non-finite values", "finite and >= 0")
+        instance("grid", self.grid, Grid, "an influence.Grid")
+        self.p = array("p", self.p, self.grid.shape)
+        if np.any(self.p < 0.0):
+            raise InputError("p", "negative values", ">= 0")
         positive("mu", self.mu)
         positive("G", self.G)
         finite("nu", self.nu)
@@ -213,13 +218,11 @@ class RollingPatch:
         finite("kappa", self.kappa)
         if self.backend not in ("fft", "dense"):
             raise InputError("backend", self.backend, '"fft" or "dense"')
-        if self.preconditioner not in ("block", "multigrid"):
-            raise InputError("preconditioner", self.preconditioner, '"block" or "multigrid"')
         if np.any(self.contact[:, 0]):
             raise InputError(
                 "grid", "contact in the first column", "one element behind each trailing edge"
             )
-        th = np.ones(self.grid.shape) if self.theta is None else np.asarray(self.theta, float)
+        th = np.ones(self.grid.shape) if self.theta is None else array("theta", self.theta)
         if th.shape != self.grid.shape or np.any(th <= 0.0) or np.any(th > 1.0):
             raise InputError("theta", "shape or range", f"shape {self.grid.shape}, in (0, 1]")
         self.theta = np.where(self.leading, th, 1.0)
@@ -247,18 +250,7 @@ class RollingPatch:
         """The next coarser level (cached, with its own coarse levels), or None."""
         if self.coarsen is None:
             return None
-        coarse = self.coarsen(self.backend)
-        if coarse.preconditioner != self.preconditioner:
-            coarse = replace(coarse, preconditioner=self.preconditioner)
-        return coarse
-
-    @cached_property
-    def mg_kernels(self) -> list[multigrid.KernelLevel]:
-        """The influence kernels of the multigrid levels (geometry only; ``multigrid``)."""
-        op = self.op
-        return multigrid.kernel_levels(
-            op.kernel, self.grid.dx, self.grid.dy, op.local, self.grid.shape
-        )
+        return self.coarsen(self.backend)
 
     @cached_property
     def op(self) -> BlockConvolution:
@@ -310,6 +302,16 @@ class RollingPatch:
         full = self.op.dense(cols)
         keep = np.concatenate([rows_in, rows_in])
         return full[keep], cols
+
+    @cached_property
+    def dense_contact_operator(self) -> FloatArray:
+        """K on the contact as a dense (2 m, 2 m) matrix (direct.py; small grids)."""
+        return direct.contact_operator(self)
+
+    @cached_property
+    def dense_contact_lu(self):
+        """LU factors of ``dense_contact_operator`` (the direct path's initial guess)."""
+        return sla.lu_factor(self.dense_contact_operator)
 
     # ---- operators ---------------------------------------------------------------------
     def apply_K(self, tau: FloatArray) -> FloatArray:
@@ -431,12 +433,14 @@ class RollingPatch:
         theory: the march tau_I = tau_I+ + W_I/L has the same force per unit creepage as the
         full-adhesion solution (three linear solves, cached)."""
         C = self.contact
-        ones = np.where(C, self.grid.dx, 0.0)
-        X, _ = self.grid.mesh()
+        dx = self.grid.dx
+        ones, zero = np.where(C, dx, 0.0), np.zeros(self.grid.shape)
+        X, Y = self.grid.mesh()
+        # the spin load is the whole rigid slip phi (-y, x) (its -y part loads Ty too
+        # for nu > 0); FASTSIM's march of the lateral part phi x carries Ty
+        spin = np.stack([np.where(C, -Y * dx, 0.0), np.where(C, X * dx, 0.0)])
         out = []
-        for a, W1 in ((0, ones), (1, ones), (1, np.where(C, X * self.grid.dx, 0.0))):
-            W = np.zeros((2, *self.grid.shape))
-            W[a] = W1
+        for a, W in ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin)):
             exact, _ = self.solve_adhesion(W, rtol=1e-6)
             fs = march(W[a], C)
             out.append(float(fs.sum()) / float(exact[a].sum()))
@@ -489,9 +493,14 @@ def solve_rolling(
     tau0: FloatArray | None = None,
     tol: float = NEWTON_TOL,
     maxit: int = NEWTON_MAXIT,
+    method: str = "auto",
 ) -> RollingSolution:
     """Steady rolling for the creepages xi = vx/Vx, eta = vy/Vx (-) and spin phi =
     Omega_z/Vx (1/m), rolling in +x. tau0: initial traction (2, ny, nx) (warm start).
+
+    method: "iterative" (GMRES Newton steps, below), "direct" (dense Newton steps,
+    direct.py), "auto": direct for contacts of at most DIRECT_MAX_ELEMENTS elements
+    with the FFT backend, iterative otherwise.
 
     Initial guess without tau0: nested iteration where the patch has a coarse level
     (``RollingPatch.coarse``; ellipse_patch grids of 64 and more elements per side): the
@@ -499,10 +508,20 @@ def solve_rolling(
     ``prolong``; otherwise, and should a coarse solve fail, the calibrated FASTSIM march
     (``RollingPatch.fastsim_guess``). Either way Newton then solves this grid's problem
     to ``tol``: the converged solution does not depend on the guess beyond ``tol``."""
-    for name, val in (("xi", xi), ("eta", eta), ("phi", phi)):
-        finite(name, val)
+    instance("patch", patch, RollingPatch, "a RollingPatch")
+    xi, eta, phi = finite("xi", xi), finite("eta", eta), finite("phi", phi)
+    tol = positive("tol", tol)
+    maxit = count("maxit", maxit, 1)
+    if tau0 is not None:
+        tau0 = array("tau0", tau0, (2, *patch.grid.shape))
+    one_of("method", method, ("auto", "iterative", "direct"))
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
+    if method == "direct" or (
+        method == "auto" and int(C.sum()) <= DIRECT_MAX_ELEMENTS and patch.backend == "fft"
+    ):
+        tau, S, slip, newton = direct.newton(patch, W, tau0, tol, maxit)
+        return _solution(patch, tau, S, slip, newton, 0, ())
     levels: tuple[tuple[int, int, int, int], ...] = ()
     tau = None
     if tau0 is not None:
@@ -529,6 +548,22 @@ def solve_rolling(
         slip_block=SLIP_BLOCK_RATIO,
         oversolve=OVERSOLVE,
     )
+    if levels:
+        levels = (*levels, (patch.grid.nx, patch.grid.ny, newton, inner))
+    return _solution(patch, tau, S, slip, newton, inner, levels)
+
+
+def _solution(
+    patch: RollingPatch,
+    tau: FloatArray,
+    S: FloatArray,
+    slip: BoolArray,
+    newton: int,
+    inner: int,
+    levels: tuple[tuple[int, int, int, int], ...],
+) -> RollingSolution:
+    """The RollingSolution of a converged traction: forces and masks on the contact."""
+    C = patch.contact
     tau = np.where(C, tau, 0.0)
     X, Y = patch.grid.mesh()
     dA = patch.grid.area
@@ -536,8 +571,6 @@ def solve_rolling(
     Ty = float(tau[1].sum() * dA)
     Mz = float(np.sum(X * tau[1] - Y * tau[0]) * dA)
     adhesion = C & ~slip
-    if levels:
-        levels = (*levels, (patch.grid.nx, patch.grid.ny, newton, inner))
     return RollingSolution(patch.grid, tau, S, C, adhesion, slip, Tx, Ty, Mz, newton, inner, levels)
 
 
@@ -689,15 +722,6 @@ def _newton_direction(
         return np.concatenate([Kd.ravel()[iHH], out_S])
 
     unknowns = _Unknowns(H, Sl, that, cS, iH, iS)
-    if getattr(patch, "preconditioner", "block") == "multigrid":
-        try:
-            cycle = _multigrid_psolve(patch, unknowns)
-        except np.linalg.LinAlgError:
-            pass  # singular row block, or too large a coarsest level: the block one
-        else:
-            # right preconditioning, one V-cycle per iteration (krylov.py)
-            x, its = fgmres(matvec, b, cycle, rtol, MULTIGRID_MAXIT)
-            return to_field(x) + dn * zhat, its
     psolve = _block_psolve(patch, unknowns, slip_block)
     x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
     return to_field(x) + dn * zhat, its
@@ -754,29 +778,6 @@ def _block_psolve(
     return psolve
 
 
-def _multigrid_psolve(patch: RollingPatch, u: _Unknowns) -> Callable[[FloatArray], FloatArray]:
-    """One multigrid V-cycle (``multigrid``) as the preconditioner of the Newton system,
-    in the unknowns' order of ``_newton_direction`` (adhesion x, adhesion y, slip)."""
-    H, Sl, that, cS, iH, iS = u.H, u.Sl, u.that, u.cS, u.iH, u.iS
-    kern = patch.mg_kernels
-    fine = multigrid.newton_level(kern[0], H, Sl, that, cS, patch.k_extra)
-    cycle = multigrid.VCycle(fine, kern)
-    nx, n = patch.grid.nx, H.size
-    nH = len(iH)
-    pos = np.zeros(n, dtype=np.int_)
-    pos[iH] = np.arange(nH)
-    pos[iS] = 2 * nH + np.arange(len(iS))
-    e = fine.ur * nx + fine.uc
-    order = pos[e] + np.where(H.ravel()[e], fine.ud * nH, 0)  # fine unknown -> Newton row
-
-    def psolve(v: FloatArray) -> FloatArray:
-        out = np.empty_like(v)
-        out[order] = cycle(v[order])
-        return out
-
-    return psolve
-
-
 def ellipse_patch(
     a1: float,
     a2: float,
@@ -790,20 +791,27 @@ def ellipse_patch(
     ny: int | None = None,
     backend: str = "fft",
     P: float | None = None,
+    spare_y: bool = False,
 ) -> RollingPatch:
     """Patch on an ellipse x^2/a1^2 + y^2/a2^2 < 1 with n x ny elements (ny = n default).
 
-    The potential contact area is the bounding box with one element to spare in x on each
-    side: dx = 2 a1/(n - 2), dy = 2 a2/ny. pressure(X, Y) gives p (Pa) at the centres,
-    scaled so that sum p dA = P (N) when P is given (the load invariant); theta follows
-    from the exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
+    The potential contact area is the ellipse's bounding box with one element to spare
+    on each side in x, dx = 2 a1/(n - 2), and with ``spare_y`` in y too, dy = 2 a2/(ny -
+    2) (one rule for both axes: the bounding box is (n - 2) x (ny - 2) elements);
+    without it dy = 2 a2/ny (the grids of ``HalfSpaceContact(n=int)``). Either way the
+    box's edges are element edges. pressure(X, Y) gives p (Pa) at the centres, scaled so
+    that sum p dA = P (N) when P is given (the load invariant); theta follows from the
+    exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
     """
-    if n < 4:
-        raise InputError("n", n, ">= 4")
-    ny = n if ny is None else int(ny)
+    a1, a2 = positive("a1", a1), positive("a2", a2)
+    if not callable(pressure):
+        raise InputError("pressure", type(pressure).__name__, "a function p(X, Y) (Pa)")
+    least = 4 if spare_y else 1
+    n = count("n", n, 4)
+    ny = n if ny is None else count("ny", ny, least)
     dx = 2.0 * a1 / (n - 2)
-    dy = 2.0 * a2 / ny
-    grid = Grid(n, ny, dx, dy, -a1 - dx, -a2)
+    dy = 2.0 * a2 / (ny - 2 if spare_y else ny)
+    grid = Grid(n, ny, dx, dy, -a1 - dx, -a2 - (dy if spare_y else 0.0))
     X, Y = grid.mesh()
     inside = (X / a1) ** 2 + (Y / a2) ** 2 < 1.0
     p = np.where(inside, pressure(X, Y), 0.0)
@@ -817,7 +825,9 @@ def ellipse_patch(
     if n // 2 >= NESTED_MIN_N and ny // 2 >= NESTED_MIN_N:
 
         def coarsen(bk: str) -> RollingPatch:
-            return ellipse_patch(a1, a2, n // 2, pressure, mu, G, nu, k, kappa, ny // 2, bk, P)
+            return ellipse_patch(
+                a1, a2, n // 2, pressure, mu, G, nu, k, kappa, ny // 2, bk, P, spare_y
+            )
 
     return RollingPatch(grid, p, mu, G, nu, k, theta, kappa, backend, coarsen=coarsen)
 

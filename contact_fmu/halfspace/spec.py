@@ -254,9 +254,13 @@ class TableSpec:
             coupling=False,
         )
 
-    def build(self, progress: Callable[[int, int], None] | None = None) -> CreepTable:
+    def build(
+        self,
+        progress: Callable[[int, int], None] | None = None,
+        map_tasks: Callable[[Callable, list], list] | None = None,
+    ) -> CreepTable:
         """The creep-force table (direct solves at its nodes; docs/halfspace.md gives the
-        cost), its meta data tagged with ``key``."""
+        cost), its meta data tagged with ``key``; ``map_tasks``: see ``build_table``."""
         table = build_table(
             self.contact(),
             loads=self.loads,
@@ -266,6 +270,7 @@ class TableSpec:
             nodes=self.nodes,
             stretch=self.stretch,
             progress=progress,
+            map_tasks=map_tasks,
         )
         meta = {**json.loads(table.data.meta), "spec": self.key}
         return CreepTable(replace(table.data, meta=json.dumps(meta)), table.P)

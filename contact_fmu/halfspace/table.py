@@ -46,7 +46,7 @@ import time
 from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cached_property, partial
 from pathlib import Path
 from typing import ClassVar
 
@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import Akima1DInterpolator, make_interp_spline
 
-from .._validate import InputError, finite, positive
+from .._validate import InputError, array, count, finite, instance, nonnegative, positive
 from .contact import HalfSpaceContact
 from .hertz import Hertz
 
@@ -550,6 +550,28 @@ class CreepTable:
 
 
 # ---- building ------------------------------------------------------------------------------
+def _table_task(contacts, axes, task) -> FloatArray | float:
+    """One task of a build: (load index, nodes of one line of x1 from its centre out)
+    -> the OUTPUTS at those nodes (len, 4), each solve warm-started from the previous;
+    (load index, None) -> the normalised onset of full slip at that load."""
+    ip, line = task
+    ck = contacts[ip]
+    xref = ck.mu * ck.P / (ck.elastic.G * ck.c**2)
+    if line is None:
+        return min(ck.onset(0.0), ck.onset(0.5 * math.pi)) / xref
+    pref = xref / ck.c
+    muP, c = ck.mu * ck.P, ck.c
+    out = np.empty((len(line), 4))
+    prev = None
+    for i, (k1, k2, k3) in enumerate(line):
+        s = ck.solve(
+            axes[0][k1] * xref, axes[1][k2] * xref, axes[2][k3] * pref, tau0=prev, tol=TABLE_TOL
+        )
+        prev = s.tau
+        out[i] = (s.Tx / muP, s.Ty / muP, s.Mz / (muP * c), s.adhesion_fraction)
+    return out
+
+
 def _half_nodes(N: tuple[int, int, int]) -> list[tuple[int, int, int]]:
     """Node indices with x > 0 in the order (x1, then x2, then x3) of odd symmetry, plus
     the centre; each line of x1 is listed from its centre outwards (warm starts)."""
@@ -573,6 +595,7 @@ def build_table(
     nodes: tuple[int, int, int] = DEFAULT_NODES,
     stretch: float = DEFAULT_STRETCH,
     progress: Callable[[int, int], None] | None = None,
+    map_tasks: Callable[[Callable, list], list] | None = None,
 ) -> CreepTable:
     """Creep-force table of ``contact`` (direct solves on its n x n grid).
 
@@ -585,16 +608,22 @@ def build_table(
     solves per load node plus two bisections for the onset of full slip, see
     docs/halfspace.md.
     Coupling B(p) is switched off (quasi-identity) so that T is odd in the creepages.
+    map_tasks(fn, tasks) -> [fn(t) for t in tasks] runs the independent solves elsewhere
+    (contact_fmu.study.engine); the table is the same as the serial build's.
+    progress(done, total) (serial build): solves done.
     """
+    instance("contact", contact, HalfSpaceContact, "a HalfSpaceContact")
     contact = replace(contact, coupling=False)
-    loads = np.array([contact.P] if loads is None else loads, float).ravel()
+    loads = array("loads", [contact.P] if loads is None else loads).ravel()
     loads.sort()
     if np.any(loads <= 0.0) or len(np.unique(loads)) != len(loads):
         raise InputError("loads", loads.tolist(), "distinct and > 0")
     if contact.k > 0.0 and len(loads) < 2:
         raise InputError("loads", loads.tolist(), "at least two nodes when kb + ks > 0")
-    nodes = tuple(int(n) for n in nodes)
-    if any(n < 3 or n % 2 == 0 for n in nodes):
+    if isinstance(nodes, str | bytes) or not hasattr(nodes, "__len__") or len(nodes) != 3:
+        raise InputError("nodes", nodes, "three odd integers >= 3")
+    nodes = tuple(count("nodes", n, 3) for n in nodes)
+    if any(n % 2 == 0 for n in nodes):
         raise InputError("nodes", nodes, "odd and >= 3 per axis")
     c0 = contact.with_load(float(loads[0]))
     xref0 = c0.mu * c0.P / (c0.elastic.G * c0.c**2)
@@ -602,8 +631,9 @@ def build_table(
     extent = np.array(DEFAULT_EXTENT, float)
     for i, (val, ref) in enumerate(((xi_max, xref0), (eta_max, xref0), (phi_max, pref0))):
         if val is not None:
-            extent[i] = positive(("xi_max", "eta_max", "phi_max")[i], abs(finite("max", val))) / ref
-    beta = float(stretch)
+            name = ("xi_max", "eta_max", "phi_max")[i]
+            extent[i] = positive(name, abs(finite(name, val))) / ref
+    beta = nonnegative("stretch", stretch)
     u = [np.linspace(-1.0, 1.0, n) for n in nodes]
     if beta > 0.0:
         axes = [X * np.sinh(beta * ui) / math.sinh(beta) for X, ui in zip(extent, u, strict=True)]
@@ -613,32 +643,35 @@ def build_table(
         a[:] = 0.5 * (a - a[::-1])
     half = _half_nodes(nodes)
     total = len(half) * len(loads)
+    contacts = [contact.with_load(float(P)) for P in loads]
+    # Independent tasks: each line of x1 (its solves warm-started along it, as in one
+    # sequence) and each load's onset of full slip; ``map_tasks`` may run them anywhere.
+    lines: dict[tuple[int, int], list[tuple[int, int, int]]] = {}
+    for node in half:
+        lines.setdefault((node[1], node[2]), []).append(node)
+    tasks = [(ip, tuple(line)) for ip in range(len(loads)) for line in lines.values()]
+    tasks += [(ip, None) for ip in range(len(loads))]
+    work = partial(_table_task, tuple(contacts), tuple(axes))
+    t0 = time.perf_counter()
+    if map_tasks is None:
+        results, done = [], 0
+        for task in tasks:
+            results.append(work(task))
+            done += len(task[1] or ())
+            if progress is not None and task[1] is not None:
+                progress(done, total)
+    else:
+        results = map_tasks(work, tasks)
     values = np.zeros((len(loads), *nodes, 4))
     onset = np.zeros(len(loads))
-    done = 0
-    t0 = time.perf_counter()
-    for ip, P in enumerate(loads):
-        ck = contact.with_load(float(P))
-        xref = ck.mu * ck.P / (ck.elastic.G * ck.c**2)
-        pref = xref / ck.c
-        muP, c = ck.mu * ck.P, ck.c
-        prev = None
-        last_line = None
-        for k1, k2, k3 in half:
-            line = (k2, k3)
-            warm = prev if line == last_line else None
-            s = ck.solve(
-                axes[0][k1] * xref, axes[1][k2] * xref, axes[2][k3] * pref, tau0=warm, tol=TABLE_TOL
-            )
-            prev, last_line = s.tau, line
-            v = np.array([s.Tx / muP, s.Ty / muP, s.Mz / (muP * c), s.adhesion_fraction])
+    for (ip, line), res in zip(tasks, results, strict=True):
+        if line is None:
+            onset[ip] = res
+            continue
+        for (k1, k2, k3), v in zip(line, res, strict=True):
             values[ip, k1, k2, k3] = v
             m = (nodes[0] - 1 - k1, nodes[1] - 1 - k2, nodes[2] - 1 - k3)
             values[ip, m[0], m[1], m[2]] = (-v[0], -v[1], -v[2], v[3])
-            done += 1
-            if progress is not None:
-                progress(done, total)
-        onset[ip] = min(ck.onset(0.0), ck.onset(0.5 * math.pi)) / xref
     e = contact.elastic
     meta = json.dumps(
         {

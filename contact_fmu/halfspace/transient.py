@@ -75,6 +75,7 @@ from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import root
 
 from .._validate import InputError, count, finite, positive
 from ..body_state import BodyState, ContactOutputs
@@ -109,6 +110,8 @@ MIN_NY = 2
 # tractions (the first step from rest loads the layer by v h/k, about 1e-3 mu p0).
 FIELD_TOL = 1e-10
 NEWTON_MAXIT = 60
+# shift_for_force: the largest force residual accepted (of mu P).
+SHIFT_FORCE_TOL = 1e-7
 # Relative GMRES tolerance of the tangent solve dtau/dvx (its error only slows the
 # outer Newton iteration, which is safeguarded by its bracket).
 TANGENT_RTOL = 1e-8
@@ -526,6 +529,29 @@ class HalfSpaceField:
         res = self.solve(geom, W)
         self.commit(res)
         return res
+
+    def shift_for_force(self, Fx: float, Fy: float = 0.0) -> tuple[float, float, StepResult]:
+        """Cattaneo at a given tangential force: the static shift (delta_x, delta_y) (m)
+        from rest whose field carries (Tx, Ty) = (Fx, Fy) (N), set as by ``set_shift``.
+        scipy.optimize.root from the adhesion stiffness's shift; |F| < mu P."""
+        Fx, Fy = finite("Fx", Fx), finite("Fy", Fy)
+        muP = self.contact.mu * self.P
+        if math.hypot(Fx, Fy) >= muP:
+            raise InputError("Fx, Fy", (Fx, Fy), f"of magnitude below mu P = {muP:.6g} N")
+        k = self.adhesion_stiffness()
+        scale = muP / k
+
+        def residual(u: FloatArray) -> FloatArray:
+            res = self.set_shift(float(u[0]) * scale, float(u[1]) * scale)
+            return np.array([res.Tx - Fx, res.Ty - Fy]) / muP
+
+        u = root(residual, np.array([Fx, Fy]) / muP, method="hybr", options={"xtol": 1e-10}).x
+        dx, dy = float(u[0]) * scale, float(u[1]) * scale
+        res = self.set_shift(dx, dy)  # the field at the solution
+        miss = max(abs(res.Tx - Fx), abs(res.Ty - Fy)) / muP
+        if miss > SHIFT_FORCE_TOL:
+            raise RuntimeError(f"shift_for_force: no convergence ({miss:.3g} of mu P)")
+        return dx, dy, res
 
     def steady_patch(self) -> RollingPatch:
         """The steady-rolling problem (``rolling.RollingPatch``) on the committed lattice:

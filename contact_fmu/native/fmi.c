@@ -108,7 +108,7 @@ static PyObject *do_step(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
     Py_DECREF(now);
     if (time == -1.0 && PyErr_Occurred()) return NULL;
     double scale = fmax(fabs(t), fabs(time)); /* slave.TIME_RTOL: ulps of t */
-    if (bad == 0 && 0.0 < h && h < INFINITY && fabs(t - time) <= b->rtol * scale &&
+    if (bad == 0 && 0.0 < h && h < INFINITY && isfinite(t) && fabs(t - time) <= b->rtol * scale &&
         b->step(b->params, b->state, b->io, h) == 0) {
         PyObject *next = PyFloat_FromDouble(t + h);
         if (next == NULL) return NULL;

@@ -19,6 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..scenario import discover, load
+from ..study.engine import Engine
 from . import output, stiff
 from .stiff_cases import cases
 from .workprecision import BUDGET, SceneReport, run_scene
@@ -58,6 +59,7 @@ USAGE = """    contact-fmu report                  # both parts, every scene (mi
     contact-fmu report --workprecision [scenes...] [--held] [--repeats N]
     contact-fmu report --stiff [--case NAME_OR_GROUP ...]
     contact-fmu report --write-docs     # also rewrite this section and docs/performance.md
+    contact-fmu report --workers 2      # the families on two worker processes (Dask)
 """
 
 
@@ -70,14 +72,24 @@ def workprecision(
     held: bool,
     log: Callable[[str], None] = print,
     budget: float = BUDGET,
+    engine: Engine | None = None,
 ) -> list[SceneReport]:
+    """Every scene's work-precision sweep; its families as tasks of ``engine`` (default:
+    in this process)."""
     reports = []
     for path in scene_paths:
         scene = load(path)
         log(f"{scene.name}: {scene.title}")
         t0 = time.perf_counter()
         rep = run_scene(
-            scene, fmu_dir, quick=quick, repeats=repeats, held=held, log=log, budget=budget
+            scene,
+            fmu_dir,
+            quick=quick,
+            repeats=repeats,
+            held=held,
+            log=log,
+            budget=budget,
+            engine=engine,
         )
         base = out / "workprecision" / scene.name
         output.write_csv(rep, base.with_suffix(".csv"))
@@ -94,7 +106,12 @@ def workprecision(
 
 
 def stiff_suite(
-    out: Path, fmu_dir: Path, quick: bool, names: list[str], log: Callable[[str], None] = print
+    out: Path,
+    fmu_dir: Path,
+    quick: bool,
+    names: list[str],
+    log: Callable[[str], None] = print,
+    engine: Engine | None = None,
 ) -> list[stiff.Result]:
     known = cases()
     unknown = [n for n in names if n not in {c.name for c in known} | {c.group for c in known}]
@@ -108,7 +125,7 @@ def stiff_suite(
     selected = [c for c in known if (not names or c.name in names or c.group in names)]
     if quick and not names:
         selected = [c for c in selected if "long" not in c.tags]
-    results = stiff.run_all(fmu_dir, selected, log=log)
+    results = stiff.run_all(fmu_dir, selected, log=log, engine=engine)
     table = stiff.markdown(results)
     out.mkdir(parents=True, exist_ok=True)
     (out / "stiff.md").write_text("# Stiff and extreme cases\n\n" + stiff.NOTE + "\n\n" + table)

@@ -19,8 +19,10 @@ Checks (each with its measured quantity; see the constants for the tolerances):
 
 from __future__ import annotations
 
+import atexit
 import dataclasses
 import gc
+import json
 import math
 import os
 import shutil
@@ -43,6 +45,7 @@ from ..layer import SPIN_GRID, LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
 from ..solvers import SOLVE_RTOL
+from ..study.engine import Engine, forget, once
 from .metrics import oscillation
 from .stiff_cases import StiffCase, cases
 
@@ -368,30 +371,60 @@ def run_case(case: StiffCase, fmu_dir: Path) -> Result:
     return res
 
 
+def fmu_files(out_dir: Path) -> dict[str, str]:
+    """Build (or take from the cache) the suite's FMUs: {configuration name: FMU file}."""
+    out = {}
+    for lateral in (False, True):
+        cfg = config(lateral)
+        out[cfg.name] = str(fmu_build.build(cfg, out_dir).path)
+    return out
+
+
+def _extract(fmus: dict[str, str]) -> Path:
+    tmp = Path(tempfile.mkdtemp(prefix="stiff-"))
+    for name, path in fmus.items():
+        fmpy.extract(path, str(tmp / name))
+    return tmp
+
+
 def prepare(out_dir: Path) -> Path:
     """Build (or take from the cache) the suite's FMUs and extract each into a folder of
     its name under the returned one."""
-    tmp = Path(tempfile.mkdtemp(prefix="stiff-"))
-    for lateral in (False, True):
-        cfg = config(lateral)
-        fmpy.extract(str(fmu_build.build(cfg, out_dir).path), str(tmp / cfg.name))
-    return tmp
+    return _extract(fmu_files(out_dir))
+
+
+def _extracted(fmus: dict[str, str]) -> Path:
+    """``_extract`` once in this process (removed at its exit, or by run_all)."""
+
+    def extract() -> Path:
+        tmp = _extract(fmus)
+        atexit.register(shutil.rmtree, tmp, True)
+        return tmp
+
+    return once("stiff:" + json.dumps(fmus, sort_keys=True), extract)
+
+
+def _run_task(fmus: dict[str, str], case: StiffCase) -> Result:
+    return run_case(case, _extracted(fmus))
 
 
 def run_all(
     out_dir: Path,
     selected: list[StiffCase] | None = None,
     log: Callable[[str], None] = print,
+    engine: Engine | None = None,
 ) -> list[Result]:
-    fmu_dir = prepare(out_dir)
-    results = []
+    """Every selected case, each a task of ``engine`` (default: in this process)."""
+    engine = engine or Engine(workers=0)
+    fmus = fmu_files(out_dir)
     try:
-        for case in selected or cases():
-            r = run_case(case, fmu_dir)
-            results.append(r)
-            log(row_text(r))
+        results = engine.map(_run_task, list(selected or cases()), shared=fmus,
+                             desc="stiff cases", batch=1)  # fmt: skip
     finally:
-        shutil.rmtree(fmu_dir, ignore_errors=True)
+        for d in forget("stiff:"):  # this process's copies (a worker's go at its exit)
+            shutil.rmtree(d, ignore_errors=True)
+    for r in results:
+        log(row_text(r))
     return results
 
 

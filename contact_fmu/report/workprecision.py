@@ -28,6 +28,7 @@ skipped and listed as such.
 
 from __future__ import annotations
 
+import atexit
 import json
 import math
 import shutil
@@ -46,6 +47,8 @@ import fmu_build
 from ..fmu.config import ModelConfig
 from ..scenario import runner
 from ..scenario.schema import Case, Scene
+from ..study import tables as study_tables
+from ..study.engine import Engine, forget, once
 from . import reference as ref
 from .metrics import norms, observed_order, pairwise_orders
 from .sweep import Family, Ladder, Rung, families, for_report, point, rungs
@@ -238,9 +241,14 @@ def run_scene(
     all_cases: bool = True,
     log: Callable[[str], None] = print,
     budget: float = BUDGET,
+    engine: Engine | None = None,
 ) -> SceneReport:
     """The scene's sweep through its FMU (built or cached under ``fmu_dir``; one per rung
-    where the ladder changes the model)."""
+    where the ladder changes the model). Each family is one task of ``engine`` (default:
+    in this process, in order); with workers, families run at once, one per worker
+    process, and each worker extracts an FMU once. The FMUs (and their creep-force
+    tables, through the engine) are built here first."""
+    engine = engine or Engine(workers=0, progress=False)
     scene = for_report(scene, quick)
     fams, cfg = families(scene, quick)
     lad, rs = rungs(scene, quick)
@@ -257,51 +265,90 @@ def run_scene(
     if not any(r.by_method for r in refs):  # nothing to compare with: not run
         log(f"  {scene.name}: skipped, " + "; ".join(dict.fromkeys(report.notes)))
         return report
-    tmp = Path(tempfile.mkdtemp(prefix=f"report-{scene.name}-"))
-    extracted: dict[str, Path] = {}
+    fmus: dict[str, str] = {}
     setups: dict[str, float] = {}
-
-    def fmu_of(c: ModelConfig) -> Path:
-        """The extracted FMU of configuration c (built, or taken from the cache, once)."""
-        key = _config_key(c)
-        if key not in extracted:
-            setups[key] = setup_cost(c)
-            built = fmu_build.build(c, fmu_dir)
-            extracted[key] = tmp / str(len(extracted))
-            fmpy.extract(str(built.path), str(extracted[key]))
+    for rung in rs:
+        rcfg = lad.configure(cfg, rung.value)
+        key = _config_key(rcfg)
+        if key not in fmus:
+            study_tables.ensure(rcfg, engine)  # through the engine when it has workers
+            setups[key] = setup_cost(rcfg)
+            built = fmu_build.build(rcfg, fmu_dir)
+            fmus[key] = str(built.path)
             report.fmu = ", ".join(filter(None, [report.fmu, built.path.name]))
-        return extracted[key]
-
+    ctx = _FamilyContext(scene, cfg, lad, rs, refs, fmus, setups, repeats, held, budget)
     try:
-        for fam in fams:
-            last = 0.0
-            for rung in rs:  # coarse to fine: the cost grows by about lad.growth per rung
-                predicted = lad.growth * last
-                n_steps = int(round(scene.stop_time / rung.h))
-                if predicted > budget * lad.budget_scale:
-                    r = Row(scene.name, fam.label, dict(fam.settings), rung.level, rung.h,
-                            n_steps, refined=lad.name, value=rung.label,
-                            spacing=rung.spacing)  # fmt: skip
-                    r.error = (
-                        f"skipped: about {predicted:.0f} s > budget {budget * lad.budget_scale:g} s"
-                    )
-                    report.rows.append(r)
-                    continue
-                rcfg = lad.configure(cfg, rung.value)
-                fmu = fmu_of(rcfg)
-                r = _point(scene, rcfg, fam, lad, rung, rs, refs, fmu, repeats, held)
-                r.setup = setups[_config_key(rcfg)]
-                report.rows.append(r)
-                last = r.wall if math.isfinite(r.wall) else last
-                log(
-                    f"  {scene.name:8s} {fam.label:28s} {lad.name} = {rung.label:>9s}  "
-                    f"{r.wall:7.3f} s  Tx {r.Tx_max:9.2e}  vx {r.vx_max:9.2e}"
-                    + (f"  {r.error}" if r.error else "")
-                )
+        results = engine.map(_family_rows, fams, shared=ctx, desc=f"report {scene.name}", batch=1)
     finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        for d in forget("report-fmu:"):  # this process's copies (a worker's go at its exit)
+            shutil.rmtree(d, ignore_errors=True)
+    for rows in results:
+        for r in rows:
+            report.rows.append(r)
+            log(
+                f"  {scene.name:8s} {r.family:28s} {lad.name} = {r.value:>9s}  "
+                f"{r.wall:7.3f} s  Tx {r.Tx_max:9.2e}  vx {r.vx_max:9.2e}"
+                + (f"  {r.error}" if r.error else "")
+            )
     _orders(report)
     return report
+
+
+@dataclass(frozen=True)
+class _FamilyContext:
+    """What every family of a scene shares: the FMUs by configuration (file paths) and
+    their setup costs, the references, the settings of the sweep."""
+
+    scene: Scene
+    cfg: ModelConfig
+    lad: Ladder
+    rs: list[Rung]
+    refs: list[_CaseRef]
+    fmus: dict[str, str]
+    setups: dict[str, float]
+    repeats: int
+    held: bool
+    budget: float
+
+
+def _extracted(path: str) -> Path:
+    """The FMU file ``path`` extracted once in this process (removed at its exit)."""
+
+    def extract() -> Path:
+        d = Path(tempfile.mkdtemp(prefix="report-fmu-"))
+        atexit.register(shutil.rmtree, d, True)
+        fmpy.extract(path, str(d))
+        return d
+
+    return once(f"report-fmu:{path}", extract)
+
+
+def _family_rows(ctx: _FamilyContext, fam: Family) -> list[Row]:
+    """One family's points, coarse to fine; a point predicted to cost more than the
+    budget (the previous point's time times the ladder's growth) is skipped."""
+    scene, lad = ctx.scene, ctx.lad
+    rows = []
+    last = 0.0
+    for rung in ctx.rs:  # coarse to fine: the cost grows by about lad.growth per rung
+        predicted = lad.growth * last
+        n_steps = int(round(scene.stop_time / rung.h))
+        if predicted > ctx.budget * lad.budget_scale:
+            r = Row(scene.name, fam.label, dict(fam.settings), rung.level, rung.h,
+                    n_steps, refined=lad.name, value=rung.label,
+                    spacing=rung.spacing)  # fmt: skip
+            r.error = (
+                f"skipped: about {predicted:.0f} s > budget {ctx.budget * lad.budget_scale:g} s"
+            )
+            rows.append(r)
+            continue
+        rcfg = lad.configure(ctx.cfg, rung.value)
+        key = _config_key(rcfg)
+        fmu = _extracted(ctx.fmus[key])
+        r = _point(scene, rcfg, fam, lad, rung, ctx.rs, ctx.refs, fmu, ctx.repeats, ctx.held)
+        r.setup = ctx.setups[key]
+        rows.append(r)
+        last = r.wall if math.isfinite(r.wall) else last
+    return rows
 
 
 def _config_key(cfg: ModelConfig) -> str:

@@ -31,6 +31,14 @@ grid, the outputs to record, reference results with tolerances and a plot layout
     [[reference]]                       # file (CSV next to the scene), source, tolerance,
                                         # cases, and options of the producing path
     [plot]                              # x, panels, scale
+    [sweep]                             # a parameter study (``contact-fmu sweep``):
+    vary = { mu = "0.1:0.5:9", "My_ex.sine.amplitude" = [0.0, 1.9] }
+                                        # parameters, inputs (held at the value) or an
+                                        # input's piece field; a list or "start:stop:n"
+    metrics = [{ name = "peak", of = "Tx", reduce = "max_abs", per = ["mu", "P"] }]
+                                        # summary values of each run (``Metric``)
+    plot = { metric = "peak", x = "mu", y = "My_ex.sine.amplitude" }
+    trajectories = false                # also every run's recorded columns
 
 The runner uses only what is here; how a reference was produced is recorded in its
 ``source`` and options, and ``references.py`` reproduces it.
@@ -42,6 +50,7 @@ import math
 import re
 import tomllib
 from dataclasses import dataclass, field
+from dataclasses import field as _field  # Scene has a field named 'field'
 from pathlib import Path
 from typing import Any
 
@@ -65,6 +74,7 @@ TOP_KEYS = {
     "reference",
     "plot",
     "halfspace",
+    "sweep",
 }
 MODEL_KEYS = {"mode", "contact_law", "phase", "method", "scheme", "vy", "spin"}
 RUN_KEYS = {"stop_time", "step", "outputs", "field"}
@@ -72,6 +82,20 @@ FIELD_KEYS = {"times", "file"}
 CASE_KEYS = {"name", "parameters", "inputs", "method", "scheme"}
 REFERENCE_KEYS = {"file", "source", "note", "tolerance", "cases", "options"}
 PLOT_KEYS = {"x", "panels", "scale"}
+SWEEP_KEYS = {"vary", "metrics", "plot", "trajectories"}
+METRIC_KEYS = {"name", "of", "reduce", "per", "after", "tol", "threshold"}
+SWEEP_PLOT_KEYS = {"metric", "x", "y"}
+# Reductions of one recorded column over a run (contact_fmu.study.metrics); the
+# last two need ``tol``, ``threshold`` (in the unit of the column divided by ``per``).
+REDUCTIONS = ("max", "min", "max_abs", "mean", "final", "settle_time", "any_above", "any_below")
+NEEDS = {"settle_time": "tol", "any_above": "threshold", "any_below": "threshold"}
+# Signal pieces whose number fields a sweep may vary ("INPUT.piece.field").
+PIECE_FIELDS = {
+    "constant": (),
+    "step": ("time", "height"),
+    "ramp": ("start", "duration", "height"),
+    "sine": ("amplitude", "period", "phase", "start"),
+}
 # The grid must hold a whole number of steps to this relative precision.
 GRID_RTOL = 1e-9
 
@@ -128,6 +152,42 @@ class Plot:
 
 
 @dataclass(frozen=True)
+class Vary:
+    """A varied name and its values: an FMU parameter, an input (held constant at the
+    value) or a number field of an input's piece, "INPUT.piece.field"."""
+
+    name: str
+    values: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Metric:
+    """A summary value of a run: ``reduce`` of the recorded column ``of`` divided,
+    sample by sample, by the product of ``per`` (parameters or recorded columns),
+    over the samples with time >= ``after`` (s)."""
+
+    name: str
+    of: str
+    reduce: str
+    per: tuple[str, ...] = ()
+    after: float = 0.0
+    tol: float | None = None
+    threshold: float | None = None
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """[sweep]: the varied names (every combination runs every case), the metrics of
+    each run, the plot (a metric over one or two varied names) and whether the full
+    recorded columns are kept."""
+
+    vary: tuple[Vary, ...] = ()
+    metrics: tuple[Metric, ...] = ()
+    plot: dict[str, str] = field(default_factory=dict)
+    trajectories: bool = False
+
+
+@dataclass(frozen=True)
 class Scene:
     path: Path
     name: str
@@ -142,6 +202,8 @@ class Scene:
     plot: Plot
     config: ModelConfig
     field: FieldRequest | None = None
+    sweep: Sweep = _field(default_factory=Sweep)
+    source: dict[str, Any] = _field(default_factory=dict, repr=False, compare=False)
 
     @property
     def n_steps(self) -> int:
@@ -227,6 +289,13 @@ def load(path: str | Path) -> Scene:
         raise ScenarioError(f"{path}: cannot read: {e}") from e
     except tomllib.TOMLDecodeError as e:
         raise ScenarioError(f"{path}: not valid TOML: {e}") from e
+    return from_data(path, raw)
+
+
+def from_data(path: str | Path, raw: dict[str, Any]) -> Scene:
+    """Check the scene's TOML data ``raw`` (read from ``path``, which names it in errors
+    and locates its references)."""
+    path = Path(path)
     try:
         return _scene(path, raw)
     except (InputError, SignalError) as e:
@@ -359,6 +428,7 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
             _positive(path, f"plot.scale.{k}.factor", s.get("factor")),
             str(s.get("label", k)),
         )
+    sweep = _sweep(path, raw.get("sweep", {}), config, raw, cases, recorded)
     return Scene(
         path=path,
         name=name,
@@ -373,7 +443,133 @@ def _scene(path: Path, raw: dict[str, Any]) -> Scene:
         plot=Plot(xs, panels, scale),
         config=config,
         field=field_req,
+        sweep=sweep,
+        source=raw,
     )
+
+
+def sweep_values(where: str, v: Any) -> tuple[float, ...]:
+    """Values of a varied name: a list of numbers, or a string "a,b,c" (a list) or
+    "start:stop:n" (n >= 2 equally spaced values, both ends included)."""
+    if isinstance(v, str):
+        text = v.strip()
+        try:
+            if ":" in text:
+                parts = text.split(":")
+                if len(parts) != 3:
+                    raise ValueError
+                a, b, n = float(parts[0]), float(parts[1]), parts[2].strip()
+                if not n.isdigit() or int(n) < 2:
+                    raise InputError(where, v, '"start:stop:n" with a whole number n >= 2')
+                v = [float(x) for x in np.linspace(a, b, int(n))]
+            else:
+                v = [float(x) for x in text.split(",")]
+        except ValueError:
+            raise InputError(where, v, 'a list "a,b,c" or a range "start:stop:n"') from None
+    if not (isinstance(v, list) and v):
+        raise InputError(where, v, 'a non-empty list of numbers or a range "start:stop:n"')
+    for x in v:
+        if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
+            raise InputError(where, x, "a finite number")
+    if len(set(v)) != len(v):
+        raise InputError(where, v, "distinct values")
+    return tuple(float(x) for x in v)
+
+
+def _piece_specs(spec: Any) -> list[Any]:
+    return spec if isinstance(spec, list) else [spec]
+
+
+def check_varied(path: Path, name: str, config: ModelConfig, raw: dict[str, Any]) -> None:
+    """A varied ``name`` must be a parameter of the model, one of the scene's inputs,
+    or "INPUT.piece.field" naming a number field of exactly one piece of that input
+    (in [inputs] and in every case that overrides the input)."""
+    params = {v.name for v in config.variables if v.causality[config.mode] == fv.PARAMETER}
+    if name in params or name in config.inputs:
+        return
+    where = f"sweep.vary.{name}"
+    parts = name.split(".")
+    if len(parts) != 3 or parts[0] not in config.inputs:
+        raise _err(
+            path,
+            where,
+            f"not a parameter ({sorted(params)}), an input ({list(config.inputs)}) "
+            "or INPUT.piece.field",
+        )
+    inp, kind, key = parts
+    if key not in PIECE_FIELDS.get(kind, ()):
+        raise _err(path, where, f"{kind}.{key} is not a number field of a signal piece")
+    specs = [raw.get("inputs", {}).get(inp)]
+    specs += [c.get("inputs", {}).get(inp) for c in raw.get("cases", [])]
+    for spec in (s for s in specs if s is not None):
+        n = sum(isinstance(p, dict) and kind in p for p in _piece_specs(spec))
+        if n != 1:
+            raise _err(path, where, f"inputs.{inp} has {n} '{kind}' pieces (one needed)")
+
+
+def _sweep(
+    path: Path,
+    d: Any,
+    config: ModelConfig,
+    raw: dict[str, Any],
+    cases: list[Case],
+    recorded: set[str],
+) -> Sweep:
+    d = _table(path, "sweep", d, SWEEP_KEYS)
+    vary = []
+    for name, v in _table(path, "sweep.vary", d.get("vary", {}), set(d.get("vary", {}))).items():
+        check_varied(path, name, config, raw)
+        vary.append(Vary(name, sweep_values(f"sweep.vary.{name}", v)))
+    metrics = []
+    raw_metrics = d.get("metrics", [])
+    if not isinstance(raw_metrics, list):
+        raise _err(path, "sweep.metrics", "must be an array of tables")
+    for i, m in enumerate(raw_metrics):
+        metrics.append(_metric(path, f"sweep.metrics[{i}]", m, cases, recorded))
+    if len({m.name for m in metrics}) != len(metrics):
+        raise _err(path, "sweep.metrics", "metric names must be unique")
+    plot = dict(_table(path, "sweep.plot", d.get("plot", {}), SWEEP_PLOT_KEYS))
+    if plot and plot.get("metric") not in {m.name for m in metrics}:
+        raise _err(path, "sweep.plot.metric", f"{plot.get('metric')!r} is not a metric")
+    for k in ("x", "y"):
+        if k in plot and plot[k] not in {v.name for v in vary}:
+            raise _err(path, f"sweep.plot.{k}", f"{plot[k]!r} is not a varied name")
+    trajectories = d.get("trajectories", False)
+    if not isinstance(trajectories, bool):
+        raise _err(path, "sweep.trajectories", f"{trajectories!r} must be true or false")
+    return Sweep(tuple(vary), tuple(metrics), plot, trajectories)
+
+
+def _metric(path: Path, where: str, m: Any, cases: list[Case], recorded: set[str]) -> Metric:
+    m = _table(path, where, m, METRIC_KEYS)
+    name, of, red = m.get("name"), m.get("of"), m.get("reduce")
+    if not isinstance(name, str) or not name.isidentifier():
+        raise _err(path, f"{where}.name", f"{name!r} must be an identifier")
+    if of not in recorded:
+        raise _err(path, f"{where}.of", f"{of!r} is not recorded (outputs, inputs or time)")
+    if red not in REDUCTIONS:
+        raise _err(path, f"{where}.reduce", f"{red!r} is not one of {list(REDUCTIONS)}")
+    per = m.get("per", [])
+    if not isinstance(per, list):
+        raise _err(path, f"{where}.per", f"{per!r} must be a list of names")
+    for p in per:
+        if p not in recorded and not all(p in c.parameters for c in cases):
+            raise _err(path, f"{where}.per", f"{p!r} is not recorded nor set in every case")
+    after = m.get("after", 0.0)
+    if isinstance(after, bool) or not isinstance(after, int | float) or not after >= 0:
+        raise _err(path, f"{where}.after", f"{after!r} must be a time >= 0 (s)")
+    extra = {}
+    for k in ("tol", "threshold"):
+        if k in m:
+            if isinstance(m[k], bool) or not isinstance(m[k], int | float):
+                raise _err(path, f"{where}.{k}", f"{m[k]!r} must be a number")
+            extra[k] = float(m[k])
+    need = NEEDS.get(red)
+    if need is not None and need not in extra:
+        raise _err(path, where, f"reduce = {red!r} needs '{need}'")
+    if "tol" in extra and not extra["tol"] > 0:
+        raise _err(path, f"{where}.tol", f"{extra['tol']!r} must be > 0")
+    return Metric(name, of, red, tuple(per), float(after), **extra)
 
 
 def discover(directory: str | Path) -> list[Path]:

@@ -1,0 +1,57 @@
+"""The dense direct path of small grids (contact_fmu.halfspace.direct): the same
+semismooth Newton method as the iterative path, so the same converged solution to the
+Newton tolerance (1e-7 of max mu p; compared at 1e-6)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from contact_fmu import examples as ex
+from contact_fmu.halfspace import HalfSpaceContact, Material
+from contact_fmu.halfspace.railway import wheel_on_rail
+from contact_fmu.halfspace.rolling import DIRECT_MAX_ELEMENTS, ellipse_patch, solve_rolling
+
+
+def _patches():
+    w = wheel_on_rail(n=(11, 11))
+    lc = ex.contact()
+    layer = ellipse_patch(lc.a1, lc.a2, 12, lc.pressure, lc.mu, lc.a1 / lc.k, 0.3, k=lc.k, P=lc.P)
+    steel, alu = Material(210e9, 0.3), Material(70e9, 0.33)
+    dissimilar = HalfSpaceContact(1000.0, 0.02, 0.02, steel, alu, 0.3, n=12)
+    return {"railway 11 x 11": (w.patch, w), "layers": (layer, None),
+            "dissimilar": (dissimilar.patch, dissimilar)}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["railway 11 x 11", "layers", "dissimilar"])
+def test_direct_and_iterative_paths_agree(name):
+    patch, c = _patches()[name]
+    assert int(patch.contact.sum()) <= DIRECT_MAX_ELEMENTS  # "auto" takes the direct path
+    if c is not None:
+        s = c.mu * c.P / (c.elastic.G * c.c**2)
+        cases = [(0.1 * s, 0, 0), (0.3 * s, 0, 0), (0.2 * s, 0.2 * s, 0.3 * s / c.c),
+                 (0, 0, 1.5 * s / c.c), (2.0 * s, 1.0 * s, 0)]  # fmt: skip
+    else:
+        cases = [(1e-4, 0, 0), (1e-3, 5e-4, 0), (1e-2, 0, 0)]
+    for w in cases:
+        a = solve_rolling(patch, *w, method="iterative")
+        b = solve_rolling(patch, *w)
+        assert b.gmres_iterations == 0  # the direct path ran
+        assert np.abs(a.tau - b.tau).max() < 1e-6 * float(patch.g.max()), w
+        assert np.array_equal(a.slip, b.slip), w
+        assert b.newton_iterations <= 10
+
+
+def test_direct_path_warm_start_and_full_adhesion():
+    """A warm start from the converged traction needs no Newton step; at a creepage of
+    1e-6 mu P/(G c^2) the whole contact adheres and the direct path returns the linear
+    theory (Kalker's C11 of this grid) to 1e-6."""
+    c = wheel_on_rail(n=(11, 11))
+    s = c.mu * c.P / (c.elastic.G * c.c**2)
+    sol = c.solve(0.3 * s)
+    again = c.solve(0.3 * s, tau0=sol.tau)
+    assert again.newton_iterations == 0
+    lin = c.solve(1e-6 * s, tol=1e-12)
+    assert lin.adhesion_fraction == 1.0
+    C11 = c.creep_coefficients().C11
+    assert lin.Tx / (c.elastic.G * c.c**2 * 1e-6 * s) == pytest.approx(C11, rel=1e-6)
