@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 SCENE  ?= scenarios/fig13.toml
 
-.PHONY: run test lint figures report venv clean
+.PHONY: run test fuzz lint figures report venv clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +23,13 @@ test: venv
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
 	$(PY) -m pytest -q
+
+# randomised hostile FMI calls on every kind of FMU (tests/fmu_fuzz): FUZZ_EXAMPLES runs
+# per kind, every failure counted; the summary is printed and kept under out/fuzz/long
+FUZZ_EXAMPLES ?= 200
+fuzz: venv
+	CONTACT_FMU_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider \
+		tests/test_fmu_fuzz.py; status=$$?; cat out/fuzz/long/summary.md; exit $$status
 
 figures: venv
 	$(PY) -m contact_fmu.figures

@@ -4,6 +4,8 @@ contact-fmu run scenarios/fig13.toml     build the scene's FMU (cached), simulat
                                          with fmpy, write CSV and PNG, compare with
                                          the references; exit 1 on a mismatch
 contact-fmu run --all                    every scene of scenarios/
+contact-fmu run --native scenarios/x.toml  the same through the native FMU (C only;
+                                         a scene it does not cover is an error)
 contact-fmu references scenarios/x.toml  rewrite a scene's stored references from
                                          their independent source (no FMU involved)
 contact-fmu system scenarios/fig13.toml --case "eta = 3" --set My_ex=-0.95
@@ -44,15 +46,22 @@ def _scene_paths(args: argparse.Namespace) -> list[Path]:
     return paths
 
 
-def run_scene(path: Path, out: Path, rebuild: bool = False, make_plot: bool = True) -> bool:
-    """Build, simulate, write and compare one scene; True when it matches its references."""
+def run_scene(
+    path: Path, out: Path, rebuild: bool = False, make_plot: bool = True, native: bool = False
+) -> bool:
+    """Build, simulate, write and compare one scene; True when it matches its references.
+    ``native``: through the native FMU (fmu_build.native_fmu)."""
     import fmu_build
+    from fmu_build import native_fmu
 
     from .scenario import load, runner
 
     scene = load(path)
     t0 = time.perf_counter()
-    built = fmu_build.build(scene.config, out / "fmu", force=rebuild)
+    if native:
+        built = native_fmu.build(scene.config, out / "fmu", force=rebuild)
+    else:
+        built = fmu_build.build(scene.config, out / "fmu", force=rebuild)
     t_build = time.perf_counter() - t0
     n_vars = len(scene.config.variables)
     size = built.path.stat().st_size
@@ -100,8 +109,10 @@ def _run(args: argparse.Namespace) -> int:
     failed = []
     for path in _scene_paths(args):
         try:
-            ok = run_scene(path, args.out, rebuild=args.rebuild, make_plot=not args.no_plot)
-        except (ScenarioError, OSError, RuntimeError) as e:
+            ok = run_scene(
+                path, args.out, args.rebuild, make_plot=not args.no_plot, native=args.native
+            )
+        except (ScenarioError, OSError, RuntimeError, ValueError) as e:
             print(f"{path}: ERROR: {e}", file=sys.stderr)
             ok = False
         if not ok:
@@ -305,6 +316,7 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (out/)")
     run.add_argument("--rebuild", action="store_true", help="ignore the FMU cache")
     run.add_argument("--no-plot", action="store_true", help="skip the PNG")
+    run.add_argument("--native", action="store_true", help="through the native FMU (C only)")
     run.set_defaults(func=_run)
 
     refs = sub.add_parser("references", help="rewrite stored references from their source")

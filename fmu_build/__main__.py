@@ -4,11 +4,16 @@ python -m fmu_build scenarios/fig13.toml        the scene's FMU (only what it us
 python -m fmu_build --all                       every scene of scenarios/
 python -m fmu_build --full body                 every variable of a mode (body,
                                                 contact, rigid_body, or all)
+python -m fmu_build --native scenarios/fig13.toml  the native FMU (C only, no Python on
+                                                the target; fmu_build/native_fmu.py)
+
+The last line of the output is the path of the (last) FMU.
 """
 
 from __future__ import annotations
 
 import argparse
+import subprocess
 import sys
 from pathlib import Path
 
@@ -36,6 +41,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (out/fmu)")
     ap.add_argument("--force", action="store_true", help="rebuild even if cached")
+    ap.add_argument(
+        "--native", action="store_true", help="the native FMU (compiled C only, no Python)"
+    )
     args = ap.parse_args(argv)
 
     configs = []
@@ -50,6 +58,8 @@ def main(argv: list[str] | None = None) -> int:
         configs += [ModelConfig.full(m) for m in modes]
     if not configs:
         ap.error("nothing to build: give scene files, --all or --full MODE")
+    if args.native:
+        return _native(configs, args)
     for cfg in configs:
         try:
             built = build(cfg, args.out, force=args.force)
@@ -61,6 +71,27 @@ def main(argv: list[str] | None = None) -> int:
             f"{built.stable}  ({state}; {len(cfg.variables)} variables; "
             f"modelIdentifier {built.identifier}; cache {built.path.name})"
         )
+    return 0
+
+
+def _native(configs: list, args: argparse.Namespace) -> int:
+    from . import native_fmu
+
+    paths = []
+    for cfg in configs:
+        try:
+            built = native_fmu.build(cfg, args.out, force=args.force)
+        except native_fmu.NativeUnsupportedError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
+        except subprocess.CalledProcessError as e:
+            print(f"error: compiling the native FMU of {cfg.name}:\n{e.stderr}", file=sys.stderr)
+            return 1
+        state = "cached" if built.cached else "built"
+        n = len(cfg.variables)
+        print(f"{cfg.name}: native FMU ({state}; {n} variables; {built.identifier})")
+        paths.append(built.path)
+    print(paths[-1])
     return 0
 
 

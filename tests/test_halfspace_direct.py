@@ -55,3 +55,28 @@ def test_direct_path_warm_start_and_full_adhesion():
     assert lin.adhesion_fraction == 1.0
     C11 = c.creep_coefficients().C11
     assert lin.Tx / (c.elastic.G * c.c**2 * 1e-6 * s) == pytest.approx(C11, rel=1e-6)
+
+
+def test_reduced_and_woodbury_newton_steps_agree():
+    """The two ways of solving a Newton system of the direct path (the reduced LU and
+    the Woodbury update of the adhesion inverse) give the same step, to round-off, on
+    a partial-slip state (a perturbed iterate, most elements slipping)."""
+    from contact_fmu.halfspace import direct
+
+    c = wheel_on_rail(n=(11, 11))
+    p, C = c.patch, c.patch.contact
+    s = c.mu * c.P / (c.elastic.G * c.c**2)
+    w = (0.1 * s, 0.05 * s, 0.1 * s / c.c)
+    sol = solve_rolling(p, *w, method="iterative", tol=1e-3)
+    m = int(C.sum())
+    t = np.concatenate([sol.tau[0][C], sol.tau[1][C]]) * 1.01
+    K, r, g = p.dense_contact_operator, p.r, p.g[C]
+    W = p.rhs(*w)
+    z = t + r * (np.concatenate([W[0][C], W[1][C]]) - K @ t)
+    nz = np.hypot(z[:m], z[m:])
+    slip = nz > g
+    assert 0.2 < slip.mean() < 0.9
+    F = t - z * np.tile(np.where(slip, g / nz, 1.0), 2)
+    a = direct._direction(r * K, F, z[:m], z[m:], nz, g, slip)
+    b = direct._woodbury(r * K, p.dense_contact_inverse / r, F, z[:m], z[m:], nz, g, slip)
+    assert np.abs(a - b).max() < 1e-8 * np.abs(a).max()

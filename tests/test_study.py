@@ -100,8 +100,8 @@ def test_report_families_on_two_workers_give_the_serial_errors(engine):
 
 
 def test_a_failed_run_is_a_row_and_the_others_keep_their_values(tmp_path, engine):
-    """P steps to -1000 N in one run: the FMU discards the step (Eq. 33 needs P > 0) and
-    the row says so; mu = -0.1 is refused by the scene check; every other run is ok
+    """P steps to -1000 N in one run: the FMU refuses the value with fmi2Error at its
+    setReal (Eq. 33 needs P > 0) and the row says so; mu = -0.1 is refused by the scene check; every other run is ok
     with the values of a sweep without the failing ones."""
     scene = load(_short_scene(tmp_path))
     vary = (Vary("P.step.height", (-500.0, -2000.0)), Vary("mu", (0.3, -0.1)))
@@ -110,7 +110,8 @@ def test_a_failed_run_is_a_row_and_the_others_keep_their_values(tmp_path, engine
     by = {(r["P.step.height"], r["mu"], r["case"]): r for r in rows}
     for case in ("eta = 1.5", "eta = 3", "eta = 10"):
         bad = by[(-2000.0, 0.3, case)]["status"]
-        assert bad.startswith("discard at t = 0.00175 s") and "P = -1000.0" in bad, bad
+        assert bad.startswith("error:") and "at t = 0.00175 s" in bad, bad
+        assert "P = -1000.0 is invalid" in bad, bad
         assert math.isnan(by[(-2000.0, 0.3, case)]["Tx_final"])
         for h in (-500.0, -2000.0):
             rejected = by[(h, -0.1, case)]["status"]

@@ -78,9 +78,9 @@ class HalfSpaceContact:
     n: the grid. ``(mx, my)``: mx elements along x and my along y over the potential
     contact area, the Hertz ellipse's bounding box with one element to spare on every
     side (the box is (mx - 2) x (my - 2) elements, dx = 2 a1/(mx - 2), dy = 2 a2/(my -
-    2); CONTACT's mx x my over its potential contact area). An int n: the n x n grid
-    of earlier versions, one element to spare along x only (dx = 2 a1/(n - 2), dy =
-    2 a2/n); the tables and scenes use it.
+    2); CONTACT's mx x my over its potential contact area). An int n: an n x n grid
+    with one element to spare along x only (dx = 2 a1/(n - 2), dy = 2 a2/n), the grid
+    of the creep-force tables and the scenes.
 
     Other ways in: ``from_ellipse`` (semi-axes and the load or the approach),
     ``from_curvatures`` (the relative curvatures A, B).

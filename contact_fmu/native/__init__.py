@@ -43,7 +43,8 @@ import numpy as np
 
 SOURCE = Path(__file__).with_name("stepper.c")
 # No contraction into fused multiply-adds, no fast math: the Python path's roundings.
-CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math")
+# CF_GLIBC_COMPAT: the oldest glibc symbol versions of hypot and pow (stepper.c).
+CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math", "-DCF_GLIBC_COMPAT")
 OK = 0
 
 
@@ -64,6 +65,7 @@ class Params(ctypes.Structure):
         ("fd_step", ctypes.c_double), ("line_search_min", ctypes.c_double),
         ("contraction_max", ctypes.c_double), ("contraction_fast", ctypes.c_double),
         ("newton_iterations", ctypes.c_int), ("algebraic_key", ctypes.c_double),
+        ("bracket", ctypes.c_int), ("max_expansions", ctypes.c_int),
     ]  # fmt: skip
 
 

@@ -12,8 +12,11 @@
  *
  * Whatever this file does not cover returns CF_FALLBACK with the state untouched, and
  * the Python path takes the whole interval: a stage whose safeguarded Newton iteration
- * does not converge (Python then brackets and calls brentq), and a stage with no root
- * (Python raises StageSolveError with its message).
+ * does not converge (Python then brackets and calls brentq; with params.bracket, as in
+ * the native FMU, this file does the same, to the same doubles), a stage with no root
+ * (Python raises StageSolveError with its message), and any non-finite input, state or
+ * result (a load that overflows the step): no function here turns a double it receives
+ * into an index or a loop count without checking it.
  *
  * Then the strip march of the thin-layer law with spin (layer._Grid.march), which
  * the Python steppers call: one loop of the same operations; and, at the end, the
@@ -24,15 +27,28 @@
 #include <math.h>
 #include <stddef.h>
 
+/* The Python path's roundings wherever this file is compiled (the native FMU's
+ * sources/ too, by a build this project does not control): no contraction into fused
+ * multiply-adds (gcc takes -ffp-contract=off from its flags; clang and MSVC this). */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(_MSC_VER)
+#pragma fp_contract(off)
+#endif
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 /* The C library's oldest versions of the symbols whose default version is newer than
  * the floor of manylinux2014 (glibc 2.17): hypot (2.35) and pow (2.29) were re-versioned
  * when their errno handling changed, not their values (the compat entries wrap the same
- * __ieee754_hypot and __pow), so the binaries load on RHEL/Rocky 8-9 and older
- * (tests/test_native.py reads the versions they need). */
-#if defined(__GLIBC__) && defined(__x86_64__)
+ * __ieee754_hypot and __pow), so the binaries built here (with CF_GLIBC_COMPAT, linked
+ * with -lm) load on RHEL/Rocky 8-9 and older (tests/test_native.py reads the versions
+ * they need). A build elsewhere (a source FMU) binds its own C library's defaults. */
+#if defined(CF_GLIBC_COMPAT) && defined(__GLIBC__) && defined(__x86_64__)
 __asm__(".symver hypot,hypot@GLIBC_2.2.5");
 __asm__(".symver pow,pow@GLIBC_2.2.5");
-#elif defined(__GLIBC__) && defined(__aarch64__)
+#elif defined(CF_GLIBC_COMPAT) && defined(__GLIBC__) && defined(__aarch64__)
 __asm__(".symver hypot,hypot@GLIBC_2.17");
 __asm__(".symver pow,pow@GLIBC_2.17");
 #endif
@@ -77,6 +93,11 @@ typedef struct {
     int newton_iterations;
     /* integrator.ALGEBRAIC: the key of a kept Newton matrix of the algebraic stage */
     double algebraic_key;
+    /* 1: a scalar stage whose Newton iteration does not converge is solved here by
+     * solvers.increasing_root (its bracket search, then scipy's brentq, in C), as the
+     * Python path does; 0: CF_FALLBACK, the Python path solves it (its own kernel) */
+    int bracket;
+    int max_expansions; /* solvers.MAX_EXPANSIONS */
 } cf_params;
 
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
@@ -374,7 +395,94 @@ static void residual_lobatto(const stage *s, double v2, double f[2]) {
     f[1] = o1[1] * dv1 + s->m * (dv1 + 1.0) / s->h;
 }
 
-/* solvers.newton_increasing without its brentq fallback (CF_FALLBACK instead) */
+/* scipy.optimize.brentq (scipy/optimize/Zeros/brentq.c, Brent 1973: inverse quadratic
+ * interpolation, secant or bisection inside a shrinking bracket), the same operations:
+ * the root of f(s, .) in [xa, xb] to xtol + rtol |x|; CF_FALLBACK if f has one sign at
+ * both ends or iter iterations do not converge (scipy raises). */
+static int brentq(const stage *s, void (*fdf)(const stage *, double, double[2]), double xa,
+                  double xb, double xtol, double rtol, int iter, double *root) {
+    double xpre = xa, xcur = xb, xblk = 0.0, fblk = 0.0, spre = 0.0, scur = 0.0;
+    double f[2];
+    fdf(s, xpre, f);
+    double fpre = f[0];
+    fdf(s, xcur, f);
+    double fcur = f[0];
+    if (fpre == 0.0) return *root = xpre, CF_OK;
+    if (fcur == 0.0) return *root = xcur, CF_OK;
+    if (signbit(fpre) == signbit(fcur)) return CF_FALLBACK;
+    for (int i = 0; i < iter; i++) {
+        if (fpre != 0.0 && fcur != 0.0 && signbit(fpre) != signbit(fcur)) {
+            xblk = xpre;
+            fblk = fpre;
+            spre = scur = xcur - xpre;
+        }
+        if (fabs(fblk) < fabs(fcur)) {
+            xpre = xcur, xcur = xblk, xblk = xpre;
+            fpre = fcur, fcur = fblk, fblk = fpre;
+        }
+        const double delta = (xtol + rtol * fabs(xcur)) / 2;
+        const double sbis = (xblk - xcur) / 2;
+        if (fcur == 0.0 || fabs(sbis) < delta) return *root = xcur, CF_OK;
+        if (fabs(spre) > delta && fabs(fcur) < fabs(fpre)) {
+            double stry;
+            if (xpre == xblk) { /* interpolate */
+                stry = -fcur * (xcur - xpre) / (fcur - fpre);
+            } else { /* extrapolate */
+                const double dpre = (fpre - fcur) / (xpre - xcur);
+                const double dblk = (fblk - fcur) / (xblk - xcur);
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre));
+            }
+            const double lim = 3 * fabs(sbis) - delta;
+            if (2 * fabs(stry) < (fabs(spre) < lim ? fabs(spre) : lim)) { /* short step */
+                spre = scur;
+                scur = stry;
+            } else { /* bisect */
+                spre = sbis;
+                scur = sbis;
+            }
+        } else { /* bisect */
+            spre = sbis;
+            scur = sbis;
+        }
+        xpre = xcur;
+        fpre = fcur;
+        if (fabs(scur) > delta) xcur += scur;
+        else xcur += (sbis > 0 ? delta : -delta);
+        fdf(s, xcur, f);
+        fcur = f[0];
+    }
+    return CF_FALLBACK;
+}
+
+/* solvers.increasing_root (max_step inf): the bracket grows from u0 in steps scale,
+ * EXPAND scale, ... until the residual changes sign, then brentq closes it to
+ * SOLVE_RTOL (scale + |lo| + |hi|); CF_FALLBACK where Python raises (no sign change in
+ * max_expansions steps: no root) */
+static int increasing_root(const stage *s, void (*fdf)(const stage *, double, double[2]),
+                           double u0, double scale, double *root) {
+    const cf_params *p = s->p;
+    double f[2];
+    fdf(s, u0, f);
+    const double r0 = f[0];
+    if (r0 == 0.0) return *root = u0, CF_OK;
+    const double direction = r0 > 0.0 ? -1.0 : 1.0;
+    double step = scale, a = u0, b = u0;
+    int k = 0;
+    for (; k < p->max_expansions; k++) {
+        b = a + direction * step;
+        fdf(s, b, f);
+        if ((f[0] > 0.0) != (r0 > 0.0)) break;
+        a = b;
+        step *= p->expand;
+    }
+    if (k == p->max_expansions) return CF_FALLBACK;
+    const double lo = a < b ? a : b, hi = a < b ? b : a;
+    const double tol = p->solve_rtol * (scale + fabs(lo) + fabs(hi));
+    return brentq(s, fdf, lo, hi, tol, 4 * DBL_EPSILON, 200, root);
+}
+
+/* solvers.newton_increasing; its fallback (increasing_root) here where p->bracket,
+ * else CF_FALLBACK */
 static int newton_increasing(const stage *s, void (*fdf)(const stage *, double, double[2]),
                              double u0, double scale, double *root) {
     double lo = -INFINITY, hi = INFINITY, u = u0, jump = scale, f[2];
@@ -405,7 +513,7 @@ static int newton_increasing(const stage *s, void (*fdf)(const stage *, double, 
         }
         u = next;
     }
-    return CF_FALLBACK;
+    return s->p->bracket ? increasing_root(s, fdf, u0, scale, root) : CF_FALLBACK;
 }
 
 static double target_x(const cf_params *p, double Fx, double My) {
@@ -543,6 +651,47 @@ typedef struct {
     int max_substeps;
     double out[N_OUT];
 } cf_body;
+
+/* ---- the derived constants of layer.LayerContact and dynamics.Body ------------------ */
+/* The thin-layer law at load P into p (mu, P, a1, creep_full_slip, beta_per_creep:
+ * LayerContact.native_fields) and its lateral semi-axis a2 and peak pressure p0, Eq. (34):
+ * delta = (P (k1 + k2)/pi)^(1/2) (Rx Ry)^(-1/4), a1 = (2 Rx delta)^(1/2), a2 = (2 Ry
+ * delta)^(1/2), p0 = delta/(k1 + k2), creep_full_slip = 2 mu p0 (kb + ks)/a1. The
+ * expressions of layer.py in its order: the same doubles (tests/test_native_fmu.py). */
+void cf_layer_law(cf_params *p, double P, double Rx, double Ry, double k1, double k2,
+                  double kb, double ks, double mu, double *a2, double *p0) {
+    const double kn = k1 + k2;
+    const double delta = sqrt(P * kn / M_PI) * pow(Rx * Ry, -0.25);
+    const double a1 = sqrt(2.0 * Rx * delta);
+    *a2 = sqrt(2.0 * Ry * delta);
+    *p0 = delta / kn;
+    const double cfs = p->beta_full_slip * mu * *p0 * (kb + ks) / a1;
+    p->mu = mu;
+    p->P = P;
+    p->a1 = a1;
+    p->creep_full_slip = cfs;
+    p->beta_per_creep = p->beta_full_slip / cfs;
+}
+
+/* dynamics.Body: A1 = M Rx^2/(M Rx^2 + Iy) (1 for Iy = 0), A2 = Iy/(M Rx^2 + Iy),
+ * m_slip = M A2 (Eq. 23), in its operations (Rx**2 is pow there) */
+void cf_body_inertia(cf_params *p, double M, double Rx, double Iy) {
+    const double MR2 = M * pow(Rx, 2.0);
+    p->A1 = Iy == 0.0 ? 1.0 : MR2 / (MR2 + Iy);
+    p->A2 = Iy / (MR2 + Iy);
+    p->m_slip = M * p->A2;
+}
+
+/* RollingBody.__init__'s forces at the initial state (vy = ry Vx, no spin) and the
+ * regime flag, in y->Tx, Ty, Mz, out_sliding */
+void cf_initial_forces(const cf_params *p, cf_state *y) {
+    double T[3];
+    law(p, y->vx, y->Vx, T);
+    y->Tx = T[0], y->Ty = T[1], y->Mz = T[2];
+    y->out_sliding = saturated(p, y->Vx, y->vx);
+    y->sliding = 0;
+    y->dv = 0.0;
+}
 
 /* LayerContact.adhesion_fraction, float path without spin */
 static double adhesion_fraction(const cf_params *p, double vx, double vy, double Vx) {
@@ -1150,4 +1299,116 @@ int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *
     if (!isfinite(w.t)) return CF_FALLBACK;
     *y = w;
     return CF_OK;
+}
+
+/* ---- the native FMU's vector path: the spin grid and the outputs -------------------- */
+/* layer._Grid.build for the thin-layer law (a1, a2, p0, mu) on nx x ny cells, into
+ * g's arrays (x: nx, y: ny, dist, mid, cap, w: ny x nx, caller's memory) and `inside`
+ * (ny x nx bytes): cell centres (2 j + 1 - nx) a1/nx, the strip half-lengths
+ * l = a1 (1 - (y/a2)^2)^(1/2) (Eq. 37), the distance marched from the node before (or
+ * the leading edge) and its midpoint, mu p (Eq. 33) and the trapezoid weights
+ * (layer._strip_weights, times 2 a2/ny), in layer.py's operations. */
+void cf_grid_build(cf_strips *g, double *x, double *y, double *dist, double *mid, double *cap,
+                   double *w, unsigned char *inside, int nx, int ny, double a1, double a2,
+                   double p0, double mu, double k, double tiny) {
+    for (int j = 0; j < nx; j++) x[j] = (2.0 * j + 1.0 - nx) * (a1 / nx);
+    for (int i = 0; i < ny; i++) y[i] = (2.0 * i + 1.0 - ny) * (a2 / ny);
+    const double dx = x[1] - x[0], wy = 2.0 * a2 / ny;
+    for (int i = 0; i < ny; i++) {
+        const double yr = y[i] / a2, r = 1.0 - yr * yr;
+        const double ell = a1 * sqrt(r > 0.0 ? r : 0.0);
+        int j0 = -1, j1 = -1;
+        for (int j = 0; j < nx; j++) {
+            const size_t e = (size_t)i * nx + j;
+            inside[e] = fabs(x[j]) < ell;
+            const double prev = j > 0 && inside[e - 1] ? x[j - 1] : -ell;
+            dist[e] = inside[e] ? x[j] - prev : 0.0;
+            mid[e] = inside[e] ? 0.5 * (x[j] + prev) : 0.0;
+            const double xr = x[j] / a1, q = 1.0 - xr * xr - yr * yr;
+            cap[e] = mu * (p0 * (q > 0.0 ? q : 0.0));
+            w[e] = inside[e] ? dx : 0.0;
+            if (inside[e]) {
+                if (j0 < 0) j0 = j;
+                j1 = j;
+            }
+        }
+        if (j0 >= 0) {
+            const size_t e0 = (size_t)i * nx + j0, e1 = (size_t)i * nx + j1;
+            if (j0 == j1) {
+                w[e0] = ell;
+            } else {
+                w[e0] = 0.5 * dx + 0.5 * (x[j0] + ell);
+                w[e1] = 0.5 * dx + 0.5 * (ell - x[j1]);
+            }
+        }
+        for (int j = 0; j < nx; j++) w[(size_t)i * nx + j] *= wy;
+    }
+    g->ny = ny, g->nx = nx;
+    g->x = x, g->y = y, g->dist = dist, g->mid = mid, g->cap = cap, g->w = w;
+    g->k = k, g->tiny = tiny;
+}
+
+/* RollingBody.__init__'s forces at the initial state of the vector path (the law with
+ * spin by the march) and its regime flag */
+void cf_initial_vforces(const cf_params *p, cf_vstate *y) {
+    march_cache cache = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
+    const double Y[4] = {y->Vx, y->vx, y->Vy, y->Oz};
+    double T[3];
+    forces_at(p, Y, T, &cache);
+    y->Tx = T[0], y->Ty = T[1], y->Mz = T[2];
+    y->out_sliding = full_slip(p, y->vx, y->Vy, y->Vx);
+    y->sliding = 0;
+    y->dv = 0.0;
+    y->jac_valid = 0;
+}
+
+/* RollingBody.outputs() on the vector path into b->out: kinematics, forces and
+ * kinematics.contact_quantities; with spin the adhesion is the share of the area
+ * (weights) whose nodes do not slip in the strip march (LayerContact.adhesion_fraction,
+ * the same march; its sums in another order than numpy's: equal to rounding). tau, slip,
+ * inside: scratch (2 ny nx doubles, ny nx bytes) and the grid's inside mask. */
+void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double *tau,
+                      unsigned char *slip, const unsigned char *inside) {
+    const double Vx = y->Vx, vx = y->vx, Vy = y->Vy, Oz = y->Oz;
+    double *o = b->out;
+    o[O_VX] = Vx;
+    o[O_VY] = Vy;
+    o[O_OMEGA_Y] = (Vx - vx) / p->Rx;
+    o[O_OMEGA_Z] = Oz;
+    o[O_TX] = y->Tx;
+    o[O_TY] = y->Ty;
+    o[O_MZ] = y->Mz;
+    o[O_VX_SLIP] = vx;
+    o[O_VY_SLIP] = Vy;
+    const double V = py_max(fabs(Vx), b->v_creep_floor);
+    o[O_XI_X] = vx / V;
+    o[O_XI_Y] = Vy / V;
+    o[O_XI_SP] = Oz / V;
+    o[O_A1] = p->a1;
+    o[O_A2] = b->a2;
+    o[O_P0] = b->p0;
+    if (Oz == 0.0 || p->strips == NULL) {
+        o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
+    } else {
+        const cf_strips *g = (const cf_strips *)p->strips;
+        const size_t n = (size_t)g->ny * g->nx;
+        if (Vx != 0.0 && isfinite(Vx) && isfinite(vx) && isfinite(Vy) && isfinite(Oz)) {
+            double R[3];
+            march_one(g, vx, Vy, Vx, Oz, tau, slip, R);
+        } else { /* standstill (layer._march_numpy): slip wherever v != 0 */
+            for (int i = 0; i < g->ny; i++)
+                for (int j = 0; j < g->nx; j++) {
+                    const double a = vx - Oz * g->y[i], c = Vy + Oz * g->x[j];
+                    slip[(size_t)i * g->nx + j] = !(a == 0.0 && c == 0.0);
+                }
+        }
+        double stuck = 0.0, area = 0.0;
+        for (size_t e = 0; e < n; e++)
+            if (inside[e]) {
+                area += g->w[e];
+                if (!slip[e]) stuck += g->w[e];
+            }
+        o[O_ADHESION] = stuck / area;
+    }
+    o[O_REGIME] = full_slip(p, vx, Vy, Vx) ? 1.0 : 0.0;
 }

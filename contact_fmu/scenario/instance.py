@@ -65,12 +65,16 @@ class Instance:
         )
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         self.time = start_time
-        self.fmu.setupExperiment(startTime=start_time)
-        self.fmu.enterInitializationMode()
-        for k, v in (start_values or {}).items():
-            self.set(k, v)
-        if initialise:
-            self.initialise()
+        try:
+            self.fmu.setupExperiment(startTime=start_time)
+            self.fmu.enterInitializationMode()
+            for k, v in (start_values or {}).items():
+                self.set(k, v)
+            if initialise:
+                self.initialise()
+        except FMICallException:  # a model that cannot start: freed, then the error
+            self.close()
+            raise
 
     def initialise(self) -> None:
         """fmi2ExitInitializationMode (fmpy raises FMICallException above Warning)."""

@@ -1,0 +1,234 @@
+"""The native FMU's cost against the pythonfmu FMU and trivial FMUs, and its size.
+
+    .venv/bin/python benchmarks/bench_native.py [--steps 300] [--repeats 5] [--write]
+
+All in one process and one run (ratios, not absolute times, carry over to another
+machine):
+
+1. Step cost through fmpy's FMU2Slave, call by call as a master does (setReal of the
+   inputs, doStep, getReal of the outputs; bench_cosim.Stepper) over the first steps of
+   the Fig. 13 case eta = 3: the native FMU with the quasistationary method and with the
+   full method, the pythonfmu FMU with both, a trivial pythonfmu FMU (one state, one
+   input; bench_cosim.null_fmu) and a trivial native FMU (the same in C,
+   benchmarks/trivial_fmu.c, built here). Repeats interleaved run by run; the cost is
+   the mean over the steps of each step's fastest repeat.
+2. From the C importer (tests/native_importer.c, no Python): communication steps per
+   second of the native Fig. 13 FMU at the scene's step, both methods (the fastest of
+   three runs of N steps).
+3. FMU sizes.
+
+``--write`` replaces the section SECTION of docs/performance.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import platform
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+import fmu_build
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.report.output import replace_section
+from contact_fmu.scenario import load, runner
+from fmu_build import native_fmu
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_cosim import Stepper, null_fmu  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+DOC = ROOT / "docs" / "performance.md"
+SECTION = "## Native FMU: step cost, C importer rate, size"
+TRIVIAL_C = Path(__file__).with_name("trivial_fmu.c")
+IMPORTER = ROOT / "tests" / "native_importer.c"
+
+
+def _trivial_md(name: str, inputs: tuple, outputs: tuple) -> str:
+    sv = [
+        f'<ScalarVariable name="{n}" valueReference="{k}" causality="input" '
+        f'variability="continuous"><Real start="0.0"/></ScalarVariable>'
+        for k, n in enumerate(inputs)
+    ] + [
+        f'<ScalarVariable name="{n}" valueReference="{len(inputs) + k}" causality="output" '
+        f'variability="continuous" initial="exact"><Real start="0.0"/></ScalarVariable>'
+        for k, n in enumerate(outputs)
+    ]
+    idx = range(len(inputs) + 1, len(inputs) + len(outputs) + 1)
+    return (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        f'<fmiModelDescription fmiVersion="2.0" modelName="{name}" guid="{{{name}}}" '
+        'generationTool="benchmarks/bench_native.py" variableNamingConvention="structured">'
+        f'<CoSimulation modelIdentifier="{name}" needsExecutionTool="false" '
+        'canHandleVariableCommunicationStepSize="true"/>'
+        f"<ModelVariables>{''.join(sv)}</ModelVariables><ModelStructure><Outputs>"
+        + "".join(f'<Unknown index="{i}" dependencies=""/>' for i in idx)
+        + "</Outputs><InitialUnknowns>"
+        + "".join(f'<Unknown index="{i}"/>' for i in idx)
+        + "</InitialUnknowns></ModelStructure></fmiModelDescription>\n"
+    )
+
+
+def trivial_native(out: Path, n_in: int = 1, n_out: int = 1) -> tuple[Path, tuple, tuple]:
+    """The trivial native FMU (benchmarks/trivial_fmu.c) with n_in inputs and n_out
+    outputs, compiled like the native FMU; (path, input names, output names) as
+    bench_cosim.null_fmu."""
+    inputs = ("u", *(f"u{k}" for k in range(2, n_in + 1)))
+    outputs = ("x", *(f"x{k}" for k in range(2, n_out + 1)))
+    name = f"TrivialNative{n_in}x{n_out}"
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as work:
+        lib = Path(work) / f"{name}.so"
+        cmd = ["cc", *native_fmu.CFLAGS, f"-DNIN={n_in}", f"-DNOUT={n_out}",
+               f"-I{native_fmu.fmi_headers()}", "-o", str(lib), str(TRIVIAL_C)]  # fmt: skip
+        subprocess.run(cmd, check=True, capture_output=True)
+        target = out / f"{name}.fmu"
+        with zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", _trivial_md(name, inputs, outputs))
+            z.write(lib, f"binaries/linux64/{name}.so")
+    return target, inputs, outputs
+
+
+def fig13_configs():
+    """The Fig. 13 scene's configuration with each method as its only one."""
+    scene = load(ROOT / "scenarios" / "fig13.toml")
+    d = scene.config.to_dict()
+    methods = ("quasistationary", "full")
+    return scene, {m: ModelConfig.from_dict(d | {"methods": [m]}) for m in methods}
+
+
+def step_costs(steps: int, repeats: int) -> dict[str, float]:
+    scene, cfgs = fig13_configs()
+    case = scene.case("eta = 3")
+    table = runner.input_table(scene, case)
+    starts = runner.start_values(scene, case)
+    runs = {}
+    for m, cfg in cfgs.items():
+        io = (starts, scene.inputs, scene.outputs)
+        runs[f"native {m}"] = (native_fmu.build(cfg, OUT).path, *io)
+        runs[f"pythonfmu {m}"] = (fmu_build.build(cfg, OUT).path, *io)
+    n_in, n_out = len(scene.inputs), len([o for o in scene.outputs if o != "regime"])
+    trivial = {f"u{k}" if k > 1 else "u": np.full(steps + 1, 1.0) for k in range(1, n_in + 1)}
+    for label, (a, b) in (("trivial", (1, 1)), (f"null {n_in}x{n_out}", (n_in, n_out))):
+        path, ins, outs = null_fmu(OUT, a, b)
+        runs[f"{label} pythonfmu"] = (path, {}, ins, outs)
+        path, ins, outs = trivial_native(OUT, a, b)
+        runs[f"{label} native"] = (path, {}, ins, outs)
+    times = {k: np.empty((repeats, steps)) for k in runs}
+    for r in range(repeats):
+        for name, (path, st, ins, outs) in runs.items():
+            tab = trivial if name.startswith(("trivial", "null")) else table
+            s = Stepper(path, name.replace(" ", "_"), st, ins, [o for o in outs if o != "regime"],
+                        tab, scene.step)  # fmt: skip
+            try:
+                for k in range(steps):
+                    times[name][r, k] = s.step(k)
+            finally:
+                s.close()
+    return {k: float(np.mean(np.min(v, axis=0))) for k, v in times.items()}
+
+
+def importer_rates(n: int) -> dict[str, float]:
+    """Steps per second of the native Fig. 13 FMU from the C importer, per method."""
+    import fmpy
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_native_fmu import _spec
+
+    scene, cfgs = fig13_configs()
+    case = scene.case("eta = 3")
+    rates = {}
+    with tempfile.TemporaryDirectory() as work:
+        work = Path(work)
+        exe = work / "importer"
+        cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe), str(IMPORTER),
+               "-ldl", "-lm"]  # fmt: skip
+        subprocess.run(cmd, check=True, capture_output=True)
+        for m, cfg in cfgs.items():
+            unzip = work / m
+            fmpy.extract(str(native_fmu.build(cfg, OUT).path), str(unzip))
+            md = fmpy.read_model_description(str(unzip))
+            spec = work / f"{m}.txt"
+            spec.write_text(_spec(md, scene, case, rows=False))
+            ident = md.coSimulation.modelIdentifier
+            lib = unzip / "binaries" / "linux64" / f"{ident}.so"
+            args = [str(exe), str(lib), md.guid, ident, "bench", str(spec)]
+            args += [repr(scene.step), str(n)]
+            proc = subprocess.run(args, capture_output=True, text=True, check=True)
+            rates[m] = float(proc.stdout.split()[-1])
+    return rates
+
+
+def sizes() -> dict[str, int]:
+    scene, cfgs = fig13_configs()
+    cfg = cfgs["full"]
+    return {
+        "native": native_fmu.build(cfg, OUT).path.stat().st_size,
+        "pythonfmu": fmu_build.build(cfg, OUT).path.stat().st_size,
+    }
+
+
+def report(cost: dict[str, float], rates: dict[str, float], size: dict[str, int], args) -> str:
+    us = {k: 1e6 * v for k, v in cost.items()}
+    q = us["native quasistationary"]
+    lines = [
+        f"Made by `benchmarks/bench_native.py --steps {args.steps} --repeats {args.repeats}"
+        f" --write` on {datetime.date.today()} ({platform.machine()}, Python "
+        f"{platform.python_version()}; a shared 2-core machine: the ratios are the result).",
+        "",
+        "Step cost through fmpy's FMU2Slave (setReal, doStep, getReal; Fig. 13, eta = 3, "
+        f"the first {args.steps} steps of 1.75e-4 s; mean of each step's fastest of "
+        f"{args.repeats} interleaved runs):",
+        "",
+        "| FMU | us per step | / trivial pythonfmu | / trivial native |",
+        "|---|---|---|---|",
+    ]
+    for k, v in us.items():
+        a, b = v / us["trivial pythonfmu"], v / us["trivial native"]
+        lines.append(f"| {k} | {v:.2f} | {a:.2f} | {b:.2f} |")
+    null = [k for k in us if k.startswith("null") and k.endswith("native")][0]
+    lines += [
+        "",
+        f"The native Fig. 13 FMU with the quasistationary method costs "
+        f"{q / us['trivial pythonfmu']:.2f} of the trivial pythonfmu FMU's step (target <= 0.8) "
+        f"and {q / us['trivial native']:.2f} of the trivial native FMU's (target <= 1.3). "
+        f"The trivial FMUs exchange one value each way, Fig. 13 three inputs and six outputs: "
+        f"against a native FMU without physics exchanging as many ({null}), the native "
+        f"Fig. 13 step costs {q / us[null]:.2f} of it; the rest is fmpy's cost per value. "
+        "The C importer below measures the FMU without a Python master.",
+        "",
+        f"From the C importer (tests/native_importer.c, no Python; fastest of three runs of "
+        f"{args.importer_steps} steps at 1.75e-4 s): "
+        + ", ".join(f"{m} {r:.3g} steps/s" for m, r in rates.items())
+        + " (target >= 2e5).",
+        "",
+        f"Size of the Fig. 13 FMU: native {size['native'] / 1024:.0f} KiB (binary, C sources), "
+        f"pythonfmu {size['pythonfmu'] / 1024:.0f} KiB "
+        f"({size['native'] / size['pythonfmu']:.2f} of it).",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--steps", type=int, default=300)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--importer-steps", type=int, default=200_000)
+    ap.add_argument("--write", action="store_true")
+    args = ap.parse_args()
+    text = report(step_costs(args.steps, args.repeats), importer_rates(args.importer_steps),
+                  sizes(), args)  # fmt: skip
+    print(text)
+    if args.write:
+        replace_section(DOC, SECTION, text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

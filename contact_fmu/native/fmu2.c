@@ -1,0 +1,1273 @@
+/* The FMI 2.0 co-simulation layer of the native FMU (fmu_build --native): contact_fmu's
+ * body mode on the compiled stepper (stepper.c, included: one translation unit), its
+ * contact mode (the thin-layer law without spin, fmu/contact_model.py) and its
+ * rigid_body mode (fmu/rigid_body.py), with no Python anywhere (CF_MODE picks one).
+ *
+ * The body model is the one of fmu/body_model.py on its compiled paths: the thin-layer
+ * law (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
+ * parameters and the load P: cf_layer_law), Lobatto IIIC, methods "full" and
+ * "quasistationary"; vx the only stage unknown (vy zero or held at a ratio, no spin:
+ * cf_advance) or Vy and/or Omega_z as unknowns too (Eqs. 10-11: cf_advance_vector, the
+ * law's spin by the strip march on its grid, built here for each load: cf_grid_build).
+ * The build refuses every other model (fmu_build/native_fmu.py). The variables, their
+ * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
+ * the generated cf_model.h; the constants the Python integrator uses travel in it too.
+ *
+ * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py):
+ * - an inadmissible value (non-finite, out of its declared range) is stored with a
+ *   logged error naming the variable and the value; while it is held every doStep
+ *   answers fmi2Discard with that message and changes nothing; once corrected the
+ *   instance steps normally;
+ * - doStep with a step not in (0, inf) or not at the FMU's time: fmi2Discard;
+ * - a step with no stage root (loads beyond mu P with an eta = inf body; a stage whose
+ *   Newton iteration does not converge is bracketed and closed by brentq, as in Python)
+ *   or with non-finite outputs: fmi2Discard, state unchanged;
+ * - parameters are fixed once the model is set up: setting one then is refused
+ *   (fmi2Error, the value kept); setting an output likewise;
+ * - a model that cannot be set up (bad parameters): fmi2Error at
+ *   exitInitializationMode, with the reason.
+ * Memory comes from the importer's callbacks; there is no mutable global: instances
+ * are independent, also on several threads. The logger never gets user text as its
+ * format. FMU state: the whole instance core (plain data), serialized with a format
+ * version, the GUID, the length and a checksum; foreign or damaged bytes are refused.
+ */
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "stepper.c"
+
+/* ---- the variables (cf_model.h, generated from variables.py) ---------------------- */
+enum { K_PARAMETER, K_INPUT, K_OUTPUT };
+enum { T_REAL, T_INTEGER, T_STRING };
+
+/* the parameters and inputs the model reads, by role */
+enum {
+    R_MU, R_RX, R_RY, R_K1, R_K2, R_KB, R_KS, R_M, R_IY, R_VY_RATIO, R_VX0, R_OMEGA_Y0,
+    R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX,
+    R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
+    R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
+    R_COUNT
+};
+/* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
+enum { MODE_BODY, MODE_CONTACT, MODE_RIGID };
+#define R_OUT 1000 /* outputs: R_OUT + the index in cf_body.out */
+
+typedef struct {
+    const char *name;
+    int kind, type, role;
+    double start;
+    double lo, hi;             /* declared range (-inf, inf where none) */
+    int open_lo;               /* lo itself excluded */
+    const char *lo_req, *hi_req; /* Var.check's requirement texts: "> 0", "<= 1" */
+} cf_var;
+
+#include "cf_model.h"
+
+#define N_METHODS 2
+static const char *const METHOD_NAMES[N_METHODS] = {"full", "quasistationary"};
+#define METHOD_TEXT 64
+
+/* ---- the instance ------------------------------------------------------------------ */
+enum { PH_INSTANTIATED, PH_INIT, PH_STEP, PH_TERMINATED };
+
+/* Everything an FMU state holds: plain data, no pointer that is not NULL. */
+typedef struct {
+    double val[R_COUNT];          /* parameters and inputs by role */
+    double var[CF_N_VARS];        /* every Real/Integer variable's value, by vr */
+    unsigned bad[CF_N_VARS];      /* 0, or the order in which the value became bad */
+    unsigned next_bad;
+    int method;                   /* index into METHOD_NAMES, -1: not a method */
+    char method_text[METHOD_TEXT]; /* the string set (cut at METHOD_TEXT - 1) */
+    double time;
+    int phase, built;
+    int dirty;                    /* contact mode: inputs set since the outputs */
+    double rb_Vx, rb_Omega_y;     /* rigid_body mode's state */
+    cf_vstate vs;                 /* body mode with Vy and/or Omega_z as unknowns */
+    double P_law;                 /* the load the law's constants are for */
+    cf_params p;
+    cf_state s;
+    cf_body b;
+} cf_core;
+
+/* the spin grid of the vector path (layer._Grid of SPIN_GRID): a function of the
+ * parameters and the load, rebuilt for each new load, not part of the FMU state */
+#define GRID_N (CF_SPIN_NX * CF_SPIN_NY)
+typedef struct {
+    double P;                     /* the load it is for (NaN: none yet) */
+    cf_strips strips;
+    double x[CF_SPIN_NX], y[CF_SPIN_NY], dist[GRID_N], mid[GRID_N], cap[GRID_N], w[GRID_N];
+    unsigned char inside[GRID_N];
+    double tau[2 * GRID_N];       /* scratch of the adhesion's march */
+    unsigned char slip[GRID_N];
+} spin_grid;
+
+typedef struct {
+    fmi2CallbackFunctions cb;
+    char *name;
+    int logging;
+    cf_core c;
+    char method_out[METHOD_TEXT]; /* what getString hands out */
+    spin_grid *grid;              /* CF_VECTOR only */
+} Inst;
+
+/* ---- messages ---------------------------------------------------------------------- */
+/* Python's repr of a float: the shortest digits that read back, its layout */
+static void py_repr(double x, char *out, size_t n) {
+    if (isnan(x)) {
+        snprintf(out, n, "nan");
+        return;
+    }
+    if (isinf(x)) {
+        snprintf(out, n, x < 0 ? "-inf" : "inf");
+        return;
+    }
+    if (x == 0.0) {
+        snprintf(out, n, signbit(x) ? "-0.0" : "0.0");
+        return;
+    }
+    char tmp[48];
+    for (int prec = 0; prec <= 17; prec++) {
+        snprintf(tmp, sizeof tmp, "%.*e", prec, x);
+        if (strtod(tmp, NULL) == x) break;
+    }
+    /* tmp: [-]d[.ddd]e[+-]XX */
+    char digits[24];
+    int nd = 0, neg = tmp[0] == '-';
+    const char *q = tmp + neg;
+    for (; *q && *q != 'e'; q++)
+        if (*q >= '0' && *q <= '9' && nd < 23) digits[nd++] = *q;
+    int e = *q == 'e' ? atoi(q + 1) : 0;
+    while (nd > 1 && digits[nd - 1] == '0') nd--;
+    digits[nd] = '\0';
+    int decpt = e + 1;
+    char body[64];
+    size_t k = 0;
+    if (-4 < decpt && decpt <= 16) {
+        if (decpt <= 0) {
+            k += (size_t)snprintf(body + k, sizeof body - k, "0.");
+            for (int i = 0; i < -decpt; i++) body[k++] = '0';
+            k += (size_t)snprintf(body + k, sizeof body - k, "%s", digits);
+        } else if (decpt >= nd) {
+            k += (size_t)snprintf(body + k, sizeof body - k, "%s", digits);
+            for (int i = nd; i < decpt; i++) body[k++] = '0';
+            k += (size_t)snprintf(body + k, sizeof body - k, ".0");
+        } else {
+            k += (size_t)snprintf(body + k, sizeof body - k, "%.*s.%s", decpt, digits,
+                                  digits + decpt);
+        }
+    } else {
+        k += (size_t)snprintf(body + k, sizeof body - k, "%c", digits[0]);
+        if (nd > 1) k += (size_t)snprintf(body + k, sizeof body - k, ".%s", digits + 1);
+        snprintf(body + k, sizeof body - k, "e%c%02d", e < 0 ? '-' : '+', e < 0 ? -e : e);
+    }
+    snprintf(out, n, "%s%s", neg ? "-" : "", body);
+}
+
+static const char *category(fmi2Status s) {
+    switch (s) {
+    case fmi2Warning: return "logStatusWarning";
+    case fmi2Discard: return "logStatusDiscard";
+    case fmi2Error: return "logStatusError";
+    case fmi2Fatal: return "logStatusFatal";
+    default: return "logAll";
+    }
+}
+
+/* a message to the importer's logger (never as its format) */
+static void say(const Inst *I, fmi2Status status, const char *fmt, ...) {
+    if (I == NULL || I->cb.logger == NULL) return;
+    if (status == fmi2OK && !I->logging) return;
+    char msg[2048];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    I->cb.logger(I->cb.componentEnvironment, I->name ? I->name : "", status, category(status),
+                 "%s", msg);
+}
+
+/* Var.check for a Real: NULL if admissible, else the requirement */
+static const char *requirement(const cf_var *v, double x) {
+    if (!isfinite(x)) return "finite";
+    if (v->type == T_INTEGER && x != floor(x)) return "an integer";
+    if (v->lo_req && (x < v->lo || (v->open_lo && x == v->lo))) return v->lo_req;
+    if (v->hi_req && x > v->hi) return v->hi_req;
+    return NULL;
+}
+
+/* "NAME = VALUE is invalid: must be REQ" */
+static void bad_text(const cf_var *v, double x, char *out, size_t n) {
+    char r[40];
+    py_repr(x, r, sizeof r);
+    snprintf(out, n, "%s = %s is invalid: must be %s", v->name, r, requirement(v, x));
+}
+
+static int any_bad(const cf_core *c) {
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (c->bad[i]) return 1;
+    return 0;
+}
+
+/* the messages of the bad values held, in the order they became bad, joined by "; " */
+static void bad_list(const Inst *I, char *out, size_t n) {
+    const cf_core *c = &I->c;
+    size_t k = 0;
+    out[0] = '\0';
+    unsigned last = 0;
+    for (;;) { /* the next one in order: few variables, a scan each */
+        int best = -1;
+        for (int i = 0; i < CF_N_VARS; i++)
+            if (c->bad[i] > last && (best < 0 || c->bad[i] < c->bad[best])) best = i;
+        if (best < 0) break;
+        last = c->bad[best];
+        char one[256];
+        if (CF_VARS[best].type == T_STRING)
+            snprintf(one, sizeof one, "%s = '%s' is invalid: must be \"full\" or "
+                     "\"quasistationary\"", CF_VARS[best].name, c->method_text);
+        else
+            bad_text(&CF_VARS[best], c->var[best], one, sizeof one);
+        int w = snprintf(out + k, n - k, "%s%s", k ? "; " : "", one);
+        if (w < 0 || (size_t)w >= n - k) break;
+        k += (size_t)w;
+    }
+}
+
+/* ---- the model ------------------------------------------------------------------------ */
+static void set_constants(cf_params *p, cf_body *b) {
+    p->v_standstill = CF_V_STANDSTILL;
+    p->v_scale_floor = CF_V_SCALE_FLOOR;
+    p->z_algebraic = CF_Z_ALGEBRAIC;
+    p->capacity_margin = CF_CAPACITY_MARGIN;
+    p->solve_rtol = CF_SOLVE_RTOL;
+    p->expand = CF_EXPAND;
+    p->max_newton = CF_MAX_NEWTON;
+    p->beta_full_slip = CF_BETA_FULL_SLIP;
+    p->beta_series = CF_BETA_SERIES;
+    p->fd_step = CF_FD_STEP;
+    p->line_search_min = CF_LINE_SEARCH_MIN;
+    p->contraction_max = CF_CONTRACTION_MAX;
+    p->contraction_fast = CF_CONTRACTION_FAST;
+    p->newton_iterations = CF_NEWTON_ITERATIONS;
+    p->algebraic_key = CF_ALGEBRAIC_KEY;
+    p->bracket = 1; /* a stage Newton cannot close: bracket and brentq, as Python does */
+    p->max_expansions = CF_MAX_EXPANSIONS;
+    p->law = LAW_LAYER;
+    p->coef = p->ax1 = p->ax2 = p->ax3 = NULL;
+    p->strips = NULL;
+    p->dyn_vy = p->dyn_spin = 0;
+    p->rz = 0.0;
+    p->Iz = 0.0;
+    b->v_creep_floor = CF_V_CREEP_FLOOR;
+    b->substep_slack = CF_SUBSTEP_SLACK;
+    b->max_substeps = CF_MAX_SUBSTEPS;
+}
+
+/* the law at load P into p and b (its reported a2, p0) */
+static void law_at_load(const cf_core *c, double P, cf_params *p, cf_body *b) {
+    const double *v = c->val;
+    cf_layer_law(p, P, v[R_RX], v[R_RY], v[R_K1], v[R_K2], v[R_KB], v[R_KS], v[R_MU], &b->a2,
+                 &b->p0);
+}
+
+/* the outputs of the struct into the variables */
+static void publish(cf_core *c) {
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = c->b.out[CF_VARS[i].role - R_OUT];
+}
+
+/* the name of the first of the FMU's outputs in out[] that is not finite (its value in
+ * r), or NULL */
+static const char *nonfinite(const double *out, char *r, size_t n) {
+    for (int i = 0; i < CF_N_VARS; i++) {
+        const cf_var *v = &CF_VARS[i];
+        if (v->kind == K_OUTPUT && !isfinite(out[v->role - R_OUT])) {
+            py_repr(out[v->role - R_OUT], r, n);
+            return v->name;
+        }
+    }
+    return NULL;
+}
+
+/* ContactElement.evaluate: the law at the inputs' load and kinematics, rigid slip of
+ * Eq. (3) at the contact centre (kinematics.rigid_slip), the forces (the closed form,
+ * LayerContact._forces_scalar: this mode has no spin input) and
+ * kinematics.contact_quantities; p and b hold the law at the load afterwards. The name
+ * of a non-finite output, or NULL. */
+static const char *contact_outputs(const cf_core *c, cf_params *p, cf_body *b,
+                                   double out[N_OUT], char *r, size_t n) {
+    const double *v = c->val;
+    if (v[R_P] != p->P) law_at_load(c, v[R_P], p, b);
+    const double Vx = v[R_VX], vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY];
+    const double Omega_z = v[R_OMEGA_Z];
+    double T[3];
+    forces(p, vx, vy, Vx, T);
+    for (int i = 0; i < N_OUT; i++) out[i] = 0.0;
+    out[O_TX] = T[0], out[O_TY] = T[1], out[O_MZ] = T[2];
+    out[O_VX_SLIP] = vx, out[O_VY_SLIP] = vy;
+    const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
+    out[O_XI_X] = vx / V, out[O_XI_Y] = vy / V, out[O_XI_SP] = Omega_z / V;
+    out[O_A1] = p->a1, out[O_A2] = b->a2, out[O_P0] = b->p0;
+    out[O_ADHESION] = adhesion_fraction(p, vx, vy, Vx);
+    out[O_REGIME] = full_slip(p, vx, vy, Vx) ? 1.0 : 0.0;
+    return nonfinite(out, r, n);
+}
+
+/* RigidBody (rigid_body.py): M, Rx, Iy > 0, the initial state */
+static int build_rigid(Inst *I) {
+    cf_core *c = &I->c;
+    const double *v = c->val;
+    static const int need[3] = {R_M, R_RX, R_IY};
+    static const char *const names[3] = {"M", "Rx", "Iy"};
+    for (int k = 0; k < 3; k++)
+        if (!(v[need[k]] > 0.0)) {
+            char r[40];
+            py_repr(v[need[k]], r, sizeof r);
+            say(I, fmi2Error, "cannot initialise the model: %s = %s is invalid: must be > 0",
+                names[k], r);
+            return 0;
+        }
+    c->rb_Vx = v[R_VX0];
+    c->rb_Omega_y = v[R_OMEGA_Y0];
+    c->b.out[O_VX] = c->rb_Vx;
+    c->b.out[O_OMEGA_Y] = c->rb_Omega_y;
+    c->built = 1;
+    publish(c);
+    return 1;
+}
+
+/* the spin grid at load P (the law's a1, a2, p0 there) into p->strips */
+static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_params *p) {
+    spin_grid *g = I->grid;
+    if (g == NULL) return;
+    if (!(g->P == law->P)) {
+        const double *v = I->c.val;
+        cf_grid_build(&g->strips, g->x, g->y, g->dist, g->mid, g->cap, g->w, g->inside,
+                      CF_SPIN_NX, CF_SPIN_NY, law->a1, b->a2, b->p0, v[R_MU], v[R_KB] + v[R_KS],
+                      CF_TINY);
+        g->P = law->P;
+    }
+    p->strips = &g->strips;
+}
+
+/* BodyModel / RollingBody set up from the parameters and inputs at the FMU's time;
+ * 0 with the reasons logged (fmi2Error) where it cannot be */
+static int build(Inst *I) {
+    cf_core *c = &I->c;
+    char list[1536];
+    bad_list(I, list, sizeof list);
+    if (list[0]) {
+        say(I, fmi2Error, "cannot initialise the model: %s", list);
+        return 0;
+    }
+    const double *v = c->val;
+    char r[40];
+    if (CF_MODE == MODE_RIGID) return build_rigid(I);
+    /* LayerContact.__post_init__ beyond the declared ranges */
+    if (!(v[R_K1] + v[R_K2] > 0.0)) {
+        py_repr(v[R_K1] + v[R_K2], r, sizeof r);
+        say(I, fmi2Error, "cannot initialise the model: k1 + k2 = %s is invalid: must be > 0 "
+            "(a Winkler layer carries the load)", r);
+        return 0;
+    }
+    if (!(v[R_KB] + v[R_KS] > 0.0)) {
+        py_repr(v[R_KB] + v[R_KS], r, sizeof r);
+        say(I, fmi2Error, "cannot initialise the model: kb + ks = %s is invalid: must be > 0 "
+            "(tangential layer compliance)", r);
+        return 0;
+    }
+    cf_params p;
+    cf_body b;
+    cf_state s;
+    memset(&p, 0, sizeof p);
+    memset(&b, 0, sizeof b);
+    memset(&s, 0, sizeof s);
+    set_constants(&p, &b);
+    if (CF_MODE == MODE_CONTACT) {
+        law_at_load(c, v[R_P], &p, &b);
+        double out[N_OUT];
+        const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+        if (bad) {
+            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+                "is not finite", bad, r);
+            return 0;
+        }
+        c->p = p, c->b = b;
+        memcpy(c->b.out, out, sizeof out);
+        c->P_law = v[R_P];
+        c->built = 1;
+        c->dirty = 0;
+        publish(c);
+        return 1;
+    }
+    const double M = v[R_M], Rx = v[R_RX], Iy = v[R_IY];
+    p.M = M, p.Rx = Rx;
+    cf_body_inertia(&p, M, Rx, Iy);
+    p.ry = v[R_VY_RATIO];
+    p.quasistationary = c->method == 1;
+    const double P = v[R_P];
+    law_at_load(c, P, &p, &b);
+    b.P = P, b.Fx_ex = v[R_FX_EX], b.My_ex = v[R_MY_EX], b.h_max = v[R_H_MAX];
+    if (CF_VECTOR) {
+        if (CF_DYN_SPIN && !(v[R_IZ] > 0.0)) {
+            py_repr(v[R_IZ], r, sizeof r);
+            say(I, fmi2Error, "cannot initialise the model: Iz = %s is invalid: must be > 0", r);
+            return 0;
+        }
+        /* VectorKernel._path: the held ratios (0 where a rate is an unknown), Iz */
+        p.ry = CF_DYN_VY ? 0.0 : v[R_VY_RATIO];
+        p.rz = CF_DYN_SPIN ? 0.0 : v[R_SPIN_RATIO];
+        p.dyn_vy = CF_DYN_VY, p.dyn_spin = CF_DYN_SPIN;
+        p.Iz = CF_DYN_SPIN ? v[R_IZ] : 0.0;
+        ensure_grid(I, &p, &b, &p);
+        /* BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, Vy0, Omega_z0), the held ratios */
+        cf_vstate y;
+        memset(&y, 0, sizeof y);
+        y.Vx = v[R_VX0];
+        y.vx = y.Vx - v[R_OMEGA_Y0] * Rx;
+        y.Vy = CF_DYN_VY ? v[R_VY0] : p.ry * y.Vx;
+        y.Oz = CF_DYN_SPIN ? v[R_OMEGA_Z0] : p.rz * y.Vx;
+        y.t = c->time;
+        cf_initial_vforces(&p, &y);
+        cf_vbody_outputs(&p, &y, &b, I->grid->tau, I->grid->slip, I->grid->inside);
+        const char *bad = nonfinite(b.out, r, sizeof r);
+        if (bad) {
+            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+                "is not finite", bad, r);
+            return 0;
+        }
+        c->p = p, c->b = b, c->vs = y;
+        c->P_law = P;
+        c->built = 1;
+        publish(c);
+        return 1;
+    }
+    /* BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, ry Vx0, 0), the forces there */
+    s.Vx = v[R_VX0];
+    s.vx = s.Vx - v[R_OMEGA_Y0] * Rx;
+    s.t = c->time;
+    cf_initial_forces(&p, &s);
+    cf_body_outputs(&p, &s, &b);
+    for (int i = 0; i < CF_N_VARS; i++) {
+        const cf_var *w = &CF_VARS[i];
+        if (w->kind == K_OUTPUT && !isfinite(b.out[w->role - R_OUT])) {
+            py_repr(b.out[w->role - R_OUT], r, sizeof r);
+            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+                "is not finite", w->name, r);
+            return 0;
+        }
+    }
+    c->p = p, c->b = b, c->s = s;
+    c->P_law = P;
+    c->built = 1;
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = b.out[CF_VARS[i].role - R_OUT];
+    return 1;
+}
+
+/* a step of the contact mode (the outputs at the inputs held) or of the rigid body
+ * (Eqs. 8-9 under held inputs, exact: Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx
+ * Tx)/Iy), committed only when its outputs are finite */
+static fmi2Status other_step(Inst *I, double t, double h) {
+    cf_core *c = &I->c;
+    char r[40];
+    const char *bad;
+    if (CF_MODE == MODE_CONTACT) {
+        cf_params p = c->p;
+        cf_body b = c->b;
+        double out[N_OUT];
+        bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+        if (!bad) {
+            c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
+            memcpy(c->b.out, out, sizeof out);
+        }
+    } else {
+        const double *v = c->val;
+        const double Tx = v[R_TX];
+        const double Vx = c->rb_Vx + h * (v[R_FX_EX] - Tx) / v[R_M];
+        const double Oy = c->rb_Omega_y + h * (v[R_MY_EX] + v[R_RX] * Tx) / v[R_IY];
+        double out[N_OUT] = {0.0};
+        out[O_VX] = Vx, out[O_OMEGA_Y] = Oy;
+        bad = nonfinite(out, r, sizeof r);
+        if (!bad) {
+            c->rb_Vx = Vx, c->rb_Omega_y = Oy;
+            c->b.out[O_VX] = Vx, c->b.out[O_OMEGA_Y] = Oy;
+        }
+    }
+    if (bad) {
+        char rt[40], rh[40];
+        py_repr(t, rt, sizeof rt);
+        py_repr(h, rh, sizeof rh);
+        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
+            "FloatingPointError: output %s = %s is not finite", rt, rh, bad, r);
+        return fmi2Discard;
+    }
+    publish(c);
+    c->time = t + h;
+    return fmi2OK;
+}
+
+/* ContactSlave._refresh (direct feedthrough): the outputs for the inputs set, unless an
+ * input is bad (then the last ones stay); an output that is not finite keeps them too,
+ * with a logged error */
+static void refresh(Inst *I) {
+    cf_core *c = &I->c;
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (c->bad[i] && CF_VARS[i].kind == K_INPUT) return;
+    cf_params p = c->p;
+    cf_body b = c->b;
+    double out[N_OUT];
+    char r[40];
+    const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+    if (bad) {
+        say(I, fmi2Error, "outputs not updated for the new inputs: FloatingPointError: output "
+            "%s = %s is not finite", bad, r);
+        return;
+    }
+    c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
+    memcpy(c->b.out, out, sizeof out);
+    publish(c);
+}
+
+/* BodyModel.step + the outputs, committed only when all is well */
+static fmi2Status fmu_step(Inst *I, double t, double h) {
+    cf_core *c = &I->c;
+    /* t and h as Python writes them, formatted only for a message (a repr costs
+     * microseconds: more than the step) */
+    char rt[40], rh[40];
+#define REPRS() (py_repr(t, rt, sizeof rt), py_repr(h, rh, sizeof rh))
+    if (!(h > 0.0 && h <= DBL_MAX)) {
+        REPRS();
+        say(I, fmi2Discard, "communicationStepSize = %s is invalid: must be > 0 and finite", rh);
+        return fmi2Discard;
+    }
+    double scale = fmax(1.0, fmax(fabs(t), h));
+    if (!isfinite(t) || fabs(t - c->time) > CF_TIME_RTOL * scale) {
+        char now[40];
+        REPRS();
+        py_repr(c->time, now, sizeof now);
+        say(I, fmi2Discard, "currentCommunicationPoint = %s is invalid: must be the FMU's time "
+            "%s", rt, now);
+        return fmi2Discard;
+    }
+    if (!c->built && !build(I)) {
+        REPRS();
+        say(I, fmi2Discard, "doStep at t = %s discarded: the model is not initialised", rt);
+        return fmi2Discard;
+    }
+    if (c->next_bad && any_bad(c)) {
+        char list[1536];
+        bad_list(I, list, sizeof list);
+        REPRS();
+        say(I, fmi2Discard, "doStep at t = %s discarded, state unchanged: %s", rt, list);
+        return fmi2Discard;
+    }
+    if (CF_MODE != MODE_BODY) return other_step(I, t, h);
+    cf_params p = c->p;
+    cf_body b = c->b;
+    cf_state w = c->s;
+    const double P = c->val[R_P];
+    if (P != c->P_law) law_at_load(c, P, &p, &b); /* set_load: Eq. (34) at the new P */
+    b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
+    /* substeps(): ceil(h / h_max (1 - slack)), at least 1, at most max_substeps */
+    double q = ceil(h / b.h_max * (1.0 - b.substep_slack));
+    int n = q < b.max_substeps ? (q < 1.0 ? 1 : (int)q) : b.max_substeps;
+    cf_vstate vw = c->vs;
+    int failed;
+    if (CF_VECTOR) {
+        ensure_grid(I, &p, &b, &p);
+        const double L[4] = {b.Fx_ex, c->val[R_FY_EX], b.My_ex, c->val[R_MZ_EX]};
+        failed = cf_advance_vector(&p, &vw, h, L, n) != CF_OK;
+    } else {
+        failed = cf_advance(&p, &w, h, b.Fx_ex, b.My_ex, n) != CF_OK;
+    }
+    if (failed) {
+        REPRS();
+        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
+            "StageSolveError: no root: the stage residual keeps its sign (loads beyond mu P?)",
+            rt, rh);
+        return fmi2Discard;
+    }
+    if (CF_VECTOR) cf_vbody_outputs(&p, &vw, &b, I->grid->tau, I->grid->slip, I->grid->inside);
+    else cf_body_outputs(&p, &w, &b);
+    for (int i = 0; i < CF_N_VARS; i++) {
+        const cf_var *v = &CF_VARS[i];
+        if (v->kind == K_OUTPUT && !isfinite(b.out[v->role - R_OUT])) {
+            char r[40];
+            py_repr(b.out[v->role - R_OUT], r, sizeof r);
+            REPRS();
+            say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
+                "FloatingPointError: output %s = %s is not finite", rt, rh, v->name, r);
+            return fmi2Discard;
+        }
+    }
+    c->p = p, c->b = b, c->s = w, c->vs = vw, c->P_law = P;
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = b.out[CF_VARS[i].role - R_OUT];
+    c->time = t + h;
+#undef REPRS
+    if (n == b.max_substeps && h / b.h_max > b.max_substeps)
+        say(I, fmi2Warning, "communication step h = %g s exceeds %d internal steps of h_max = "
+            "%g s: taken in %d steps of %g s", h, b.max_substeps, b.h_max, n, h / n);
+    return fmi2OK;
+}
+
+/* the instance at its start values */
+static void start_values(Inst *I) {
+    cf_core *c = &I->c;
+    memset(c, 0, sizeof *c);
+    c->method = CF_METHOD_START;
+    snprintf(c->method_text, METHOD_TEXT, "%s", METHOD_NAMES[CF_METHOD_START]);
+    for (int i = 0; i < CF_N_VARS; i++) {
+        const cf_var *v = &CF_VARS[i];
+        if (v->type == T_STRING) continue;
+        c->var[i] = v->start;
+        if (v->kind != K_OUTPUT && v->role < R_COUNT) c->val[v->role] = v->start;
+    }
+    c->phase = PH_INSTANTIATED;
+}
+
+/* ---- FMI 2.0 ----------------------------------------------------------------------------- */
+#define INST(fn)                                                                         \
+    Inst *I = (Inst *)c;                                                                 \
+    if (I == NULL) return fmi2Error
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cats[]) {
+    INST(fmi2SetDebugLogging);
+    (void)n, (void)cats;
+    I->logging = on != fmi2False;
+    return fmi2OK;
+}
+
+fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
+                              fmi2String resources, const fmi2CallbackFunctions *cb,
+                              fmi2Boolean visible, fmi2Boolean logging) {
+    (void)resources, (void)visible;
+    if (cb == NULL || cb->allocateMemory == NULL || cb->freeMemory == NULL) return NULL;
+    Inst probe;
+    memset(&probe, 0, sizeof probe);
+    probe.cb = *cb;
+    probe.name = (char *)(name ? name : "");
+    if (type != fmi2CoSimulation) {
+        say(&probe, fmi2Error, "fmi2Instantiate: this FMU is for co-simulation only");
+        return NULL;
+    }
+    if (guid == NULL || strcmp(guid, CF_GUID) != 0) {
+        say(&probe, fmi2Error, "fmi2Instantiate: GUID %s is not this FMU's (%s)",
+            guid ? guid : "(null)", CF_GUID);
+        return NULL;
+    }
+    Inst *I = (Inst *)cb->allocateMemory(1, sizeof(Inst));
+    if (I == NULL) {
+        say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    memset(I, 0, sizeof *I);
+    I->cb = *cb;
+    size_t len = strlen(probe.name) + 1;
+    I->name = (char *)cb->allocateMemory(len, 1);
+    if (I->name == NULL) {
+        cb->freeMemory(I);
+        say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    memcpy(I->name, probe.name, len);
+    if (CF_VECTOR) {
+        I->grid = (spin_grid *)cb->allocateMemory(1, sizeof(spin_grid));
+        if (I->grid == NULL) {
+            cb->freeMemory(I->name);
+            cb->freeMemory(I);
+            say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
+            return NULL;
+        }
+        I->grid->P = NAN;
+    }
+    I->logging = logging != fmi2False;
+    start_values(I);
+    return I;
+}
+
+void fmi2FreeInstance(fmi2Component c) {
+    Inst *I = (Inst *)c;
+    if (I == NULL) return;
+    fmi2CallbackFreeMemory release = I->cb.freeMemory;
+    if (I->grid) release(I->grid);
+    release(I->name);
+    release(I);
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDefined, fmi2Real tol,
+                               fmi2Real start, fmi2Boolean stopDefined, fmi2Real stop) {
+    INST(fmi2SetupExperiment);
+    (void)tolDefined, (void)tol, (void)stopDefined, (void)stop;
+    if (I->c.built) {
+        say(I, fmi2Error, "fmi2SetupExperiment after initialisation is ignored");
+        return fmi2Error;
+    }
+    if (isfinite(start)) {
+        I->c.time = start;
+        return fmi2OK;
+    }
+    char r[40];
+    py_repr(start, r, sizeof r);
+    say(I, fmi2Error, "startTime = %s is invalid: must be finite; using 0", r);
+    return fmi2Error;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    INST(fmi2EnterInitializationMode);
+    I->c.phase = PH_INIT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    INST(fmi2ExitInitializationMode);
+    if (!build(I)) return fmi2Error;
+    I->c.phase = PH_STEP;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+    INST(fmi2Terminate);
+    I->c.phase = PH_TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+    INST(fmi2Reset);
+    start_values(I);
+    return fmi2OK;
+}
+
+static int vr_ok(const Inst *I, fmi2ValueReference vr, int type, const char *fn) {
+    if (vr < CF_N_VARS && CF_VARS[vr].type == type) return 1;
+    say(I, fmi2Error, "%s: value reference %u is not a variable of this type", fn, (unsigned)vr);
+    return 0;
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[]) {
+    INST(fmi2GetReal);
+    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
+    for (size_t i = 0; i < n; i++) {
+        if (!vr_ok(I, vr[i], T_REAL, "fmi2GetReal")) return fmi2Error;
+        v[i] = I->c.var[vr[i]];
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                          fmi2Integer v[]) {
+    INST(fmi2GetInteger);
+    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built) refresh(I);
+    for (size_t i = 0; i < n; i++) {
+        if (!vr_ok(I, vr[i], T_INTEGER, "fmi2GetInteger")) return fmi2Error;
+        double x = I->c.var[vr[i]];
+        v[i] = x > 0.5 ? 1 : 0; /* the only Integer: regime, 0 or 1 */
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                          fmi2Boolean v[]) {
+    INST(fmi2GetBoolean);
+    (void)v;
+    if (n == 0) return fmi2OK;
+    say(I, fmi2Error, "fmi2GetBoolean: this FMU has no Boolean variable (vr %u)",
+        vr ? (unsigned)vr[0] : 0u);
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                         fmi2String v[]) {
+    INST(fmi2GetString);
+    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+    for (size_t i = 0; i < n; i++) {
+        if (!vr_ok(I, vr[i], T_STRING, "fmi2GetString")) return fmi2Error;
+        snprintf(I->method_out, METHOD_TEXT, "%s", I->c.method_text);
+        v[i] = I->method_out;
+    }
+    return fmi2OK;
+}
+
+/* a parameter or input may be set now; else the refusal logged */
+static int settable(Inst *I, int i, const char *value) {
+    const cf_var *v = &CF_VARS[i];
+    if (v->kind == K_OUTPUT) {
+        say(I, fmi2Error, "%s is an output of this FMU: the value %s set is ignored", v->name,
+            value);
+        return 0;
+    }
+    if (v->kind == K_PARAMETER && I->c.built) {
+        char now[80];
+        if (v->type == T_STRING) snprintf(now, sizeof now, "'%s'", I->c.method_text);
+        else py_repr(I->c.var[i], now, sizeof now);
+        say(I, fmi2Error, "%s is a fixed parameter and the model is initialised: %s = %s is "
+            "ignored (%s stays %s)", v->name, v->name, value, v->name, now);
+        return 0;
+    }
+    return 1;
+}
+
+static void mark(cf_core *c, int i, int bad) {
+    if (!bad) c->bad[i] = 0;
+    else if (!c->bad[i]) c->bad[i] = ++c->next_bad;
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                       const fmi2Real v[]) {
+    INST(fmi2SetReal);
+    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+    fmi2Status status = fmi2OK;
+    for (size_t k = 0; k < n; k++) {
+        if (!vr_ok(I, vr[k], T_REAL, "fmi2SetReal")) return fmi2Error;
+        const int i = (int)vr[k];
+        const cf_var *var = &CF_VARS[i];
+        char r[40] = "";
+        if (var->kind == K_OUTPUT || (var->kind == K_PARAMETER && I->c.built))
+            py_repr(v[k], r, sizeof r); /* for the refusal's message */
+        if (!settable(I, i, r)) {
+            status = fmi2Error;
+            continue;
+        }
+        cf_core *C = &I->c;
+        C->var[i] = v[k];
+        if (var->role < R_COUNT) C->val[var->role] = v[k];
+        const int bad = requirement(var, v[k]) != NULL;
+        mark(C, i, bad);
+        if (var->kind == K_INPUT) C->dirty = 1;
+        if (bad) {
+            char msg[256];
+            bad_text(var, v[k], msg, sizeof msg);
+            say(I, fmi2Error, "%s; doStep answers fmi2Discard until it is corrected", msg);
+        }
+    }
+    return status;
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                          const fmi2Integer v[]) {
+    INST(fmi2SetInteger);
+    (void)v;
+    for (size_t k = 0; k < n; k++) {
+        if (vr == NULL || !vr_ok(I, vr[k], T_INTEGER, "fmi2SetInteger")) return fmi2Error;
+        char r[24];
+        snprintf(r, sizeof r, "%d", (int)v[k]);
+        settable(I, (int)vr[k], r); /* the only Integer is an output */
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                          const fmi2Boolean v[]) {
+    INST(fmi2SetBoolean);
+    (void)v;
+    if (n == 0) return fmi2OK;
+    say(I, fmi2Error, "fmi2SetBoolean: this FMU has no Boolean variable (vr %u)",
+        vr ? (unsigned)vr[0] : 0u);
+    return fmi2Error;
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                         const fmi2String v[]) {
+    INST(fmi2SetString);
+    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+    fmi2Status status = fmi2OK;
+    for (size_t k = 0; k < n; k++) {
+        if (!vr_ok(I, vr[k], T_STRING, "fmi2SetString")) return fmi2Error;
+        const char *s = v[k] ? v[k] : "";
+        char shown[METHOD_TEXT + 2];
+        snprintf(shown, sizeof shown, "'%s'", s);
+        if (!settable(I, (int)vr[k], shown)) {
+            status = fmi2Error;
+            continue;
+        }
+        cf_core *C = &I->c;
+        snprintf(C->method_text, METHOD_TEXT, "%s", s);
+        C->method = -1;
+        for (int m = 0; m < N_METHODS; m++)
+            if (strcmp(s, METHOD_NAMES[m]) == 0) C->method = m;
+        /* RollingBody's check, at set-up in Python: here at once, the same words */
+        mark(C, (int)vr[k], C->method < 0);
+        if (C->method < 0)
+            say(I, fmi2Error, "method = '%s' is invalid: must be \"full\" or \"quasistationary\"; "
+                "doStep answers fmi2Discard until it is corrected", C->method_text);
+    }
+    return status;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
+    INST(fmi2DoStep);
+    (void)noSetPrior;
+    return fmu_step(I, t, h);
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+    INST(fmi2CancelStep);
+    say(I, fmi2Error, "fmi2CancelStep: doStep runs synchronously; nothing to cancel");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *v) {
+    INST(fmi2GetStatus);
+    (void)s, (void)v;
+    say(I, fmi2Error, "fmi2GetStatus: doStep runs synchronously; no pending status");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *v) {
+    INST(fmi2GetRealStatus);
+    if (s == fmi2LastSuccessfulTime && v != NULL) {
+        *v = I->c.time;
+        return fmi2OK;
+    }
+    say(I, fmi2Error, "fmi2GetRealStatus: only fmi2LastSuccessfulTime is provided");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *v) {
+    INST(fmi2GetIntegerStatus);
+    (void)s, (void)v;
+    say(I, fmi2Error, "fmi2GetIntegerStatus: not provided");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *v) {
+    INST(fmi2GetBooleanStatus);
+    if (s == fmi2Terminated && v != NULL) {
+        *v = fmi2False; /* the FMU never ends a simulation itself */
+        return fmi2OK;
+    }
+    say(I, fmi2Error, "fmi2GetBooleanStatus: only fmi2Terminated is provided");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *v) {
+    INST(fmi2GetStringStatus);
+    (void)s, (void)v;
+    say(I, fmi2Error, "fmi2GetStringStatus: not provided");
+    return fmi2Error;
+}
+
+/* d(Tx, Ty, Mz, vx, vy)/d(vx, vy, V) of the thin-layer law without spin at (vx, vy, V),
+ * V != 0, analytic: T = mu P h(beta) e, Mz = sign(V) mu P a1 g(beta) e_y with
+ * e = v/|v|, beta = |v| c/|V| (Eqs. 40-43 corrected; g = beta (h - 1)/2, docs/model.md),
+ * so dT = mu P (h' dbeta e + h de), de = (I - e e^T) dv/|v|, dbeta = c e.dv/|V| -
+ * beta dV/V; h/|v| = (h/beta)(c/|V|) from the series below BETA_SERIES. At v = 0 the
+ * limits: dT = mu P h'(0) c dv/|V|, dMz = sign(V) mu P a1 g'(0) c dvy/|V|. */
+static void law_jacobian(const cf_params *p, double vx, double vy, double V, double J[3][3]) {
+    const double muP = p->mu * p->P, c = p->beta_per_creep, aV = fabs(V);
+    const double sg = V > 0.0 ? 1.0 : -1.0, a1 = p->a1;
+    const double s = hypot(vx, vy);
+    if (s == 0.0) {
+        const double d = muP * force_fraction_slope(p, 0.0) * c / aV;
+        const double dg = -0.5; /* g'(0) = (h(0) - 1)/2 */
+        double Z[3][3] = {{d, 0.0, 0.0}, {0.0, d, 0.0}, {0.0, sg * muP * a1 * dg * c / aV, 0.0}};
+        memcpy(J, Z, sizeof Z);
+        return;
+    }
+    const double ex = vx / s, ey = vy / s, beta = s * c / aV;
+    double h = 1.0, dh = 0.0, g = 0.0, dg = 0.0;
+    if (beta < p->beta_full_slip) {
+        const double m = m_of(beta);
+        h = py_min((2.0 / M_PI) * H_m(beta, m), 1.0);
+        dh = slope_m(beta, m);
+        g = 0.5 * beta * (h - 1.0);
+        dg = 0.5 * (h - 1.0) + 0.5 * beta * dh;
+    }
+    const double per_beta = beta < p->beta_series
+        ? 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI)
+        : h / beta;
+    const double h_s = per_beta * c / aV;                       /* h/|v| */
+    const double g_s = beta < p->beta_full_slip ? 0.5 * (h - 1.0) * c / aV : 0.0; /* g/|v| */
+    const double db[3] = {c * ex / aV, c * ey / aV, -beta / V}; /* dbeta/d(vx, vy, V) */
+    const double de[2][3] = {{ey * ey, -ex * ey, 0.0}, {-ex * ey, ex * ex, 0.0}}; /* |v| de */
+    for (int k = 0; k < 3; k++) {
+        J[0][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ex + h_s * de[0][k]);
+        J[1][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ey + h_s * de[1][k]);
+        J[2][k] = sg * muP * a1 * ((dg != 0.0 ? dg * db[k] : 0.0) * ey + g_s * de[1][k]);
+    }
+}
+
+/* the output i's row of d(outputs)/d(Vx, Vy, Omega_y) where it is analytic, else 0 */
+static int analytic_row(const cf_core *c, int role, double row[3]) {
+    const double *v = c->val, Vx = v[R_VX], Rx = v[R_RX];
+    const double vx = Vx - v[R_OMEGA_Y] * Rx, vy = v[R_VY];
+    int k;
+    switch (role - R_OUT) {
+    case O_TX: k = 0; break;
+    case O_TY: k = 1; break;
+    case O_MZ: k = 2; break;
+    case O_VX_SLIP: row[0] = 1.0, row[1] = 0.0, row[2] = -Rx; return 1;
+    case O_VY_SLIP: row[0] = 0.0, row[1] = 1.0, row[2] = 0.0; return 1;
+    default: return 0;
+    }
+    if (Vx == 0.0) return 0; /* standstill: the blend of the law is not this */
+    double J[3][3];
+    law_jacobian(&c->p, vx, vy, Vx, J);
+    /* chain rule: vx = Vx - Omega_y Rx, vy = Vy, V = Vx */
+    row[0] = J[k][0] + J[k][2];
+    row[1] = J[k][1];
+    row[2] = -Rx * J[k][0];
+    return 1;
+}
+
+/* Contact mode: the directional derivative of the outputs (vUnknown) along the inputs
+ * (vKnown, direction dvKnown) at the current inputs. Tx, Ty, Mz, vx, vy with respect
+ * to Vx, Vy, Omega_y analytic (law_jacobian); any other pair (P, the creepages, the
+ * adhesion) by central differences of the outputs along the direction. */
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference zr[], size_t nz,
+                                        const fmi2ValueReference ur[], size_t nu,
+                                        const fmi2Real du[], fmi2Real dz[]) {
+    INST(fmi2GetDirectionalDerivative);
+    if (CF_MODE != MODE_CONTACT) {
+        say(I, fmi2Error, "fmi2GetDirectionalDerivative: provided by the contact mode only "
+            "(providesDirectionalDerivative is false here)");
+        return fmi2Error;
+    }
+    if ((nz && (zr == NULL || dz == NULL)) || (nu && (ur == NULL || du == NULL))) return fmi2Error;
+    cf_core *C = &I->c;
+    if (!C->built) {
+        say(I, fmi2Error, "fmi2GetDirectionalDerivative: the model is not initialised");
+        return fmi2Error;
+    }
+    if (C->next_bad && any_bad(C)) {
+        say(I, fmi2Error, "fmi2GetDirectionalDerivative: an input is invalid (see setReal)");
+        return fmi2Error;
+    }
+    if (C->dirty) refresh(I);
+    int only_kin = 1; /* every known among (Vx, Vy, Omega_y) */
+    double dir[3] = {0.0, 0.0, 0.0};
+    for (size_t j = 0; j < nu; j++) {
+        if (ur[j] >= CF_N_VARS || CF_VARS[ur[j]].kind != K_INPUT || CF_VARS[ur[j]].type != T_REAL) {
+            say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
+                "input", (unsigned)ur[j]);
+            return fmi2Error;
+        }
+        const int role = CF_VARS[ur[j]].role;
+        const int k = role == R_VX ? 0 : role == R_VY ? 1 : role == R_OMEGA_Y ? 2 : -1;
+        if (k < 0) only_kin = 0;
+        else dir[k] += du[j];
+        if (!isfinite(du[j])) {
+            say(I, fmi2Error, "fmi2GetDirectionalDerivative: a direction is not finite");
+            return fmi2Error;
+        }
+    }
+    /* central differences along the direction for what is not analytic */
+    double plus[N_OUT], minus[N_OUT], eps = 0.0;
+    int have_fd = 0;
+    for (size_t i = 0; i < nz; i++) {
+        if (zr[i] >= CF_N_VARS || CF_VARS[zr[i]].kind != K_OUTPUT ||
+            CF_VARS[zr[i]].type != T_REAL) {
+            say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
+                "output", (unsigned)zr[i]);
+            return fmi2Error;
+        }
+        const int role = CF_VARS[zr[i]].role;
+        double row[3];
+        if (only_kin && analytic_row(C, role, row)) {
+            dz[i] = row[0] * dir[0] + row[1] * dir[1] + row[2] * dir[2];
+            continue;
+        }
+        if (!have_fd) {
+            double size = 0.0, dn = 0.0;
+            for (size_t j = 0; j < nu; j++) {
+                size = fmax(size, fabs(C->val[CF_VARS[ur[j]].role]));
+                dn = fmax(dn, fabs(du[j]));
+            }
+            eps = dn > 0.0 ? 1e-6 * fmax(size, 1e-3) / dn : 0.0;
+            cf_core X = *C;
+            char r[40];
+            for (int sgn = 0; sgn < 2; sgn++) {
+                for (size_t j = 0; j < nu; j++)
+                    X.val[CF_VARS[ur[j]].role] = C->val[CF_VARS[ur[j]].role] +
+                                                 (sgn ? -eps : eps) * du[j];
+                cf_params p = C->p;
+                cf_body b = C->b;
+                if (contact_outputs(&X, &p, &b, sgn ? minus : plus, r, sizeof r)) {
+                    say(I, fmi2Error, "fmi2GetDirectionalDerivative: the outputs are not "
+                        "finite next to the inputs");
+                    return fmi2Error;
+                }
+            }
+            have_fd = 1;
+        }
+        const int o = role - R_OUT;
+        dz[i] = eps > 0.0 ? (plus[o] - minus[o]) / (2.0 * eps) : 0.0;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                                       const fmi2Integer order[], const fmi2Real v[]) {
+    INST(fmi2SetRealInputDerivatives);
+    (void)vr, (void)n, (void)order, (void)v;
+    say(I, fmi2Error, "fmi2SetRealInputDerivatives: inputs are held over a step "
+        "(canInterpolateInputs is false)");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
+                                        size_t n, const fmi2Integer order[], fmi2Real v[]) {
+    INST(fmi2GetRealOutputDerivatives);
+    (void)vr, (void)n, (void)order, (void)v;
+    say(I, fmi2Error, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder "
+        "is 0)");
+    return fmi2Error;
+}
+
+/* ---- FMU state ------------------------------------------------------------------------ */
+/* a restored core made safe: what no legal state holds is reset (constants, pointers,
+ * flags); values are whatever they were (a non-finite one only makes steps decline) */
+static void sanitize(cf_core *c) {
+    set_constants(&c->p, &c->b);
+    if (c->method < -1 || c->method >= N_METHODS) c->method = -1;
+    c->method_text[METHOD_TEXT - 1] = '\0';
+    c->p.quasistationary = c->method == 1;
+    c->built = c->built != 0;
+    c->dirty = c->dirty != 0;
+    if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED) c->phase = PH_STEP;
+    c->s.out_sliding = c->s.out_sliding != 0;
+    c->s.sliding = c->s.sliding != 0;
+    c->vs.out_sliding = c->vs.out_sliding != 0;
+    c->vs.sliding = c->vs.sliding != 0;
+    c->vs.jac_valid = c->vs.jac_valid != 0;
+    c->p.ry = CF_DYN_VY ? 0.0 : c->val[R_VY_RATIO];
+    c->p.rz = CF_DYN_SPIN ? 0.0 : c->val[R_SPIN_RATIO];
+    c->p.dyn_vy = CF_VECTOR && CF_DYN_VY, c->p.dyn_spin = CF_VECTOR && CF_DYN_SPIN;
+    c->p.Iz = CF_VECTOR && CF_DYN_SPIN ? c->val[R_IZ] : 0.0;
+    unsigned top = 0;
+    for (int i = 0; i < CF_N_VARS; i++) top = c->bad[i] > top ? c->bad[i] : top;
+    c->next_bad = top;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
+    INST(fmi2GetFMUstate);
+    if (state == NULL) return fmi2Error;
+    cf_core *s = (cf_core *)*state;
+    if (s == NULL) s = (cf_core *)I->cb.allocateMemory(1, sizeof(cf_core));
+    if (s == NULL) {
+        say(I, fmi2Error, "fmi2GetFMUstate: out of memory");
+        return fmi2Error;
+    }
+    *s = I->c;
+    *state = s;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
+    INST(fmi2SetFMUstate);
+    if (state == NULL) {
+        say(I, fmi2Error, "fmi2SetFMUstate: no state given");
+        return fmi2Error;
+    }
+    I->c = *(const cf_core *)state;
+    sanitize(&I->c);
+    if (CF_VECTOR && I->c.built) ensure_grid(I, &I->c.p, &I->c.b, &I->c.p); /* its load's */
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
+    INST(fmi2FreeFMUstate);
+    if (state != NULL && *state != NULL) {
+        I->cb.freeMemory(*state);
+        *state = NULL;
+    }
+    return fmi2OK;
+}
+
+/* serialized: MAGIC, format version (u32), GUID length (u32), GUID, payload length
+ * (u64), payload (the cf_core), FNV-1a 64 of all that (u64); host byte order */
+static const char MAGIC[8] = {'c', 'f', 'm', 'u', 'S', 'T', 'A', 'T'};
+#define STATE_VERSION 1u
+
+static uint64_t fnv1a(const unsigned char *p, size_t n) {
+    uint64_t h = 1469598103934665603ull;
+    for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 1099511628211ull;
+    return h;
+}
+
+static size_t serialized_size(void) {
+    return sizeof MAGIC + 4 + 4 + strlen(CF_GUID) + 8 + sizeof(cf_core) + 8;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
+    INST(fmi2SerializedFMUstateSize);
+    if (state == NULL || size == NULL) return fmi2Error;
+    *size = serialized_size();
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte out[],
+                                 size_t size) {
+    INST(fmi2SerializeFMUstate);
+    if (state == NULL || out == NULL || size < serialized_size()) {
+        say(I, fmi2Error, "fmi2SerializeFMUstate: no state, or a buffer of %zu bytes (%zu "
+            "needed)", size, serialized_size());
+        return fmi2Error;
+    }
+    unsigned char *p = (unsigned char *)out;
+    const uint32_t version = STATE_VERSION, glen = (uint32_t)strlen(CF_GUID);
+    const uint64_t plen = sizeof(cf_core);
+    size_t k = 0;
+    memcpy(p + k, MAGIC, sizeof MAGIC), k += sizeof MAGIC;
+    memcpy(p + k, &version, 4), k += 4;
+    memcpy(p + k, &glen, 4), k += 4;
+    memcpy(p + k, CF_GUID, glen), k += glen;
+    memcpy(p + k, &plen, 8), k += 8;
+    memcpy(p + k, state, sizeof(cf_core)), k += sizeof(cf_core);
+    const uint64_t sum = fnv1a(p, k);
+    memcpy(p + k, &sum, 8);
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte in[], size_t size,
+                                   fmi2FMUstate *state) {
+    INST(fmi2DeSerializeFMUstate);
+    const unsigned char *p = (const unsigned char *)in;
+    const char *why = NULL;
+    uint32_t version = 0, glen = 0;
+    uint64_t plen = 0, sum = 0;
+    if (p == NULL || state == NULL) why = "no bytes";
+    else if (size < sizeof MAGIC + 8 || memcmp(p, MAGIC, sizeof MAGIC) != 0)
+        why = "not an FMU state of a contact_fmu native FMU";
+    if (why == NULL) {
+        memcpy(&version, p + 8, 4);
+        memcpy(&glen, p + 12, 4);
+        if (version != STATE_VERSION) why = "a format version this FMU does not read";
+        else if (glen != strlen(CF_GUID) || size < 16 + (size_t)glen ||
+                 memcmp(p + 16, CF_GUID, glen) != 0)
+            why = "the state of another FMU (GUID differs)";
+    }
+    if (why == NULL) {
+        if (size != serialized_size()) why = "damaged: its length is wrong";
+        else {
+            memcpy(&plen, p + 16 + glen, 8);
+            memcpy(&sum, p + size - 8, 8);
+            if (plen != sizeof(cf_core)) why = "damaged: its payload length is wrong";
+            else if (fnv1a(p, size - 8) != sum) why = "damaged: its checksum does not match";
+        }
+    }
+    if (why != NULL) {
+        say(I, fmi2Error, "fmi2DeSerializeFMUstate: the bytes are refused: %s", why);
+        return fmi2Error;
+    }
+    cf_core *s = (cf_core *)*state;
+    if (s == NULL) s = (cf_core *)I->cb.allocateMemory(1, sizeof(cf_core));
+    if (s == NULL) {
+        say(I, fmi2Error, "fmi2DeSerializeFMUstate: out of memory");
+        return fmi2Error;
+    }
+    memcpy(s, p + 16 + glen + 8, sizeof(cf_core));
+    sanitize(s);
+    *state = s;
+    return fmi2OK;
+}

@@ -1,0 +1,345 @@
+"""The native FMU: FMI 2.0 co-simulation in compiled C only (``python -m fmu_build --native``).
+
+The binary is contact_fmu/native/fmu2.c (the FMI layer) with stepper.c (the kernel)
+and a header generated here, cf_model.h: the FMU's variables from
+``contact_fmu.fmu.variables`` (names, kinds, starts, ranges and the requirement texts of
+their check messages), its GUID and the Python integrator's constants, so that each
+lives once. The model description is written like the pythonfmu FMU's and completed by
+the same ``model_description.patch`` (units, ranges, starts, ModelStructure); it lists the
+C sources (``<SourceFiles>``) that the FMU carries under ``sources/``, so that fmpy's
+build (or any importer's) compiles it on Windows or macOS; the FMI headers are fmpy's
+(``fmpy/c-code``), found at build time and not carried in this repository.
+
+What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, methods
+"full" and "quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or
+from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the contact mode on
+the thin-layer law without a spin input (sweep); the rigid_body mode (``--full
+rigid_body``). Everything else is refused here with a message that names the scene's
+feature (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import importlib.util
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import uuid
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from contact_fmu import integrator, kinematics, layer, native, solvers
+from contact_fmu.fmu import body_model
+from contact_fmu.fmu import variables as fv
+from contact_fmu.fmu.config import ModelConfig
+
+from . import model_description
+
+FORMAT = "contact_fmu-native-fmu-1"
+NATIVE_DIR = Path(native.__file__).resolve().parent
+SOURCES = ("fmu2.c", "stepper.c")  # fmu2.c includes stepper.c: one translation unit
+HEADER = "cf_model.h"
+CFLAGS = (*native.CFLAGS, "-fvisibility=hidden", "-std=c11", "-D_DEFAULT_SOURCE")
+PLATFORM = "linux64"
+
+
+class NativeUnsupportedError(ValueError):
+    """The scene's model has a feature the C kernel does not cover (named in the text)."""
+
+
+@dataclass(frozen=True)
+class NativeBuilt:
+    path: Path
+    key: str
+    guid: str
+    identifier: str
+    cached: bool
+
+
+def unsupported(cfg: ModelConfig) -> str | None:
+    """Why the native FMU cannot carry ``cfg``'s model, or None."""
+    if cfg.mode == "rigid_body":
+        return None  # Eqs. (8)-(9) alone: no law
+    if cfg.contact_law != "layer":
+        return (
+            f'contact_law = "{cfg.contact_law}" (the native FMU has the thin-layer law only; '
+            "the half-space creep-force table is not carried)"
+        )
+    if cfg.mode == "contact" and "Omega_z" in cfg.inputs:
+        return (
+            "input Omega_z (spin: the strip march of the thin-layer law needs its grid, "
+            "which the native FMU does not build)"
+        )
+    if cfg.phase != "steady":
+        return f'phase = "{cfg.phase}" (the transient traction field is not in the C kernel)'
+    if cfg.spin == "ratio" and cfg.vy != "eq10":
+        return (
+            'spin = "ratio" without vy = "eq10" (a held spin ratio with vx the only unknown '
+            "runs in Python only, not in the C kernel)"
+        )
+    if tuple(cfg.schemes) != ("lobatto3c",):
+        return f"scheme {list(cfg.schemes)} (the C kernel has Lobatto IIIC only, not SDIRK2)"
+    return None
+
+
+def _c(x: float) -> str:
+    """A double as a C literal that reads back to the same double."""
+    r = repr(float(x))
+    if r in ("inf", "-inf"):
+        return "(-INFINITY)" if r[0] == "-" else "INFINITY"
+    if "." not in r and "e" not in r:
+        r += ".0"
+    return r
+
+
+def _cstr(s: str) -> str:
+    return json.dumps(s)  # a C string literal for the ASCII texts used here
+
+
+def _time_rtol() -> float:
+    """slave.TIME_RTOL, read from its source (the build does not import pythonfmu)."""
+    src = (Path(body_model.__file__).with_name("slave.py")).read_text()
+    for node in ast.parse(src).body:
+        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "TIME_RTOL":
+            return float(ast.literal_eval(node.value))
+    raise RuntimeError("slave.TIME_RTOL not found")
+
+
+# the constants of the Python integrator the C kernel reads, by their C names
+def constants() -> dict[str, float | int]:
+    return {
+        "V_STANDSTILL": integrator.V_STANDSTILL,
+        "V_SCALE_FLOOR": integrator.V_SCALE_FLOOR,
+        "Z_ALGEBRAIC": integrator.Z_ALGEBRAIC,
+        "CAPACITY_MARGIN": integrator.CAPACITY_MARGIN,
+        "ALGEBRAIC_KEY": integrator.ALGEBRAIC,
+        "SOLVE_RTOL": solvers.SOLVE_RTOL,
+        "EXPAND": solvers.EXPAND,
+        "MAX_EXPANSIONS": solvers.MAX_EXPANSIONS,
+        "MAX_NEWTON": solvers.MAX_NEWTON,
+        "FD_STEP": solvers.FD_STEP,
+        "LINE_SEARCH_MIN": solvers.LINE_SEARCH_MIN,
+        "CONTRACTION_MAX": solvers.CONTRACTION_MAX,
+        "CONTRACTION_FAST": solvers.CONTRACTION_FAST,
+        "NEWTON_ITERATIONS": solvers.NEWTON_ITERATIONS,
+        "BETA_FULL_SLIP": layer.BETA_FULL_SLIP,
+        "BETA_SERIES": layer.BETA_SERIES,
+        "V_CREEP_FLOOR": kinematics.V_CREEP_FLOOR,
+        "SUBSTEP_SLACK": body_model.SUBSTEP_SLACK,
+        "MAX_SUBSTEPS": body_model.MAX_SUBSTEPS,
+        "TIME_RTOL": _time_rtol(),
+    }
+
+
+_ROLES = {
+    "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "Omega_y0",
+    "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
+    "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex",
+}  # fmt: skip
+_MODES = {"body": "MODE_BODY", "contact": "MODE_CONTACT", "rigid_body": "MODE_RIGID"}
+
+
+def _role(cfg: ModelConfig, v: fv.Var) -> str:
+    if v.causality[cfg.mode] == fv.OUTPUT:
+        return f"R_OUT + {native.OUTPUTS.index(v.name)}"
+    if v.name not in _ROLES:
+        raise NativeUnsupportedError(f"variable {v.name} (not read by the native FMU's model)")
+    return "R_" + v.name.upper()
+
+
+def header(cfg: ModelConfig, guid: str) -> str:
+    """cf_model.h for ``cfg``: the variables in value-reference order, the GUID, the
+    start method and the constants."""
+    kinds = {fv.PARAMETER: "K_PARAMETER", fv.INPUT: "K_INPUT", fv.OUTPUT: "K_OUTPUT"}
+    types = {"Real": "T_REAL", "Integer": "T_INTEGER", "String": "T_STRING"}
+    rows = []
+    for v in cfg.variables:
+        lo, hi = cfg.bounds(v)
+        # outputs start at their declared value before set-up (slave.py's _out)
+        start = v.start if v.causality[cfg.mode] == fv.OUTPUT else cfg.start(v)
+        lo_req = hi_req = "NULL"
+        if lo is not None:  # Var.check's texts
+            lo_req = _cstr(f"{'>' if v.open_min else '>='} {lo:g}")
+        if hi is not None:
+            hi_req = _cstr(f"<= {hi:g}")
+        rows.append(
+            f"    {{{_cstr(v.name)}, {kinds[v.causality[cfg.mode]]}, {types[v.type]}, "
+            f"{_role(cfg, v)}, {_c(0.0 if v.type == 'String' else float(start))}, "
+            f"{_c(-float('inf') if lo is None else lo)}, {_c(float('inf') if hi is None else hi)}, "
+            f"{int(v.open_min)}, {lo_req}, {hi_req}}},"
+        )
+    method = cfg.start(fv.BY_NAME["method"]) if "method" in fv.BY_NAME else cfg.methods[0]
+    lines = [
+        "/* Generated by fmu_build/native_fmu.py from contact_fmu/fmu/variables.py. */",
+        f"#define CF_GUID {_cstr(guid)}",
+        f"#define CF_N_VARS {len(rows)}",
+        f"#define CF_MODE {_MODES[cfg.mode]}",
+        # the vector path (stepper.c, cf_advance_vector): Vy and/or Omega_z as unknowns
+        f"#define CF_DYN_VY {int(cfg.mode == 'body' and cfg.vy == 'eq10')}",
+        f"#define CF_DYN_SPIN {int(cfg.mode == 'body' and cfg.spin == 'eq11')}",
+        "#define CF_VECTOR (CF_DYN_VY || CF_DYN_SPIN)",
+        f"#define CF_SPIN_NX {layer.SPIN_GRID[0]}",
+        f"#define CF_SPIN_NY {layer.SPIN_GRID[1]}",
+        f"#define CF_TINY {_c(layer.TINY)}",
+        f"#define CF_METHOD_START {('full', 'quasistationary').index(method)}",
+        "static const cf_var CF_VARS[CF_N_VARS] = {",
+        *rows,
+        "};",
+    ]
+    for name, value in constants().items():
+        lit = str(value) if isinstance(value, int) else _c(value)
+        lines.append(f"#define CF_{name} {lit}")
+    return "\n".join(lines) + "\n"
+
+
+def _skeleton(cfg: ModelConfig, identifier: str, guid: str) -> bytes:
+    """A model description in pythonfmu's layout, for model_description.patch."""
+    root = ET.Element(
+        "fmiModelDescription",
+        fmiVersion="2.0",
+        modelName=identifier,
+        guid=guid,
+        generationTool="contact_fmu fmu_build --native",
+        variableNamingConvention="structured",
+        description=cfg.description or f"Spector & Batra (1995) contact, {cfg.mode} mode",
+        author="contact_fmu",
+        license="MIT",
+    )
+    cs = ET.SubElement(
+        root,
+        "CoSimulation",
+        modelIdentifier=identifier,
+        needsExecutionTool="false",
+        canHandleVariableCommunicationStepSize="true",
+        canInterpolateInputs="false",
+        canBeInstantiatedOnlyOncePerProcess="false",
+        canNotUseMemoryManagementFunctions="false",
+        canGetAndSetFMUstate="true",
+        canSerializeFMUstate="true",
+        # the contact mode's force element, for masters that couple implicitly
+        providesDirectionalDerivative="true" if cfg.mode == "contact" else "false",
+    )
+    files = ET.SubElement(cs, "SourceFiles")
+    ET.SubElement(files, "File", name=SOURCES[0])
+    cats = ET.SubElement(root, "LogCategories")
+    for name, text in (
+        ("logStatusWarning", "Log messages with fmi2Warning status."),
+        ("logStatusDiscard", "Log messages with fmi2Discard status."),
+        ("logStatusError", "Log messages with fmi2Error status."),
+        ("logStatusFatal", "Log messages with fmi2Fatal status."),
+        ("logAll", "Log all messages."),
+    ):
+        ET.SubElement(cats, "Category", name=name, description=text)
+    if cfg.experiment is not None:
+        start, stop, step = cfg.experiment
+        ET.SubElement(
+            root,
+            "DefaultExperiment",
+            startTime=repr(float(start)),
+            stopTime=repr(float(stop)),
+            stepSize=repr(float(step)),
+        )
+    mv = ET.SubElement(root, "ModelVariables")
+    for vr, v in enumerate(cfg.variables):
+        c = v.causality[cfg.mode]
+        attrs = {"name": v.name, "valueReference": str(vr), "description": v.description}
+        attrs["causality"] = c
+        if c == fv.PARAMETER:
+            attrs["variability"] = "fixed"
+        elif c == fv.INPUT:
+            attrs["variability"] = "continuous"
+        else:
+            attrs["variability"] = "continuous" if v.type == "Real" else "discrete"
+            attrs["initial"] = "calculated"
+        sv = ET.SubElement(mv, "ScalarVariable", attrs)
+        typed = ET.SubElement(sv, v.type)
+        if c != fv.OUTPUT:
+            typed.set("start", str(cfg.start(v)))
+    ET.SubElement(root, "ModelStructure")
+    return ET.tostring(root, encoding="UTF-8")
+
+
+def fmi_headers() -> Path:
+    """fmpy's copy of the FMI 2.0 headers (fmpy/c-code)."""
+    spec = importlib.util.find_spec("fmpy")
+    if spec is None or spec.origin is None:
+        raise NativeUnsupportedError("fmpy is not installed: its FMI headers are needed")
+    path = Path(spec.origin).parent / "c-code"
+    if not (path / "fmi2Functions.h").is_file():
+        raise NativeUnsupportedError(f"no fmi2Functions.h under {path}")
+    return path
+
+
+def identity(cfg: ModelConfig) -> str:
+    """The content key: the configuration, the C sources, the variables' header and this
+    module; the GUID and the model identifier follow from it."""
+    h = hashlib.sha256(FORMAT.encode())
+    h.update(json.dumps(cfg.to_dict(), sort_keys=True).encode())
+    h.update(header(cfg, "").encode())
+    h.update(_skeleton(cfg, "", ""))
+    for name in SOURCES:
+        h.update((NATIVE_DIR / name).read_bytes())
+    h.update(Path(__file__).read_bytes())
+    h.update(Path(model_description.__file__).read_bytes())
+    h.update(" ".join(CFLAGS).encode())
+    return h.hexdigest()
+
+
+def _zip(final: Path, files: dict[str, bytes]) -> None:
+    with zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data in files.items():
+            info = zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
+            info.external_attr = 0o644 << 16  # readable by all once extracted
+            info.compress_type = zipfile.ZIP_DEFLATED
+            z.writestr(info, data)
+
+
+def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
+    """fmu2.c (with stepper.c and cf_model.h in ``src_dir``) into the shared library
+    ``target``; CalledProcessError with the compiler's output on failure."""
+    cc = os.environ.get("CC", "cc")
+    cmd = [cc, *CFLAGS, *extra, f"-I{src_dir}", f"-I{fmi_headers()}", "-o", str(target),
+           str(src_dir / SOURCES[0]), "-lm"]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True, text=True)
+    return target
+
+
+def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeBuilt:
+    """The native FMU of ``cfg`` under ``out_dir`` (built unless cached); NativeUnsupportedError
+    naming the feature where the C kernel does not cover the model."""
+    why = unsupported(cfg)
+    if why is not None:
+        raise NativeUnsupportedError(f"no native FMU for scene {cfg.name!r}: {why}")
+    key = identity(cfg)
+    guid = "{" + str(uuid.UUID(key[:32])) + "}"
+    identifier = f"{cfg.name[0].upper()}{cfg.name[1:]}_native_{key[:12]}"
+    out_dir = Path(out_dir).resolve()
+    target = out_dir / f"{cfg.name}-native-{key[:12]}.fmu"
+    if target.is_file() and not force and zipfile.is_zipfile(target):
+        return NativeBuilt(target, key, guid, identifier, cached=True)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".native-{cfg.name}-", dir=out_dir))
+    try:
+        src = work / "sources"
+        src.mkdir()
+        for name in SOURCES:
+            shutil.copyfile(NATIVE_DIR / name, src / name)
+        (src / HEADER).write_text(header(cfg, guid))
+        lib = compile_binary(src, work / f"{identifier}.so")
+        xml = model_description.patch(_skeleton(cfg, identifier, guid), cfg)
+        files = {"modelDescription.xml": xml}
+        files[f"binaries/{PLATFORM}/{identifier}.so"] = lib.read_bytes()
+        for name in (*SOURCES, HEADER):
+            files[f"sources/{name}"] = (src / name).read_bytes()
+        final = work / "final.fmu"
+        _zip(final, files)
+        os.replace(final, target)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return NativeBuilt(target, key, guid, identifier, cached=False)

@@ -1,0 +1,360 @@
+/* A plain C FMI 2.0 co-simulation importer for the native FMU's tests (no Python).
+ *
+ *   native_importer LIB GUID IDENT run  SPEC   run a case: outputs of every step (hex)
+ *   native_importer LIB GUID IDENT fuzz SPEC SEED N   N random calls with extreme values
+ *   native_importer LIB GUID IDENT bench SPEC H N     N steps of H, inputs at their
+ *                                                   starts: steps per second (the
+ *                                                   master's setReal, doStep, getReal)
+ *
+ * LIB is the FMU's shared library, opened with dlopen; built with -DLINKED (the
+ * sanitizer build: the FMU's sources compiled into this program) the functions are
+ * called directly and LIB is ignored. SPEC (text):
+ *   line 1: the Real inputs' value references       "n vr..."
+ *   line 2: the Real outputs' value references      "n vr..."
+ *   line 3: parameters set before initialisation    "n vr value..." (values as %a)
+ *   then, for "run", one row per step: "t h u_1 ... u_n" (hex floats)
+ * "run" prints each step's outputs as hex floats, one line per step; "fuzz" prints a
+ * count of the statuses. Exit status: 0 fine, 2 usage, 3 an FMI answer not allowed
+ * (fmi2Fatal, a non-finite output served with fmi2OK, damaged bytes accepted).
+ */
+#include <math.h>
+#include <time.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+
+#ifndef LINKED
+#include <dlfcn.h>
+#endif
+
+typedef struct {
+    fmi2InstantiateTYPE *Instantiate;
+    fmi2FreeInstanceTYPE *FreeInstance;
+    fmi2SetupExperimentTYPE *SetupExperiment;
+    fmi2EnterInitializationModeTYPE *EnterInit;
+    fmi2ExitInitializationModeTYPE *ExitInit;
+    fmi2TerminateTYPE *Terminate;
+    fmi2ResetTYPE *Reset;
+    fmi2SetRealTYPE *SetReal;
+    fmi2GetRealTYPE *GetReal;
+    fmi2DoStepTYPE *DoStep;
+    fmi2GetFMUstateTYPE *GetState;
+    fmi2SetFMUstateTYPE *SetState;
+    fmi2FreeFMUstateTYPE *FreeState;
+    fmi2SerializedFMUstateSizeTYPE *StateSize;
+    fmi2SerializeFMUstateTYPE *Serialize;
+    fmi2DeSerializeFMUstateTYPE *Deserialize;
+    fmi2GetDirectionalDerivativeTYPE *DirDer;
+} api;
+
+static int load(api *f, const char *lib) {
+#ifdef LINKED
+    (void)lib;
+    f->Instantiate = fmi2Instantiate;
+    f->FreeInstance = fmi2FreeInstance;
+    f->SetupExperiment = fmi2SetupExperiment;
+    f->EnterInit = fmi2EnterInitializationMode;
+    f->ExitInit = fmi2ExitInitializationMode;
+    f->Terminate = fmi2Terminate;
+    f->Reset = fmi2Reset;
+    f->SetReal = fmi2SetReal;
+    f->GetReal = fmi2GetReal;
+    f->DoStep = fmi2DoStep;
+    f->GetState = fmi2GetFMUstate;
+    f->SetState = fmi2SetFMUstate;
+    f->FreeState = fmi2FreeFMUstate;
+    f->StateSize = fmi2SerializedFMUstateSize;
+    f->Serialize = fmi2SerializeFMUstate;
+    f->Deserialize = fmi2DeSerializeFMUstate;
+    f->DirDer = fmi2GetDirectionalDerivative;
+    return 0;
+#else
+    void *h = dlopen(lib, RTLD_NOW | RTLD_LOCAL);
+    if (h == NULL) {
+        fprintf(stderr, "dlopen: %s\n", dlerror());
+        return 1;
+    }
+#define SYM(field, name)                                          \
+    if ((*(void **)&f->field = dlsym(h, name)) == NULL) {         \
+        fprintf(stderr, "missing %s\n", name);                    \
+        return 1;                                                 \
+    }
+    SYM(Instantiate, "fmi2Instantiate");
+    SYM(FreeInstance, "fmi2FreeInstance");
+    SYM(SetupExperiment, "fmi2SetupExperiment");
+    SYM(EnterInit, "fmi2EnterInitializationMode");
+    SYM(ExitInit, "fmi2ExitInitializationMode");
+    SYM(Terminate, "fmi2Terminate");
+    SYM(Reset, "fmi2Reset");
+    SYM(SetReal, "fmi2SetReal");
+    SYM(GetReal, "fmi2GetReal");
+    SYM(DoStep, "fmi2DoStep");
+    SYM(GetState, "fmi2GetFMUstate");
+    SYM(SetState, "fmi2SetFMUstate");
+    SYM(FreeState, "fmi2FreeFMUstate");
+    SYM(StateSize, "fmi2SerializedFMUstateSize");
+    SYM(Serialize, "fmi2SerializeFMUstate");
+    SYM(Deserialize, "fmi2DeSerializeFMUstate");
+    SYM(DirDer, "fmi2GetDirectionalDerivative");
+    return 0;
+#endif
+}
+
+static unsigned long messages;
+static int quiet;
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                   fmi2String category, fmi2String fmt, ...) {
+    (void)env, (void)category;
+    char buf[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    messages++;
+    if (!quiet) fprintf(stderr, "[%s %d] %s\n", name, (int)status, buf);
+}
+
+typedef struct {
+    int n_in, n_out, n_par;
+    fmi2ValueReference in[16], out[32], par[32];
+    double par_val[32];
+} spec;
+
+static int read_list(FILE *f, int *n, fmi2ValueReference *vr, int cap) {
+    if (fscanf(f, "%d", n) != 1 || *n < 0 || *n > cap) return 1;
+    for (int i = 0; i < *n; i++)
+        if (fscanf(f, "%u", &vr[i]) != 1) return 1;
+    return 0;
+}
+
+static int read_spec(FILE *f, spec *s) {
+    if (read_list(f, &s->n_in, s->in, 16) || read_list(f, &s->n_out, s->out, 32)) return 1;
+    if (fscanf(f, "%d", &s->n_par) != 1 || s->n_par < 0 || s->n_par > 32) return 1;
+    for (int i = 0; i < s->n_par; i++) {
+        char v[64];
+        if (fscanf(f, "%u %63s", &s->par[i], v) != 2) return 1;
+        s->par_val[i] = strtod(v, NULL);
+    }
+    return 0;
+}
+
+static fmi2Component start(const api *f, const char *guid, const char *ident,
+                           const fmi2CallbackFunctions *cb, const spec *s) {
+    fmi2Component c = f->Instantiate(ident, fmi2CoSimulation, guid, "", cb, fmi2False, fmi2True);
+    if (c == NULL) return NULL;
+    f->SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+    f->EnterInit(c);
+    if (s->n_par) f->SetReal(c, s->par, (size_t)s->n_par, s->par_val);
+    f->ExitInit(c);
+    return c;
+}
+
+static int run(const api *f, const char *guid, const char *ident, FILE *in) {
+    spec s;
+    if (read_spec(in, &s)) return 2;
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = start(f, guid, ident, &cb, &s);
+    if (c == NULL) return 3;
+    char tok[64];
+    double u[16], y[32];
+    for (;;) {
+        double t, h;
+        if (fscanf(in, "%63s", tok) != 1) break;
+        t = strtod(tok, NULL);
+        if (fscanf(in, "%63s", tok) != 1) return 2;
+        h = strtod(tok, NULL);
+        for (int i = 0; i < s.n_in; i++) {
+            if (fscanf(in, "%63s", tok) != 1) return 2;
+            u[i] = strtod(tok, NULL);
+        }
+        if (f->SetReal(c, s.in, (size_t)s.n_in, u) != fmi2OK) return 3;
+        fmi2Status st = f->DoStep(c, t, h, fmi2True);
+        if (st != fmi2OK) {
+            printf("status %d\n", (int)st);
+            continue;
+        }
+        if (f->GetReal(c, s.out, (size_t)s.n_out, y) != fmi2OK) return 3;
+        for (int i = 0; i < s.n_out; i++) printf(i ? " %a" : "%a", y[i]);
+        printf("\n");
+    }
+    f->Terminate(c);
+    f->FreeInstance(c);
+    return 0;
+}
+
+/* ---- fuzz ------------------------------------------------------------------------- */
+static unsigned long long rng_state;
+static unsigned long long rnd(void) { /* xorshift64* */
+    rng_state ^= rng_state >> 12;
+    rng_state ^= rng_state << 25;
+    rng_state ^= rng_state >> 27;
+    return rng_state * 2685821657736338717ull;
+}
+static double uniform(void) { return (double)(rnd() >> 11) / 9007199254740992.0; }
+
+static double extreme(void) {
+    static const double pool[] = {0.0, -0.0, 1e308, -1e308, 6e306, 1.2e308, 5e-324, -5e-324,
+                                  1e-300, 1.0, -1.0, 1e3, 1000.0, 190.98593171027443, 0.3};
+    switch (rnd() % 5) {
+    case 0: return NAN;
+    case 1: return (rnd() & 1) ? INFINITY : -INFINITY;
+    case 2: return pool[rnd() % (sizeof pool / sizeof pool[0])];
+    case 3: return (uniform() - 0.5) * pow(10.0, (double)(rnd() % 40) - 20.0);
+    default: return (uniform() - 0.5) * 400.0; /* loads around mu P */
+    }
+}
+
+static int fuzz(const api *f, const char *guid, const char *ident, FILE *in, unsigned long long seed,
+                long n) {
+    spec s;
+    if (read_spec(in, &s)) return 2;
+    rng_state = seed * 0x9E3779B97F4A7C15ull + 1;
+    quiet = 1;
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = start(f, guid, ident, &cb, &s);
+    if (c == NULL) return 3;
+    long count[5] = {0};
+    double t = 0.0;
+    fmi2FMUstate saved = NULL;
+    /* every variable a random call may name: inputs, parameters, outputs, and one past */
+    fmi2ValueReference all[96];
+    int n_all = 0;
+    for (int i = 0; i < s.n_in; i++) all[n_all++] = s.in[i];
+    for (int i = 0; i < s.n_par; i++) all[n_all++] = s.par[i];
+    for (int i = 0; i < s.n_out; i++) all[n_all++] = s.out[i];
+    all[n_all++] = 100000u;
+    for (long k = 0; k < n; k++) {
+        fmi2Status st = fmi2OK;
+        switch (rnd() % 10) {
+        case 0: case 1: case 2: { /* a value, mostly an input, extreme or not */
+            fmi2ValueReference vr = rnd() % 4 ? s.in[rnd() % (unsigned)s.n_in]
+                                              : all[rnd() % (unsigned)n_all];
+            double v = rnd() % 3 ? extreme() : 100.0 * uniform();
+            st = f->SetReal(c, &vr, 1, &v);
+            break;
+        }
+        case 3: case 4: case 5: { /* a step, mostly a good one */
+            static const double hs[] = {1e-4, 1.75e-4, 0.0, -1e-4, 1e-300, 1e3, 1e-9, 2.0};
+            double h = rnd() % 4 ? 1.75e-4 : (rnd() % 5 ? hs[rnd() % 8] : extreme());
+            double at = rnd() % 10 ? t : extreme();
+            st = f->DoStep(c, at, h, fmi2True);
+            if (st == fmi2OK) {
+                t = at + h;
+                double y[32];
+                if (f->GetReal(c, s.out, (size_t)s.n_out, y) != fmi2OK) return 3;
+                for (int i = 0; i < s.n_out; i++)
+                    if (!isfinite(y[i])) {
+                        fprintf(stderr, "non-finite output served with fmi2OK\n");
+                        return 3;
+                    }
+            }
+            break;
+        }
+        case 6: /* get or set a state */
+            if (saved == NULL || rnd() % 2) st = f->GetState(c, &saved);
+            else st = f->SetState(c, saved);
+            break;
+        case 7: { /* serialize, damage, deserialize: refused; the intact bytes accepted */
+            if (saved == NULL) break;
+            size_t size = 0;
+            if (f->StateSize(c, saved, &size) != fmi2OK || size == 0) return 3;
+            unsigned char *b = malloc(size);
+            if (b == NULL || f->Serialize(c, saved, (fmi2Byte *)b, size) != fmi2OK) return 3;
+            fmi2FMUstate back = NULL;
+            int damage = (int)(rnd() % 3);
+            size_t len = size;
+            if (damage == 1) b[rnd() % size] ^= (unsigned char)(1u + rnd() % 255u);
+            if (damage == 2) len = rnd() % size;
+            st = f->Deserialize(c, (const fmi2Byte *)b, len, &back);
+            if ((damage == 0) != (st == fmi2OK)) {
+                fprintf(stderr, "deserialize: damage %d answered %d\n", damage, (int)st);
+                return 3;
+            }
+            if (back != NULL) {
+                if (rnd() % 2) f->SetState(c, back);
+                f->FreeState(c, &back);
+            }
+            free(b);
+            break;
+        }
+        case 8: { /* the directional derivative: not provided, an error, no harm */
+            fmi2ValueReference u = s.in[0], z = s.out[0];
+            double dv = 1.0, dz = 0.0;
+            st = f->DirDer(c, &u, 1, &z, 1, &dv, &dz);
+            break;
+        }
+        default: /* now and then start over */
+            if (rnd() % 20 == 0) {
+                st = f->Reset(c);
+                f->SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+                f->EnterInit(c);
+                f->SetReal(c, s.par, (size_t)s.n_par, s.par_val);
+                f->ExitInit(c);
+                t = 0.0;
+            }
+        }
+        if ((int)st < 0 || (int)st >= 5 || st == fmi2Fatal) {
+            fprintf(stderr, "status %d\n", (int)st);
+            return 3;
+        }
+        count[st]++;
+    }
+    if (saved) f->FreeState(c, &saved);
+    f->Terminate(c);
+    f->FreeInstance(c);
+    printf("ok %ld warning %ld discard %ld error %ld messages %lu\n", count[0], count[1],
+           count[2], count[3], messages);
+    return 0;
+}
+
+static int bench(const api *f, const char *guid, const char *ident, FILE *in, double h, long n) {
+    spec s;
+    if (read_spec(in, &s)) return 2;
+    quiet = 1;
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = start(f, guid, ident, &cb, &s);
+    if (c == NULL) return 3;
+    double u[16], y[32], best = INFINITY;
+    if (f->GetReal(c, s.in, (size_t)s.n_in, u) != fmi2OK) return 3; /* the start inputs */
+    double t = 0.0;
+    for (int rep = 0; rep < 3; rep++) {
+        struct timespec a, b;
+        clock_gettime(CLOCK_MONOTONIC, &a);
+        for (long k = 0; k < n; k++) {
+            if (f->SetReal(c, s.in, (size_t)s.n_in, u) != fmi2OK) return 3;
+            if (f->DoStep(c, t, h, fmi2True) != fmi2OK) return 3;
+            t += h;
+            if (f->GetReal(c, s.out, (size_t)s.n_out, y) != fmi2OK) return 3;
+        }
+        clock_gettime(CLOCK_MONOTONIC, &b);
+        double dt = (double)(b.tv_sec - a.tv_sec) + 1e-9 * (double)(b.tv_nsec - a.tv_nsec);
+        best = dt < best ? dt : best;
+    }
+    printf("%.6g\n", (double)n / best);
+    f->FreeInstance(c);
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 6) {
+        fprintf(stderr, "usage: %s LIB GUID IDENT run|fuzz SPEC [SEED N]\n", argv[0]);
+        return 2;
+    }
+    api f;
+    if (load(&f, argv[1])) return 2;
+    FILE *in = fopen(argv[5], "r");
+    if (in == NULL) return 2;
+    int rc;
+    if (strcmp(argv[4], "run") == 0) rc = run(&f, argv[2], argv[3], in);
+    else if (strcmp(argv[4], "bench") == 0 && argc >= 8)
+        rc = bench(&f, argv[2], argv[3], in, strtod(argv[6], NULL), strtol(argv[7], NULL, 10));
+    else if (strcmp(argv[4], "fuzz") == 0 && argc >= 8)
+        rc = fuzz(&f, argv[2], argv[3], in, strtoull(argv[6], NULL, 10), strtol(argv[7], NULL, 10));
+    else rc = 2;
+    fclose(in);
+    return rc;
+}
