@@ -138,7 +138,7 @@ def constants() -> dict[str, float | int]:
 
 
 _ROLES = {
-    "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "Omega_y0",
+    "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "vx0",
     "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
     "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex",
 }  # fmt: skip
@@ -150,7 +150,7 @@ def _role(cfg: ModelConfig, v: fv.Var) -> str:
         return f"R_OUT + {native.OUTPUTS.index(v.name)}"
     if v.name not in _ROLES:
         raise NativeUnsupportedError(f"variable {v.name} (not read by the native FMU's model)")
-    return "R_" + v.name.upper()
+    return "R_SLIP0" if v.name == "vx0" else "R_" + v.name.upper()  # vx0: not R_VX0
 
 
 def header(cfg: ModelConfig, guid: str) -> str:
@@ -250,12 +250,8 @@ def _skeleton(cfg: ModelConfig, identifier: str, guid: str) -> bytes:
         c = v.causality[cfg.mode]
         attrs = {"name": v.name, "valueReference": str(vr), "description": v.description}
         attrs["causality"] = c
-        if c == fv.PARAMETER:
-            attrs["variability"] = "fixed"
-        elif c == fv.INPUT:
-            attrs["variability"] = "continuous"
-        else:
-            attrs["variability"] = "continuous" if v.type == "Real" else "discrete"
+        attrs["variability"] = fv.variability(v, cfg.mode)
+        if c == fv.OUTPUT:
             attrs["initial"] = "calculated"
         sv = ET.SubElement(mv, "ScalarVariable", attrs)
         typed = ET.SubElement(sv, v.type)
