@@ -181,7 +181,7 @@ def build(
         target, key, module, class_name, package, tuple(modules), True, stable, ident, guid(key)
     )
     if target.is_file() and not force and zipfile.is_zipfile(target):
-        _publish(target, stable)
+        publish(target, stable)
         return info
     target.parent.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix=f".build-{cfg.name}-", dir=target.parent))
@@ -220,13 +220,13 @@ def build(
         os.replace(final, target)  # atomic: concurrent builds of one key are harmless
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    _publish(target, stable)
+    publish(target, stable)
     return Built(
         target, key, module, class_name, package, tuple(modules), False, stable, ident, info.guid
     )
 
 
-def _publish(target: Path, stable: Path) -> None:
+def publish(target: Path, stable: Path) -> None:
     """``stable`` becomes the content of ``target``, atomically (a hard link, or a copy
     where links are not possible, renamed over it): a reader never sees a partial file."""
     tmp = stable.with_name(f".{stable.name}.{os.getpid()}.tmp")
@@ -275,6 +275,12 @@ def _finish(
                     data = shim
             entries[name] = data
     entries.update(documentation.files(cfg, ident))
+    write_archive(final, entries)
+
+
+def write_archive(final: Path, entries: dict[str, bytes]) -> None:
+    """An FMU archive of ``entries`` (path -> content): an entry per folder (0755) and
+    per file (0644), from a Unix system at a fixed date, compressed."""
     folders = sorted({n.rsplit("/", i)[0] for n in entries for i in range(1, n.count("/") + 1)})
     with zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as zout:
         for folder in folders:

@@ -90,7 +90,7 @@ def _native(configs: list, args: argparse.Namespace) -> int:
         state = "cached" if built.cached else "built"
         n = len(cfg.variables)
         print(f"{cfg.name}: native FMU ({state}; {n} variables; {built.identifier})")
-        paths.append(built.path)
+        paths.append(built.stable)
     print(paths[-1])
     return 0
 

@@ -134,8 +134,29 @@ def variables_html(cfg: ModelConfig) -> str:
     return "\n".join(rows)
 
 
-def index_html(cfg: ModelConfig, identifier: str, figure: str | None) -> str:
-    """documentation/index.html of the FMU for ``cfg``."""
+# the FMU's binary, per build target: what the host needs, the licences it carries
+_TARGETS = {
+    "pythonfmu": (
+        "The FMU's Python parts run in the importing process: the host needs Python 3.11 "
+        "with numpy and scipy (pythonfmu's binary).",
+        '<p>MIT: see <a href="licenses/LICENSE.txt">licenses/LICENSE.txt</a>; pythonfmu '
+        '(the FMU\'s inner binary): <a href="licenses/pythonfmu-LICENSE.txt">'
+        "licenses/pythonfmu-LICENSE.txt</a>.</p>",
+    ),
+    "native": (
+        "A native C FMU (binaries/linux64 and its C sources under sources/): any FMI 2.0 "
+        "importer runs it, with no Python on the host.",
+        '<p>MIT: see <a href="licenses/LICENSE.txt">licenses/LICENSE.txt</a>.</p>',
+    ),
+}
+
+
+def index_html(
+    cfg: ModelConfig, identifier: str, figure: str | None, target: str = "pythonfmu"
+) -> str:
+    """documentation/index.html of the FMU for ``cfg`` built for ``target`` (pythonfmu or
+    native)."""
+    host, licence = _TARGETS[target]
     e = html.escape
     title = cfg.description or f"{identifier}: {cfg.mode}-mode contact FMU"
     law = {"layer": "thin compliant layers (Eqs. 31-43)", "halfspace": "elastic half-spaces"}
@@ -170,8 +191,7 @@ def index_html(cfg: ModelConfig, identifier: str, figure: str | None) -> str:
         variables_html(cfg),
         "<h2>How to use it</h2>",
         f"<p>{e(_USE[cfg.mode])}</p>",
-        "<p>The FMU's Python parts run in the importing process: the host needs Python "
-        "3.11 with numpy and scipy (pythonfmu's binary). With fmpy:</p>",
+        f"<p>{e(host)} With fmpy:</p>",
         "<pre><code>import fmpy\n"
         f"fmpy.dump({identifier + '.fmu'!r})\n"
         f"result = fmpy.simulate_fmu({identifier + '.fmu'!r}, stop_time=..., "
@@ -185,9 +205,7 @@ def index_html(cfg: ModelConfig, identifier: str, figure: str | None) -> str:
         ]
     parts += [
         "<h2>Licence</h2>",
-        '<p>MIT: see <a href="licenses/LICENSE.txt">licenses/LICENSE.txt</a>; pythonfmu '
-        '(the FMU\'s inner binary): <a href="licenses/pythonfmu-LICENSE.txt">'
-        "licenses/pythonfmu-LICENSE.txt</a>.</p>",
+        licence,
         "</body></html>",
         "",
     ]
@@ -229,8 +247,8 @@ def _pythonfmu_license() -> bytes:
     )
 
 
-def files(cfg: ModelConfig, identifier: str) -> list[tuple[str, bytes]]:
-    """The FMU's documentation entries: (path inside the FMU, content)."""
+def files(cfg: ModelConfig, identifier: str, target: str = "pythonfmu") -> dict[str, bytes]:
+    """The FMU's documentation entries: path inside the FMU -> content."""
     fig = scene_figure(cfg)
     out = []
     figure_name = None
@@ -238,9 +256,10 @@ def files(cfg: ModelConfig, identifier: str) -> list[tuple[str, bytes]]:
         figure_name = f"scene_{cfg.name}.png"
         out.append((f"documentation/{figure_name}", fig.read_bytes()))
     out += [
-        ("documentation/index.html", index_html(cfg, identifier, figure_name).encode()),
+        ("documentation/index.html", index_html(cfg, identifier, figure_name, target).encode()),
         ("documentation/licenses/LICENSE.txt", LICENSE.read_bytes()),
-        ("documentation/licenses/pythonfmu-LICENSE.txt", _pythonfmu_license()),
         ("model.png", icon_png()),
     ]
-    return out
+    if target == "pythonfmu":
+        out.append(("documentation/licenses/pythonfmu-LICENSE.txt", _pythonfmu_license()))
+    return dict(out)

@@ -39,7 +39,8 @@ from contact_fmu.fmu import body_model
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 
-from . import model_description
+from . import CACHE, documentation, model_description, publish, write_archive
+from . import identifier as model_identifier
 
 FORMAT = "contact_fmu-native-fmu-1"
 NATIVE_DIR = Path(native.__file__).resolve().parent
@@ -55,11 +56,16 @@ class NativeUnsupportedError(ValueError):
 
 @dataclass(frozen=True)
 class NativeBuilt:
+    """A native FMU: its content-keyed file (``path``), the user's stable copy
+    (``stable``, <out>/<name>_native.fmu, the latest build), GUID and identifier (the
+    scene's name and _native: stable across rebuilds)."""
+
     path: Path
     key: str
     guid: str
     identifier: str
     cached: bool
+    stable: Path
 
 
 def unsupported(cfg: ModelConfig) -> str | None:
@@ -283,17 +289,11 @@ def identity(cfg: ModelConfig) -> str:
         h.update((NATIVE_DIR / name).read_bytes())
     h.update(Path(__file__).read_bytes())
     h.update(Path(model_description.__file__).read_bytes())
+    h.update(Path(documentation.__file__).read_bytes())
+    for doc in documentation.sources(cfg):  # the licence, the scene's figure
+        h.update(doc.read_bytes())
     h.update(" ".join(CFLAGS).encode())
     return h.hexdigest()
-
-
-def _zip(final: Path, files: dict[str, bytes]) -> None:
-    with zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, data in files.items():
-            info = zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
-            info.external_attr = 0o644 << 16  # readable by all once extracted
-            info.compress_type = zipfile.ZIP_DEFLATED
-            z.writestr(info, data)
 
 
 def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
@@ -314,13 +314,15 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeB
         raise NativeUnsupportedError(f"no native FMU for scene {cfg.name!r}: {why}")
     key = identity(cfg)
     guid = "{" + str(uuid.UUID(key[:32])) + "}"
-    identifier = f"{cfg.name[0].upper()}{cfg.name[1:]}_native_{key[:12]}"
+    identifier = f"{model_identifier(cfg)}_native"
     out_dir = Path(out_dir).resolve()
-    target = out_dir / f"{cfg.name}-native-{key[:12]}.fmu"
+    target = out_dir / CACHE / f"{cfg.name}-native-{key[:12]}.fmu"
+    stable = out_dir / f"{identifier}.fmu"
     if target.is_file() and not force and zipfile.is_zipfile(target):
-        return NativeBuilt(target, key, guid, identifier, cached=True)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".native-{cfg.name}-", dir=out_dir))
+        publish(target, stable)
+        return NativeBuilt(target, key, guid, identifier, True, stable)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".native-{cfg.name}-", dir=target.parent))
     try:
         src = work / "sources"
         src.mkdir()
@@ -333,9 +335,11 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeB
         files[f"binaries/{PLATFORM}/{identifier}.so"] = lib.read_bytes()
         for name in (*SOURCES, HEADER):
             files[f"sources/{name}"] = (src / name).read_bytes()
+        files.update(documentation.files(cfg, identifier, target="native"))
         final = work / "final.fmu"
-        _zip(final, files)
+        write_archive(final, files)
         os.replace(final, target)
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    return NativeBuilt(target, key, guid, identifier, cached=False)
+    publish(target, stable)
+    return NativeBuilt(target, key, guid, identifier, False, stable)

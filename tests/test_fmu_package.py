@@ -28,6 +28,7 @@ from contact_fmu import examples as ex
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import OK, Instance
+from fmu_build import native_fmu
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -38,8 +39,13 @@ CONFIGS = {
 }
 
 
-@pytest.fixture(scope="module")
-def built() -> dict[str, fmu_build.Built]:
+@pytest.fixture(scope="module", params=["pythonfmu", "native"])
+def built(request) -> dict[str, fmu_build.Built]:
+    """The FMUs of both targets: pythonfmu's and the native C FMU (fmu_build.native_fmu)."""
+    if request.param == "native":
+        from fmu_build import native_fmu
+
+        return {name: native_fmu.build(cfg, OUT) for name, cfg in CONFIGS.items()}
     return {name: fmu_build.build(cfg, OUT) for name, cfg in CONFIGS.items()}
 
 
@@ -82,7 +88,8 @@ def test_fmu_documents_itself(built):
             licence = z.read("documentation/licenses/LICENSE.txt").decode()
         assert icon[:8] == b"\x89PNG\r\n\x1a\n", name
         assert "MIT License" in licence and "contact_fmu contributors" in licence
-        assert "documentation/licenses/pythonfmu-LICENSE.txt" in names
+        native = isinstance(b, native_fmu.NativeBuilt)  # no pythonfmu inside
+        assert ("documentation/licenses/pythonfmu-LICENSE.txt" in names) != native
         parsed = _Table()
         parsed.feed(page)
         header, *rows = parsed.rows
@@ -131,10 +138,15 @@ def test_zip_entries_are_readable_by_everyone(built):
 def test_stable_identifier_and_binaries_named_after_it(built):
     for name, b in built.items():
         md = fmpy.read_model_description(str(b.stable))
-        assert md.modelName == md.coSimulation.modelIdentifier == CONFIGS[name].name
-        assert md.guid == fmu_build.guid(b.key)
+        assert md.modelName == md.coSimulation.modelIdentifier == b.identifier
+        assert b.stable.name == f"{b.identifier}.fmu"
         with zipfile.ZipFile(b.stable) as z:
             binaries = sorted(n for n in z.namelist() if n.startswith("binaries/") and "." in n)
+        if isinstance(b, native_fmu.NativeBuilt):
+            assert b.identifier == f"{name}_native" and md.guid == b.guid
+            assert binaries == [f"binaries/linux64/{name}_native.so"]
+            continue
+        assert b.identifier == CONFIGS[name].name and md.guid == fmu_build.guid(b.key)
         assert binaries == [f"binaries/linux64/{name}.so", f"binaries/win64/{name}.dll"]
         # the per-content module inside the resources keeps FMUs apart in one process
         assert b.class_name != name and b.key[:12] in b.class_name
