@@ -262,9 +262,9 @@ def test_doStep_before_initialisation_or_after_terminate_is_an_error():
 def test_fixed_parameter_change_after_initialisation_is_ignored_and_logged():
     b = loaded_body()
     assert b.step()
-    b.set("mu", 0.5)
-    assert b.get("mu") == ex.mu
-    assert "mu is a fixed parameter" in b.messages[-1]
+    b.set("M", 2.0)  # mu is tunable (test_fmu_interface); M is fixed
+    assert b.get("M") == ex.M
+    assert "M is a fixed parameter" in b.messages[-1]
     assert b.step()
 
 
@@ -591,6 +591,7 @@ def test_fmu_state_is_checked_whole_and_refused_without_a_trace():
         (crafted(values={**good["values"], "mu": "0.3"}), "is not a number"),
         (crafted(model=(good["model"][0], "not a snapshot")), "cannot be restored"),
         ({k: v for k, v in good.items() if k != "dirty"}, "fields differ"),
+        (crafted(out_mu=-0.3), "is not a positive float"),
         (crafted(values={k: v for k, v in good["values"].items() if k != "mu"}), "differ"),
     ]
     for state, reason in cases:

@@ -19,7 +19,7 @@ from .. import native
 from .._validate import InputError
 from ..dynamics import Body, Lateral, Loads
 from ..integrator import RollingBody
-from ..kinematics import V_CREEP_FLOOR
+from ..kinematics import V_CREEP_FLOOR, spin_for_slip
 from .config import ModelConfig
 from .laws import make_law
 
@@ -54,7 +54,7 @@ def make_stepper(
         Lateral(vy_ratio=vy_ratio, spin_ratio=spin_ratio),
         method=p.get("method", cfg.methods[0]),
         Vx0=p["Vx0"],
-        Omega_y0=p["Omega_y0"],
+        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]),
         Vy0=p.get("Vy0", 0.0),
         Omega_z0=p.get("Omega_z0", 0.0),
         t0=t0,
@@ -106,6 +106,11 @@ class BodyModel:
 
     def evaluate(self, inputs: Mapping[str, float]) -> None:  # no feedthrough
         return None
+
+    def tune(self, params: Mapping[str, Any]) -> None:
+        """mu from the next step on (a wet or contaminated patch)."""
+        if "mu" in params:
+            self.stepper.set_mu(params["mu"])
 
     def outputs(self) -> dict[str, float]:
         return self.stepper.outputs()

@@ -87,7 +87,8 @@ class Var:
     depends on directly (ModelStructure/Outputs dependencies). ``laws``: the contact
     laws whose models have the variable (None: every law); the half-space law's
     geometry and materials are structural, so the layer law's Ry, k1, k2, kb, ks are
-    parameters of the layer law only.
+    parameters of the layer law only. ``tunable``: a parameter the FMU takes between
+    steps too (variability "tunable"; else "fixed").
     """
 
     name: str
@@ -102,6 +103,7 @@ class Var:
     needs: str | None = None
     feedthrough: tuple[str, ...] = field(default=())
     laws: tuple[str, ...] | None = None
+    tunable: bool = False
 
     def check(self, value: object) -> str | None:
         """None if ``value`` is admissible, else the requirement it violates."""
@@ -133,7 +135,16 @@ _ALL = ("body", "contact", "rigid_body")
 
 VARIABLES: tuple[Var, ...] = (
     # ---- parameters ------------------------------------------------------------------
-    _p("mu", "1", "Coefficient of friction (> 0)", 0.3, min=0.0, open_min=True),
+    _p(
+        "mu",
+        "1",
+        "Coefficient of friction (> 0); tunable: a new value between steps (a wet or "
+        "contaminated patch) applies from the next step, the bound becomes mu P",
+        0.3,
+        min=0.0,
+        open_min=True,
+        tunable=True,
+    ),
     _p(
         "Rx",
         "m",
@@ -155,7 +166,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "k1",
         "m/Pa",
-        "Normal compliance of the body's layer, Eq. (32)",
+        "Normal compliance of the body's layer, Eq. (32) (>= 0, with k1 + k2 > 0)",
         5.0e-13,
         min=0.0,
         laws=_LAYER,
@@ -163,7 +174,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "k2",
         "m/Pa",
-        "Normal compliance of the substrate's layer, Eq. (32)",
+        "Normal compliance of the substrate's layer, Eq. (32) (>= 0, with k1 + k2 > 0)",
         5.0e-13,
         min=0.0,
         laws=_LAYER,
@@ -171,7 +182,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "kb",
         "m/Pa",
-        "Tangential compliance of the body's layer, Eq. (31)",
+        "Tangential compliance of the body's layer, Eq. (31) (>= 0, with kb + ks > 0)",
         3.2e-13,
         min=0.0,
         laws=_LAYER,
@@ -179,7 +190,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "ks",
         "m/Pa",
-        "Tangential compliance of the substrate's layer, Eq. (31)",
+        "Tangential compliance of the substrate's layer, Eq. (31) (>= 0, with kb + ks > 0)",
         3.2e-13,
         min=0.0,
         laws=_LAYER,
@@ -188,7 +199,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "Iy",
         "kg.m2",
-        "Moment of inertia about the axle; eta = M Rx^2/Iy, Iy = 0 is eta = inf",
+        "Moment of inertia about the axle (>= 0); eta = M Rx^2/Iy, Iy = 0 is eta = inf",
         0.05**2 / 3.0,
         modes=_BODY_RB,
         min=0.0,
@@ -229,13 +240,15 @@ VARIABLES: tuple[Var, ...] = (
         max=SPEED_MAX,
     ),
     _p(
-        "Omega_y0",
-        "rad/s",
-        "Initial angular velocity about the axle (Vx0/Rx: pure rolling; abs <= 1e7 rad/s)",
-        112.83791670955127,
+        "vx0",
+        "m/s",
+        "Initial rigid slip at the contact centre, Vx0 - Omega_y0 Rx (Eq. 3): the body "
+        "starts with Omega_y0 = (Vx0 - vx0)/Rx; 0 is pure rolling at any Vx0 (initial "
+        "creepage xi_x0 = vx0/abs(Vx0); abs <= 1e4 m/s)",
+        0.0,
         modes=_BODY_RB,
-        min=-RATE_MAX,
-        max=RATE_MAX,
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
     ),
     _p(
         "Vy0",
@@ -531,6 +544,15 @@ VARIABLES: tuple[Var, ...] = (
 )
 
 BY_NAME: dict[str, Var] = {v.name: v for v in VARIABLES}
+
+
+def variability(var: Var, mode: str) -> str:
+    """FMI variability of ``var`` in ``mode``: parameters fixed (or tunable), Real inputs
+    and outputs continuous, others discrete."""
+    c = var.causality[mode]
+    if c == PARAMETER:
+        return "tunable" if var.tunable else "fixed"
+    return "continuous" if var.type == "Real" else "discrete"
 
 
 def applicable(var: Var, s: Structure) -> bool:
