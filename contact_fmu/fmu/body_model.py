@@ -22,6 +22,7 @@ from ..integrator import RollingBody
 from ..kinematics import V_CREEP_FLOOR, spin_for_slip
 from .config import ModelConfig
 from .laws import make_law
+from .variables import RATE_MAX, SPEED_MAX
 
 # Most stepper steps per communication step: beyond, h_max is enlarged for that step
 # (the scheme stays stable; only the accuracy of the slow dynamics drops) so that one
@@ -35,6 +36,19 @@ def substeps(h: float, h_max: float) -> int:
     """ceil(h / h_max), at least 1, at most MAX_SUBSTEPS."""
     n = math.ceil(h / h_max * (1.0 - SUBSTEP_SLACK))
     return min(max(n, 1), MAX_SUBSTEPS)
+
+
+def within_range(out: Mapping[str, float]) -> None:
+    """InputError where a step took a speed or rate beyond its physical range (the
+    declared range of its initial value): there the (Vx, vx) state no longer resolves
+    Omega_y to one step's change (docs/reliability.md); the adapter discards the step."""
+    for name, bound in (("Vx", SPEED_MAX), ("Vy", SPEED_MAX), ("Omega_y", RATE_MAX),
+                        ("Omega_z", RATE_MAX)):  # fmt: skip
+        value = out.get(name, 0.0)
+        if not abs(value) <= bound:
+            raise InputError(
+                name, value, f"within abs <= {bound:g} (the loads drive the body beyond it)"
+            )
 
 
 def make_stepper(
@@ -80,6 +94,7 @@ class BodyModel:
         loads = Loads(*[inputs.get(k, 0.0) for k in Loads._fields])
         n = self.internal_steps(h)
         self.stepper.advance(h, loads, n)
+        within_range(self.stepper.outputs())
         if n == MAX_SUBSTEPS and h / self.h_max > MAX_SUBSTEPS:
             return (
                 f"communication step h = {h:g} s exceeds {MAX_SUBSTEPS} internal steps of "

@@ -404,7 +404,8 @@ class ContactSlave(Fmi2Slave):
     def _fast_enable(self) -> None:
         """Use the model's compiled step if it has one (and the FMU no feedthrough)."""
         fast = getattr(self._model, "fast", None)
-        self._fast = fast() if fast is not None and not self._model.feedthrough else None
+        compiled = fast is not None and not self._model.feedthrough and not self._terminated
+        self._fast = fast() if compiled else None
         self._fast_out, self._fast_step, self._out_stale = None, None, False
         self._fast_io, self._fast_inputs, self._fast_reads = None, frozenset(), {}
         for name in _FMI_CALLS:  # the class's methods again

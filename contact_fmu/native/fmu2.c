@@ -666,6 +666,13 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
             return fmi2Discard;
         }
     }
+    if (!within_range(b.out)) { /* body_model.within_range */
+        REPRS();
+        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: the loads "
+            "drive a speed beyond abs %g m/s or a rate beyond abs %g rad/s", rt, rh,
+            CF_SPEED_MAX, CF_RATE_MAX);
+        return fmi2Discard;
+    }
     c->p = p, c->b = b, c->s = w, c->vs = vw, c->P_law = P;
     for (int i = 0; i < CF_N_VARS; i++)
         if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = b.out[CF_VARS[i].role - R_OUT];
