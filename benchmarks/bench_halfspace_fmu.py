@@ -238,7 +238,7 @@ def main(argv: list[str] | None = None) -> int:
         for name, lw in (("table", law), ("layer", twin)):
             best = np.inf
             for _ in range(args.repeats):
-                rb = RollingBody(lw, body, Vx0=p["Vx0"], Omega_y0=p["Omega_y0"])
+                rb = RollingBody(lw, body, Vx0=p["Vx0"], Omega_y0=p["Vx0"] / p["Rx"])  # vx0 = 0
                 t0 = time.perf_counter()
                 for _ in range(args.steps):
                     rb.advance(traction.step, Loads(My_ex=My), 5)

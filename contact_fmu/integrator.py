@@ -152,6 +152,11 @@ class RollingBody(BodyState):
         """Change the normal load P (N): the contact ellipse follows (Eq. 34)."""
         self.law = self.law.with_load(positive("P", P))
 
+    def set_mu(self, mu: float) -> None:
+        """Change the coefficient of friction (takes effect from the next step; the
+        state is kept: the slip relaxes to the new law, or saturates at the new mu P)."""
+        self.law = self.law.with_mu(positive("mu", mu))
+
     def advance(self, h: float, loads: LoadInput, substeps: int = 1) -> None:
         """Advance by h (s) in ``substeps`` equal steps under the load history.
 

@@ -20,6 +20,12 @@ def rigid_slip(Vx: float, Omega_y: float, Vy: float, Rx: float) -> tuple[float, 
     return Vx - Omega_y * Rx, Vy
 
 
+def spin_for_slip(Vx: float, vx: float, Rx: float) -> float:
+    """Omega_y (rad/s) at which the body moving at Vx has the rigid slip vx at the contact
+    centre: Eq. (3) solved, (Vx - vx)/Rx; vx = 0 is pure rolling."""
+    return (Vx - vx) / Rx
+
+
 def creepage(v: float, Vx: float) -> float:
     """v / |Vx| with |Vx| floored at V_CREEP_FLOOR (-)."""
     return v / max(abs(Vx), V_CREEP_FLOOR)

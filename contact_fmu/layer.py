@@ -255,6 +255,13 @@ class LayerContact:
             return self
         return LayerContact(P, self.Rx, self.Ry, self.k1, self.k2, self.kb, self.ks, self.mu)
 
+    def with_mu(self, mu: float) -> LayerContact:
+        """The same contact with another coefficient of friction (a wet or contaminated
+        patch): the bound mu p of Eq. (35) and every force scale with it."""
+        if mu == self.mu:
+            return self
+        return LayerContact(self.P, self.Rx, self.Ry, self.k1, self.k2, self.kb, self.ks, mu)
+
     # ---- tangential contact, Eqs. (35)-(43) ---------------------------------------
     def beta(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike) -> FloatArray:
         """beta = alpha/a1 (Eqs. 39, 43) = a1 |v| / (mu p0 (kb+ks) |Vx|); inf if Vx = 0 < |v|."""

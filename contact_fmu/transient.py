@@ -782,6 +782,11 @@ class TransientRollingBody(BodyState):
         (material outside the new contact is released at the next step)."""
         self.field.set_load(P)
 
+    def set_mu(self, mu: float) -> None:
+        """Change the coefficient of friction: the field is kept; tractions above the new
+        bound mu p are capped at the next step (as after a load drop)."""
+        self.field.law = self.field.law.with_mu(positive("mu", mu))
+
     def advance(self, h: float, loads: LoadInput, substeps: int = 1) -> None:
         """Advance by h (s) in ``substeps`` equal steps under the load history.
 

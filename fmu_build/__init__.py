@@ -24,6 +24,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import uuid
 import zipfile
 from dataclasses import dataclass
 from importlib import metadata
@@ -34,9 +35,19 @@ import fmpy
 from contact_fmu import native
 from contact_fmu.fmu.config import ModelConfig
 
-from . import model_description, script, sources, tables
+from . import documentation, model_description, script, sources, tables
 
 DEFAULT_OUT = Path("out") / "fmu"
+# Under the output folder: the content-keyed builds, <name>-<key[:12]>.fmu. The user's
+# file is <name>.fmu beside it, the latest build of that name (``Built.stable``).
+CACHE = "cache"
+# Zip entries: readable by everyone (an extracted FMU may be shared between users),
+# written by a Unix system (so that unzip applies the modes), at a fixed date (the
+# same content gives the same bytes).
+FILE_MODE, DIR_MODE = 0o100644, 0o040755
+ZIP_DATE = (1980, 1, 1, 0, 0, 0)
+# The GUID of an FMU: derived from its content key (same model, same GUID).
+GUID_NAMESPACE = uuid.UUID("6f1f7d2e-6a55-4c8e-9d0b-2b1f6c0a9e11")
 # Bump when the layout of built FMUs changes without a change of the sources.
 FORMAT = "contact_fmu-fmu-1"
 HERE = Path(__file__).resolve().parent
@@ -59,7 +70,12 @@ class BuildError(RuntimeError):
 
 @dataclass(frozen=True)
 class Built:
-    """A built FMU: its file, identity and whether it came from the cache."""
+    """A built FMU: its content-keyed file (``path``, never rewritten), the user's
+    stable copy (``stable``, <out>/<name>.fmu: the latest build of that name), its
+    identity and whether it came from the cache. The modelIdentifier and modelName
+    are the scene's name (``identifier``); the module, class and package inside the
+    resources carry the content key, so that FMUs of one name but different content
+    never share Python modules in one process."""
 
     path: Path
     key: str
@@ -68,6 +84,9 @@ class Built:
     package: str
     modules: tuple[str, ...]
     cached: bool
+    stable: Path
+    identifier: str
+    guid: str
 
 
 def roots(cfg: ModelConfig) -> list[str]:
@@ -89,8 +108,12 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
     for rel in cfg.generated_files:  # the generated data's content key (no build needed)
         h.update(rel.encode() + b"\0" + tables.key(cfg).encode() + b"\0")
-    for own in sorted(p for p in HERE.glob("*.py") if p.name != "__main__.py") + [SHIM]:
+    # this package's modules that shape an FMU (not the command line, not the systems)
+    own_files = sorted(p for p in HERE.glob("*.py") if p.name not in ("__main__.py", "system.py"))
+    for own in own_files + [SHIM]:
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
+    for doc in documentation.sources(cfg):  # the licence, the scene's figure
+        h.update(doc.name.encode() + b"\0" + doc.read_bytes() + b"\0")
     return h.hexdigest(), modules
 
 
@@ -102,6 +125,19 @@ def names(cfg: ModelConfig, key: str) -> tuple[str, str, str]:
         f"{cfg.name[0].upper()}{cfg.name[1:]}_{short}",
         f"cfmu_{short}",
     )
+
+
+def identifier(cfg: ModelConfig) -> str:
+    """modelIdentifier and modelName: the configuration's name, stable across rebuilds
+    (the binaries are named after it: binaries/linux64/<identifier>.so)."""
+    if not (cfg.name.isascii() and cfg.name.isidentifier()):
+        raise BuildError(f"name {cfg.name!r} is not a C identifier (ASCII letters, digits, _)")
+    return cfg.name
+
+
+def guid(key: str) -> str:
+    """The FMU's GUID from its content key: it changes when the model does, only then."""
+    return str(uuid.uuid5(GUID_NAMESPACE, key))
 
 
 def compiles(cfg: ModelConfig) -> bool:
@@ -138,12 +174,17 @@ def build(
     out_dir = Path(out_dir).resolve()
     key, modules = identity(cfg)
     module, class_name, package = names(cfg, key)
-    target = out_dir / f"{cfg.name}-{key[:12]}.fmu"
-    info = Built(target, key, module, class_name, package, tuple(modules), cached=True)
+    ident = identifier(cfg)
+    target = out_dir / CACHE / f"{cfg.name}-{key[:12]}.fmu"
+    stable = out_dir / f"{ident}.fmu"
+    info = Built(
+        target, key, module, class_name, package, tuple(modules), True, stable, ident, guid(key)
+    )
     if target.is_file() and not force and zipfile.is_zipfile(target):
+        publish(target, stable)
         return info
-    out_dir.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".build-{cfg.name}-", dir=out_dir))
+    target.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".build-{cfg.name}-", dir=target.parent))
     try:
         stage = work / "stage"
         sources.vendor(modules, stage / package, cfg.data_files, compiles(cfg))
@@ -175,11 +216,26 @@ def build(
                 f"{proc.stdout}\n{proc.stderr}"
             )
         final = work / "final.fmu"
-        _finish(raw, final, cfg, _compile_shim(work))
+        _finish(raw, final, cfg, _compile_shim(work), ident, info.guid)
         os.replace(final, target)  # atomic: concurrent builds of one key are harmless
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    return Built(target, key, module, class_name, package, tuple(modules), cached=False)
+    publish(target, stable)
+    return Built(
+        target, key, module, class_name, package, tuple(modules), False, stable, ident, info.guid
+    )
+
+
+def publish(target: Path, stable: Path) -> None:
+    """``stable`` becomes the content of ``target``, atomically (a hard link, or a copy
+    where links are not possible, renamed over it): a reader never sees a partial file."""
+    tmp = stable.with_name(f".{stable.name}.{os.getpid()}.tmp")
+    tmp.unlink(missing_ok=True)
+    try:
+        os.link(target, tmp)
+    except OSError:
+        shutil.copyfile(target, tmp)
+    os.replace(tmp, stable)
 
 
 def _compile_shim(work: Path) -> bytes | None:
@@ -195,17 +251,46 @@ def _compile_shim(work: Path) -> bytes | None:
         return None
 
 
-def _finish(raw: Path, final: Path, cfg: ModelConfig, shim: bytes | None) -> None:
-    """Copy pythonfmu's FMU with the completed model description, compressed; with the
-    shim as the Linux binary and pythonfmu's under resources/."""
-    with zipfile.ZipFile(raw) as zin, zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as zout:
+def _finish(
+    raw: Path, final: Path, cfg: ModelConfig, shim: bytes | None, ident: str, guid: str
+) -> None:
+    """Copy pythonfmu's FMU with the completed model description (stable identifier,
+    content GUID), compressed; the binaries named after the identifier, with the shim as
+    the Linux binary and pythonfmu's under resources/; the documentation and icon
+    added; every entry readable by everyone."""
+    entries: dict[str, bytes] = {}
+    with zipfile.ZipFile(raw) as zin:
         for item in zin.infolist():
-            data = zin.read(item.filename)
-            if item.filename == "modelDescription.xml":
-                data = model_description.patch(data, cfg)
-            if "__pycache__" in item.filename:
+            name = item.filename
+            if "__pycache__" in name or name.endswith("/"):
                 continue
-            if shim is not None and item.filename.startswith("binaries/linux64/"):
-                zout.writestr(f"resources/{INNER}", data)
-                data = shim
-            zout.writestr(item.filename, data)
+            data = zin.read(name)
+            if name == "modelDescription.xml":
+                data = model_description.patch(data, cfg, model_identifier=ident, guid=guid)
+            if name.startswith("binaries/"):  # pythonfmu names them after the class
+                folder, file = name.rsplit("/", 1)
+                name = f"{folder}/{ident}{Path(file).suffix}"
+                if shim is not None and folder == "binaries/linux64":
+                    entries[f"resources/{INNER}"] = data
+                    data = shim
+            entries[name] = data
+    entries.update(documentation.files(cfg, ident))
+    write_archive(final, entries)
+
+
+def write_archive(final: Path, entries: dict[str, bytes]) -> None:
+    """An FMU archive of ``entries`` (path -> content): an entry per folder (0755) and
+    per file (0644), from a Unix system at a fixed date, compressed."""
+    folders = sorted({n.rsplit("/", i)[0] for n in entries for i in range(1, n.count("/") + 1)})
+    with zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as zout:
+        for folder in folders:
+            info = zipfile.ZipInfo(folder + "/", ZIP_DATE)
+            info.create_system = 3
+            info.external_attr = (DIR_MODE << 16) | 0x10  # 0x10: MS-DOS directory flag
+            zout.writestr(info, b"")
+        for name in sorted(entries):
+            info = zipfile.ZipInfo(name, ZIP_DATE)
+            info.create_system = 3
+            info.external_attr = FILE_MODE << 16
+            info.compress_type = zipfile.ZIP_DEFLATED
+            zout.writestr(info, entries[name])

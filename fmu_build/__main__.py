@@ -67,7 +67,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {e}", file=sys.stderr)
             return 1
         state = "cached" if built.cached else "built"
-        print(f"{built.path}  ({state}; {len(cfg.variables)} variables; class {built.class_name})")
+        print(
+            f"{built.stable}  ({state}; {len(cfg.variables)} variables; "
+            f"modelIdentifier {built.identifier}; cache {built.path.name})"
+        )
     return 0
 
 
@@ -87,7 +90,7 @@ def _native(configs: list, args: argparse.Namespace) -> int:
         state = "cached" if built.cached else "built"
         n = len(cfg.variables)
         print(f"{cfg.name}: native FMU ({state}; {n} variables; {built.identifier})")
-        paths.append(built.path)
+        paths.append(built.stable)
     print(paths[-1])
     return 0
 

@@ -37,9 +37,18 @@ def _num(x: float) -> str:
     return repr(float(x))
 
 
-def patch(xml: bytes, cfg: ModelConfig) -> bytes:
-    """The completed model description of an FMU built for ``cfg``."""
+def patch(
+    xml: bytes, cfg: ModelConfig, model_identifier: str | None = None, guid: str | None = None
+) -> bytes:
+    """The completed model description of an FMU built for ``cfg``; with
+    ``model_identifier`` it is the modelName and CoSimulation's modelIdentifier, with
+    ``guid`` the GUID (pythonfmu writes its class name and a random one)."""
     root = ET.fromstring(xml)
+    if model_identifier is not None:
+        root.set("modelName", model_identifier)
+        root.find("CoSimulation").set("modelIdentifier", model_identifier)
+    if guid is not None:
+        root.set("guid", guid)
     for el in root.iter():  # drop pythonfmu's indentation; the output is re-indented
         if el.text is not None and not el.text.strip():
             el.text = None

@@ -42,7 +42,8 @@ from contact_fmu.fmu import body_model
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 
-from . import model_description
+from . import CACHE, documentation, model_description, publish, write_archive
+from . import identifier as model_identifier
 
 FORMAT = "contact_fmu-native-fmu-1"
 NATIVE_DIR = Path(native.__file__).resolve().parent
@@ -58,11 +59,16 @@ class NativeUnsupportedError(ValueError):
 
 @dataclass(frozen=True)
 class NativeBuilt:
+    """A native FMU: its content-keyed file (``path``), the user's stable copy
+    (``stable``, <out>/<name>_native.fmu, the latest build), GUID and identifier (the
+    scene's name and _native: stable across rebuilds)."""
+
     path: Path
     key: str
     guid: str
     identifier: str
     cached: bool
+    stable: Path
 
 
 def unsupported(cfg: ModelConfig) -> str | None:
@@ -145,7 +151,7 @@ def constants() -> dict[str, float | int]:
 
 
 _ROLES = {
-    "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "Omega_y0",
+    "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "vx0",
     "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
     "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex",
 }  # fmt: skip
@@ -157,7 +163,7 @@ def _role(cfg: ModelConfig, v: fv.Var) -> str:
         return f"R_OUT + {native.OUTPUTS.index(v.name)}"
     if v.name not in _ROLES:
         raise NativeUnsupportedError(f"variable {v.name} (not read by the native FMU's model)")
-    return "R_" + v.name.upper()
+    return "R_SLIP0" if v.name == "vx0" else "R_" + v.name.upper()  # vx0: not R_VX0
 
 
 def header(cfg: ModelConfig, guid: str) -> str:
@@ -326,12 +332,8 @@ def _skeleton(cfg: ModelConfig, identifier: str, guid: str) -> bytes:
         c = v.causality[cfg.mode]
         attrs = {"name": v.name, "valueReference": str(vr), "description": v.description}
         attrs["causality"] = c
-        if c == fv.PARAMETER:
-            attrs["variability"] = "fixed"
-        elif c == fv.INPUT:
-            attrs["variability"] = "continuous"
-        else:
-            attrs["variability"] = "continuous" if v.type == "Real" else "discrete"
+        attrs["variability"] = fv.variability(v, cfg.mode)
+        if c == fv.OUTPUT:
             attrs["initial"] = "calculated"
         sv = ET.SubElement(mv, "ScalarVariable", attrs)
         typed = ET.SubElement(sv, v.type)
@@ -363,17 +365,11 @@ def identity(cfg: ModelConfig) -> str:
         h.update((NATIVE_DIR / name).read_bytes())
     h.update(Path(__file__).read_bytes())
     h.update(Path(model_description.__file__).read_bytes())
+    h.update(Path(documentation.__file__).read_bytes())
+    for doc in documentation.sources(cfg):  # the licence, the scene's figure
+        h.update(doc.read_bytes())
     h.update(" ".join(CFLAGS).encode())
     return h.hexdigest()
-
-
-def _zip(final: Path, files: dict[str, bytes]) -> None:
-    with zipfile.ZipFile(final, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, data in files.items():
-            info = zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
-            info.external_attr = 0o644 << 16  # readable by all once extracted
-            info.compress_type = zipfile.ZIP_DEFLATED
-            z.writestr(info, data)
 
 
 def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
@@ -394,13 +390,15 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeB
         raise NativeUnsupportedError(f"no native FMU for scene {cfg.name!r}: {why}")
     key = identity(cfg)
     guid = "{" + str(uuid.UUID(key[:32])) + "}"
-    identifier = f"{cfg.name[0].upper()}{cfg.name[1:]}_native_{key[:12]}"
+    identifier = f"{model_identifier(cfg)}_native"
     out_dir = Path(out_dir).resolve()
-    target = out_dir / f"{cfg.name}-native-{key[:12]}.fmu"
+    target = out_dir / CACHE / f"{cfg.name}-native-{key[:12]}.fmu"
+    stable = out_dir / f"{identifier}.fmu"
     if target.is_file() and not force and zipfile.is_zipfile(target):
-        return NativeBuilt(target, key, guid, identifier, cached=True)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".native-{cfg.name}-", dir=out_dir))
+        publish(target, stable)
+        return NativeBuilt(target, key, guid, identifier, True, stable)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".native-{cfg.name}-", dir=target.parent))
     try:
         src = work / "sources"
         src.mkdir()
@@ -415,9 +413,11 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeB
             files[f"sources/{name}"] = (src / name).read_bytes()
         if cfg.has_table:
             files["resources/table.bin"] = table_bytes(cfg)
+        files.update(documentation.files(cfg, identifier, target="native"))
         final = work / "final.fmu"
-        _zip(final, files)
+        write_archive(final, files)
         os.replace(final, target)
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    return NativeBuilt(target, key, guid, identifier, cached=False)
+    publish(target, stable)
+    return NativeBuilt(target, key, guid, identifier, False, stable)

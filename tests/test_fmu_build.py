@@ -85,7 +85,9 @@ def test_exact_start_values_in_the_model_description(built):
 def _vendored(b: fmu_build.Built) -> set[str]:
     with zipfile.ZipFile(b.path) as z:
         prefix = f"resources/{b.package}/"
-        return {n[len(prefix) :] for n in z.namelist() if n.startswith(prefix)}
+        return {  # files (the archive also holds an entry per folder)
+            n[len(prefix) :] for n in z.namelist() if n.startswith(prefix) and not n.endswith("/")
+        }
 
 
 def test_scene_fmu_holds_only_the_variables_it_uses(built):

@@ -419,7 +419,7 @@ def test_full_body_fmu_lateral_extremes(kind, method):
     path = fmu_build.build(ModelConfig.full("body"), OUT).path
     h = 1e-5
     V0 = 0.3 if kind == "reversal" else ex.speed_unit()
-    starts = {"h_max": h / 4, "Vx0": V0, "Omega_y0": V0 / ex.Rx, "Iy": ex.M * ex.Rx**2 / 2,
+    starts = {"h_max": h / 4, "Vx0": V0, "Iy": ex.M * ex.Rx**2 / 2,
               "method": method}  # fmt: skip
     cfs = ex.contact().creep_full_slip
     with Instance(path, f"{kind}_{method}", starts) as b:

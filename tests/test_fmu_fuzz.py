@@ -170,7 +170,7 @@ def test_checker_momentum_balance_bound():
 
 def test_checker_flags_fatal_nan_friction_and_crash():
     k = KINDS["fig13"]
-    base = {"Vx": k.start("Vx0"), "Omega_y": k.start("Omega_y0"), "Tx": 0.0}
+    base = {"Vx": k.start("Vx0"), "Omega_y": k.start("Vx0") / k.start("Rx"), "Tx": 0.0}
     over = dict(base, Tx=300.0 * (1 + 1e-9))  # mu P = 300 N
     assert "T_exceeds_muP" in _check("fig13", [(0, base, over)])
     assert "T_exceeds_muP" not in _check("fig13", [(0, base, dict(base, Tx=300.0))])

@@ -127,7 +127,7 @@ def test_field_file_is_the_steppers_field_at_the_requested_times(fmu, tmp_path):
     p = {**SCENE.cases[0].parameters, **SMALL}
     tb = TransientRollingBody(
         ex.contact(), ex.body(10.9), Lateral(vy_ratio=0.002), Vx0=p["Vx0"],
-        Omega_y0=p["Omega_y0"], nx=SMALL["nx"], ny=SMALL["ny"],
+        Omega_y0=p["Vx0"] / p["Rx"], nx=SMALL["nx"], ny=SMALL["ny"],  # vx0 = 0
     )  # fmt: skip
     expected = {0.0: (0.0, tb.field_arrays(), tb.outputs()["Tx"])}
     with start(fmu, field_file=str(path), field_times=", ".join(map(repr, times))) as b:

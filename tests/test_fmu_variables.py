@@ -56,7 +56,7 @@ def test_defaults_are_the_parameter_set_of_the_papers_figures():
     assert d["M"] == ex.M
     assert d["Iy"] == pytest.approx(ex.M * ex.Rx**2 / 3.0, rel=1e-15)  # eta = 3
     assert d["Vx0"] == ex.speed_unit()
-    assert d["Omega_y0"] == pytest.approx(ex.speed_unit() / ex.Rx, rel=1e-15)  # pure rolling
+    assert d["vx0"] == 0.0  # pure rolling
 
 
 def test_var_check_names_the_requirement():
@@ -74,7 +74,7 @@ def test_straight_rolling_body_has_no_lateral_variables():
     """Fig. 13 rolls straight (vy = 0, no spin): no lateral degree of freedom is declared."""
     names = {v.name for v in body().variables}
     assert not names & LATERAL
-    assert {"mu", "Rx", "M", "Iy", "Vx0", "Omega_y0", "h_max", "P", "Tx"} <= names
+    assert {"mu", "Rx", "M", "Iy", "Vx0", "vx0", "h_max", "P", "Tx"} <= names
 
 
 def test_full_body_fmu_declares_every_body_variable():

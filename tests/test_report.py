@@ -94,7 +94,7 @@ def test_quasistationary_closed_form_is_what_the_stepper_solves():
     ref = reference.quasistationary_held(s, case, grid)
     p = case.parameters
     rb = RollingBody(reference.law(p, 1000.0), reference.body(p), method="quasistationary",
-                     Vx0=p["Vx0"], Omega_y0=p["Omega_y0"])  # fmt: skip
+                     Vx0=p["Vx0"], Omega_y0=p["Vx0"] / p["Rx"])  # vx0 = 0  # fmt: skip
     My = case.inputs["My_ex"](grid)
     v_s = rb.law.creep_full_slip * p["Vx0"]
     for k in range(1, grid.size):

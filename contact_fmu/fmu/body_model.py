@@ -19,9 +19,10 @@ from .. import native
 from .._validate import InputError
 from ..dynamics import Body, Lateral, Loads
 from ..integrator import RollingBody
-from ..kinematics import V_CREEP_FLOOR
+from ..kinematics import V_CREEP_FLOOR, spin_for_slip
 from .config import ModelConfig
 from .laws import make_law
+from .variables import RATE_MAX, SPEED_MAX
 
 # Most stepper steps per communication step: beyond, h_max is enlarged for that step
 # (the scheme stays stable; only the accuracy of the slow dynamics drops) so that one
@@ -35,6 +36,19 @@ def substeps(h: float, h_max: float) -> int:
     """ceil(h / h_max), at least 1, at most MAX_SUBSTEPS."""
     n = math.ceil(h / h_max * (1.0 - SUBSTEP_SLACK))
     return min(max(n, 1), MAX_SUBSTEPS)
+
+
+def within_range(out: Mapping[str, float]) -> None:
+    """InputError where a step took a speed or rate beyond its physical range (the
+    declared range of its initial value): there the (Vx, vx) state no longer resolves
+    Omega_y to one step's change (docs/reliability.md); the adapter discards the step."""
+    for name, bound in (("Vx", SPEED_MAX), ("Vy", SPEED_MAX), ("Omega_y", RATE_MAX),
+                        ("Omega_z", RATE_MAX)):  # fmt: skip
+        value = out.get(name, 0.0)
+        if not abs(value) <= bound:
+            raise InputError(
+                name, value, f"within abs <= {bound:g} (the loads drive the body beyond it)"
+            )
 
 
 def make_stepper(
@@ -54,7 +68,7 @@ def make_stepper(
         Lateral(vy_ratio=vy_ratio, spin_ratio=spin_ratio),
         method=p.get("method", cfg.methods[0]),
         Vx0=p["Vx0"],
-        Omega_y0=p["Omega_y0"],
+        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]),
         Vy0=p.get("Vy0", 0.0),
         Omega_z0=p.get("Omega_z0", 0.0),
         t0=t0,
@@ -80,6 +94,7 @@ class BodyModel:
         loads = Loads(*[inputs.get(k, 0.0) for k in Loads._fields])
         n = self.internal_steps(h)
         self.stepper.advance(h, loads, n)
+        within_range(self.stepper.outputs())
         if n == MAX_SUBSTEPS and h / self.h_max > MAX_SUBSTEPS:
             return (
                 f"communication step h = {h:g} s exceeds {MAX_SUBSTEPS} internal steps of "
@@ -106,6 +121,11 @@ class BodyModel:
 
     def evaluate(self, inputs: Mapping[str, float]) -> None:  # no feedthrough
         return None
+
+    def tune(self, params: Mapping[str, Any]) -> None:
+        """mu from the next step on (a wet or contaminated patch)."""
+        if "mu" in params:
+            self.stepper.set_mu(params["mu"])
 
     def outputs(self) -> dict[str, float]:
         return self.stepper.outputs()

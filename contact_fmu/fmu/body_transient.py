@@ -33,6 +33,7 @@ import numpy as np
 
 from .._validate import InputError
 from ..dynamics import Body, Lateral
+from ..kinematics import spin_for_slip
 from ..transient import TransientRollingBody
 from .body_model import MAX_SUBSTEPS, BodyModel, substeps
 from .config import ModelConfig
@@ -184,7 +185,7 @@ def make_stepper(
         body,
         Lateral(vy_ratio=vy_ratio, spin_ratio=spin_ratio),
         Vx0=p["Vx0"],
-        Omega_y0=p["Omega_y0"],
+        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]),
         Vy0=p.get("Vy0", 0.0),
         Omega_z0=p.get("Omega_z0", 0.0),
         t0=t0,

@@ -39,6 +39,11 @@ class ContactElement:
         out.update(contact_quantities(law, Vx, vx, vy, Omega_z))
         self.law, self._out = law, out
 
+    def tune(self, params: Mapping[str, Any]) -> None:
+        """mu for the next evaluation (the adapter recomputes the outputs)."""
+        if "mu" in params:
+            self.law = self.law.with_mu(params["mu"])
+
     @property
     def P(self) -> float:
         """The normal load (N) of the current outputs."""

@@ -50,17 +50,21 @@ __asm__(".symver dlerror,dlerror@GLIBC_2.2.5");
 #define CF_FORMAT 1u
 #define CF_MAX_STATES 4096
 
+/* Every FMI 2.0 co-simulation function but the two without an instance. */
+#define CF_FUNCTIONS(X)                                                                  \
+    X(Instantiate) X(FreeInstance) X(SetDebugLogging) X(SetupExperiment)                 \
+    X(EnterInitializationMode) X(ExitInitializationMode) X(Terminate) X(Reset)           \
+    X(GetReal) X(GetInteger) X(GetBoolean) X(GetString)                                  \
+    X(SetReal) X(SetInteger) X(SetBoolean) X(SetString)                                  \
+    X(GetFMUstate) X(SetFMUstate) X(FreeFMUstate) X(SerializedFMUstateSize)              \
+    X(SerializeFMUstate) X(DeSerializeFMUstate) X(GetDirectionalDerivative)              \
+    X(SetRealInputDerivatives) X(GetRealOutputDerivatives) X(DoStep) X(CancelStep)       \
+    X(GetStatus) X(GetRealStatus) X(GetIntegerStatus) X(GetBooleanStatus)                \
+    X(GetStringStatus)
+
 typedef struct {
 #define F(name) fmi2##name##TYPE *name;
-    F(Instantiate) F(FreeInstance) F(SetDebugLogging) F(SetupExperiment)
-    F(EnterInitializationMode) F(ExitInitializationMode) F(Terminate) F(Reset)
-    F(GetReal) F(GetInteger) F(GetBoolean) F(GetString)
-    F(SetReal) F(SetInteger) F(SetBoolean) F(SetString)
-    F(GetFMUstate) F(SetFMUstate) F(FreeFMUstate) F(SerializedFMUstateSize)
-    F(SerializeFMUstate) F(DeSerializeFMUstate) F(GetDirectionalDerivative)
-    F(SetRealInputDerivatives) F(GetRealOutputDerivatives) F(DoStep) F(CancelStep)
-    F(GetStatus) F(GetRealStatus) F(GetIntegerStatus) F(GetBooleanStatus)
-    F(GetStringStatus)
+    CF_FUNCTIONS(F)
 #undef F
 } inner_api;
 
@@ -162,15 +166,7 @@ static int load_inner(shim *s, const char *resources) {
         cf_log(&s->cb, s->name, fmi2Error, "pythonfmu's binary lacks fmi2" #fn);       \
         return 0;                                                                        \
     }
-    F(Instantiate) F(FreeInstance) F(SetDebugLogging) F(SetupExperiment)
-    F(EnterInitializationMode) F(ExitInitializationMode) F(Terminate) F(Reset)
-    F(GetReal) F(GetInteger) F(GetBoolean) F(GetString)
-    F(SetReal) F(SetInteger) F(SetBoolean) F(SetString)
-    F(GetFMUstate) F(SetFMUstate) F(FreeFMUstate) F(SerializedFMUstateSize)
-    F(SerializeFMUstate) F(DeSerializeFMUstate) F(GetDirectionalDerivative)
-    F(SetRealInputDerivatives) F(GetRealOutputDerivatives) F(DoStep) F(CancelStep)
-    F(GetStatus) F(GetRealStatus) F(GetIntegerStatus) F(GetBooleanStatus)
-    F(GetStringStatus)
+    CF_FUNCTIONS(F)
 #undef F
     return 1;
 }

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from .._validate import finite, positive
+from ..kinematics import spin_for_slip
 from .config import ModelConfig
 
 
@@ -55,4 +56,5 @@ def build(
     data_dir: Any = None,  # no contact law, no data
 ) -> RigidBody:
     p = params
-    return RigidBody(p["M"], p["Rx"], p["Iy"], p["Vx0"], p["Omega_y0"])
+    Omega_y0 = spin_for_slip(p["Vx0"], p["vx0"], p["Rx"])
+    return RigidBody(p["M"], p["Rx"], p["Iy"], p["Vx0"], Omega_y0)

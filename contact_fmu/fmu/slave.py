@@ -19,6 +19,8 @@ fmi2OK or fmi2Fatal. So nothing here raises to pythonfmu:
   and answers fmi2Discard;
 - parameters are fixed: once the model is set up, setting one is ignored with a
   logged error; while it cannot be set up (bad parameters) they may still be set.
+  Tunable parameters (``Var.tunable``: mu) go into the running model (``tune``) and
+  apply from the next step (a force element's outputs follow at once).
 
 FMU state (get/set) holds everything: the model's snapshot, parameter and input values,
 outputs, time and flags; get state, step, set state, step again repeats bit for bit.
@@ -85,7 +87,7 @@ _PACKAGE = __name__.split(".")[0]
 # the entry of _bad that a refused FMU state holds (no variable has this name)
 _STATE = "FMU state"
 # the fields of an FMU state (_get_fmu_state)
-_STATE_FIELDS = frozenset({"time", "values", "bad", "out", "dirty", "model"})
+_STATE_FIELDS = frozenset({"time", "values", "bad", "out", "out_mu", "dirty", "model"})
 
 
 class ContactSlave(Fmi2Slave):
@@ -117,6 +119,8 @@ class ContactSlave(Fmi2Slave):
             n: float(v.start) for n, v in self._vars.items() if self._causality[n] == fv.OUTPUT
         }
         self._bad: dict[str, str] = {}  # inadmissible values held: name -> message
+        # the mu the outputs were computed with (a tuned mu applies from the next step)
+        self._out_mu: float | None = self._values.get("mu")
         self._model: Any = None
         self._model_params: dict[str, Any] | None = None
         # the model's compiled step (model.fast(), e.g. native.FastBody) or None; while
@@ -158,15 +162,8 @@ class ContactSlave(Fmi2Slave):
     # ---- registration ------------------------------------------------------------------
     def _fmi_variable(self, v: fv.Var) -> Any:
         c = self._causality[v.name]
-        if c == fv.PARAMETER:
-            variability, initial = Fmi2Variability.fixed, None
-        elif c == fv.INPUT:
-            variability, initial = Fmi2Variability.continuous, None
-        else:
-            variability = (
-                Fmi2Variability.continuous if v.type == "Real" else Fmi2Variability.discrete
-            )
-            initial = Fmi2Initial.calculated
+        variability = Fmi2Variability[fv.variability(v, self.cfg.mode)]
+        initial = Fmi2Initial.calculated if c == fv.OUTPUT else None
         # the per-step calls (Real inputs and outputs) take no detour
         if c == fv.OUTPUT and v.type == "Real":
             # replaced by a read of the compiled step's outputs while it runs
@@ -266,14 +263,16 @@ class ContactSlave(Fmi2Slave):
         if c == fv.OUTPUT:
             self._error(f"{name} is an output of this FMU: the value {value!r} set is ignored")
             return
-        if c == fv.PARAMETER and self._model is not None:
+        var = self._vars[name]
+        if c == fv.PARAMETER and self._model is not None and not var.tunable:
             self._error(
                 f"{name} is a fixed parameter and the model is initialised: "
                 f"{name} = {value!r} is ignored ({name} stays {self._values[name]!r})"
             )
             return
-        var = self._vars[name]
         problem = self.cfg.check(name, value)
+        if c == fv.PARAMETER and self._model is not None:
+            self._fast_pull()  # the outputs of the mu they were computed with (_out_mu)
         self._values[name] = (
             value if var.type == "String" or problem == "a number" else float(value)
         )
@@ -290,6 +289,27 @@ class ContactSlave(Fmi2Slave):
             self.log(f"{msg}; doStep answers fmi2Discard until it is corrected", Fmi2Status.error)
         if c == fv.INPUT:
             self._dirty = True
+        elif problem is None and self._model is not None:  # a tunable parameter
+            self._tune(name, self._values[name])
+
+    def _tune(self, name: str, value: Any) -> None:
+        """A tunable parameter's new value into the running model (from the next step;
+        a force element's outputs are recomputed); refused, nothing changed, if the model
+        does not take it."""
+        self._fast_pull()
+        snap = self._model.snapshot()
+        try:
+            self._model.tune({name: value})
+        except Exception as e:
+            self._model.restore(snap)
+            self._values[name] = self._model_params[name]
+            self._refuse(f"{name} = {value!r} is refused: {_describe(e)}")
+            return
+        finally:
+            if self._fast is not None:
+                self._fast_push()
+        self._model_params = {**self._model_params, name: value}
+        self._dirty = True
 
     def set_real(self, vrs: list[int], values: list[float]) -> None:
         """fmi2SetReal, the per-step call: a Real input's float is tested here against
@@ -376,6 +396,7 @@ class ContactSlave(Fmi2Slave):
             self._error(f"cannot initialise the model: {_describe(e)}")
             return False
         self._model, self._model_params, self._out, self._dirty = model, self._params(), out, False
+        self._out_mu = self._values.get("mu")
         self._fast_enable()
         return True
 
@@ -383,7 +404,8 @@ class ContactSlave(Fmi2Slave):
     def _fast_enable(self) -> None:
         """Use the model's compiled step if it has one (and the FMU no feedthrough)."""
         fast = getattr(self._model, "fast", None)
-        self._fast = fast() if fast is not None and not self._model.feedthrough else None
+        compiled = fast is not None and not self._model.feedthrough and not self._terminated
+        self._fast = fast() if compiled else None
         self._fast_out, self._fast_step, self._out_stale = None, None, False
         self._fast_io, self._fast_inputs, self._fast_reads = None, frozenset(), {}
         for name in _FMI_CALLS:  # the class's methods again
@@ -433,6 +455,7 @@ class ContactSlave(Fmi2Slave):
     def _sync_out(self) -> None:
         if self._out_stale:
             self._out = {n: self._fast_out[i] for n, i in self._fast_index.items()}
+            self._out_mu = self._values.get("mu")  # _tune pulls before mu changes
             self._out_stale = False
 
     def _collect(self, outputs: dict[str, float]) -> dict[str, float]:
@@ -457,6 +480,7 @@ class ContactSlave(Fmi2Slave):
         try:
             self._model.evaluate(self._inputs())
             self._out = self._collect(self._model.outputs())
+            self._out_mu = self._values.get("mu")
             self._dirty = False
         except Exception as e:
             self._model.restore(snap)
@@ -551,6 +575,7 @@ class ContactSlave(Fmi2Slave):
                 f"doStep at t = {t!r} with h = {h!r} discarded, state unchanged: {_describe(e)}"
             )
         self._out, self._time, self._dirty = out, t + h, False
+        self._out_mu = self._values.get("mu")
         if self._fast is not None:
             self._fast_push()
         if note:
@@ -569,6 +594,7 @@ class ContactSlave(Fmi2Slave):
                 "values": self._values,
                 "bad": self._bad,
                 "out": self._out,
+                "out_mu": self._out_mu,
                 "dirty": self._dirty,
                 "model": model,
             }
@@ -622,12 +648,19 @@ class ContactSlave(Fmi2Slave):
         for n, v in out.items():
             if type(v) is not float or not math.isfinite(v):
                 return f"its output {n} = {v!r} is not a finite float"
+        out_mu = state["out_mu"]
+        if out_mu is not None and (type(out_mu) is not float or not 0.0 < out_mu < math.inf):
+            return f"its outputs' mu {out_mu!r} is not a positive float"
         model, params = None, None
         if state["model"] is not None:
             model, params = self._state_model(state["model"], values, bad, t)
             if isinstance(model, str):
                 return model
-            bound = _coulomb_excess(out, values.get("mu"), getattr(model, "P", None))
+            # outputs taken after mu was tuned, before the next step: the earlier mu's bound
+            mu = values.get("mu")
+            if isinstance(mu, float) and out_mu is not None:
+                mu = max(mu, out_mu)
+            bound = _coulomb_excess(out, mu, getattr(model, "P", None))
             if bound is not None:
                 self._restore_own(model)
                 return bound
@@ -635,7 +668,7 @@ class ContactSlave(Fmi2Slave):
         self._time, self._values, self._bad = t, copy.deepcopy(values), bad
         self._in = self._input_values()
         self._model, self._model_params = model, params
-        self._out, self._dirty = dict(out), dirty
+        self._out, self._dirty, self._out_mu = dict(out), dirty, out_mu
         self._fast_enable()
         return None
 

@@ -38,6 +38,12 @@ UNITS: dict[str, dict[str, int]] = {
     "m/Pa": {"kg": -1, "m": 2, "s": 2},
 }
 
+# Physical ranges of the initial speeds and rates: beyond them the body's state (Vx and
+# the slip vx, Eq. 20) no longer resolves Omega_y = (Vx - vx)/Rx to the changes one
+# step makes (eps |Vx| / Rx against h Rx mu P / Iy; docs/reliability.md)
+SPEED_MAX = 1e4  # m/s
+RATE_MAX = 1e7  # rad/s
+
 # Contact-mode inputs that the contact forces depend on directly (direct feedthrough).
 _KIN = ("P", "Vx", "Vy", "Omega_y", "Omega_z")
 
@@ -81,7 +87,8 @@ class Var:
     depends on directly (ModelStructure/Outputs dependencies). ``laws``: the contact
     laws whose models have the variable (None: every law); the half-space law's
     geometry and materials are structural, so the layer law's Ry, k1, k2, kb, ks are
-    parameters of the layer law only.
+    parameters of the layer law only. ``tunable``: a parameter the FMU takes between
+    steps too (variability "tunable"; else "fixed").
     """
 
     name: str
@@ -96,6 +103,7 @@ class Var:
     needs: str | None = None
     feedthrough: tuple[str, ...] = field(default=())
     laws: tuple[str, ...] | None = None
+    tunable: bool = False
 
     def check(self, value: object) -> str | None:
         """None if ``value`` is admissible, else the requirement it violates."""
@@ -127,7 +135,16 @@ _ALL = ("body", "contact", "rigid_body")
 
 VARIABLES: tuple[Var, ...] = (
     # ---- parameters ------------------------------------------------------------------
-    _p("mu", "1", "Coefficient of friction (> 0)", 0.3, min=0.0, open_min=True),
+    _p(
+        "mu",
+        "1",
+        "Coefficient of friction (> 0); tunable: a new value between steps (a wet or "
+        "contaminated patch) applies from the next step, the bound becomes mu P",
+        0.3,
+        min=0.0,
+        open_min=True,
+        tunable=True,
+    ),
     _p(
         "Rx",
         "m",
@@ -149,7 +166,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "k1",
         "m/Pa",
-        "Normal compliance of the body's layer, Eq. (32)",
+        "Normal compliance of the body's layer, Eq. (32) (>= 0, with k1 + k2 > 0)",
         5.0e-13,
         min=0.0,
         laws=_LAYER,
@@ -157,7 +174,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "k2",
         "m/Pa",
-        "Normal compliance of the substrate's layer, Eq. (32)",
+        "Normal compliance of the substrate's layer, Eq. (32) (>= 0, with k1 + k2 > 0)",
         5.0e-13,
         min=0.0,
         laws=_LAYER,
@@ -165,7 +182,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "kb",
         "m/Pa",
-        "Tangential compliance of the body's layer, Eq. (31)",
+        "Tangential compliance of the body's layer, Eq. (31) (>= 0, with kb + ks > 0)",
         3.2e-13,
         min=0.0,
         laws=_LAYER,
@@ -173,7 +190,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "ks",
         "m/Pa",
-        "Tangential compliance of the substrate's layer, Eq. (31)",
+        "Tangential compliance of the substrate's layer, Eq. (31) (>= 0, with kb + ks > 0)",
         3.2e-13,
         min=0.0,
         laws=_LAYER,
@@ -182,7 +199,7 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "Iy",
         "kg.m2",
-        "Moment of inertia about the axle; eta = M Rx^2/Iy, Iy = 0 is eta = inf",
+        "Moment of inertia about the axle (>= 0); eta = M Rx^2/Iy, Iy = 0 is eta = inf",
         0.05**2 / 3.0,
         modes=_BODY_RB,
         min=0.0,
@@ -213,22 +230,45 @@ VARIABLES: tuple[Var, ...] = (
         modes=_BODY,
         needs="spin_ratio",
     ),
-    _p("Vx0", "m/s", "Initial speed of the centre of mass", 5.6418958354775635, modes=_BODY_RB),
     _p(
-        "Omega_y0",
-        "rad/s",
-        "Initial angular velocity about the axle (Vx0/Rx: pure rolling)",
-        112.83791670955127,
+        "Vx0",
+        "m/s",
+        "Initial speed of the centre of mass (abs <= 1e4 m/s)",
+        5.6418958354775635,
         modes=_BODY_RB,
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
     ),
-    _p("Vy0", "m/s", "Initial lateral speed, Eq. (10)", 0.0, modes=_BODY, needs="vy_eq10"),
+    _p(
+        "vx0",
+        "m/s",
+        "Initial rigid slip at the contact centre, Vx0 - Omega_y0 Rx (Eq. 3): the body "
+        "starts with Omega_y0 = (Vx0 - vx0)/Rx; 0 is pure rolling at any Vx0 (initial "
+        "creepage xi_x0 = vx0/abs(Vx0); abs <= 1e4 m/s)",
+        0.0,
+        modes=_BODY_RB,
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
+    ),
+    _p(
+        "Vy0",
+        "m/s",
+        "Initial lateral speed, Eq. (10) (abs <= 1e4 m/s)",
+        0.0,
+        modes=_BODY,
+        needs="vy_eq10",
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
+    ),
     _p(
         "Omega_z0",
         "rad/s",
-        "Initial angular velocity about the vertical, Eq. (11)",
+        "Initial angular velocity about the vertical, Eq. (11) (abs <= 1e7 rad/s)",
         0.0,
         modes=_BODY,
         needs="spin_eq11",
+        min=-RATE_MAX,
+        max=RATE_MAX,
     ),
     _p(
         "h_max",
@@ -318,10 +358,11 @@ VARIABLES: tuple[Var, ...] = (
     Var(
         "P",
         "N",
-        "Normal load (> 0)",
+        "Normal load (> 0, <= 1e9 N)",
         {"body": INPUT, "contact": INPUT},
         1000.0,
         min=0.0,
+        max=1e9,
         open_min=True,
     ),
     Var(
@@ -503,6 +544,15 @@ VARIABLES: tuple[Var, ...] = (
 )
 
 BY_NAME: dict[str, Var] = {v.name: v for v in VARIABLES}
+
+
+def variability(var: Var, mode: str) -> str:
+    """FMI variability of ``var`` in ``mode``: parameters fixed (or tunable), Real inputs
+    and outputs continuous, others discrete."""
+    c = var.causality[mode]
+    if c == PARAMETER:
+        return "tunable" if var.tunable else "fixed"
+    return "continuous" if var.type == "Real" else "discrete"
 
 
 def applicable(var: Var, s: Structure) -> bool:

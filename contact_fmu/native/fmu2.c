@@ -26,7 +26,8 @@
  *   Newton iteration does not converge is bracketed and closed by brentq, as in Python)
  *   or with non-finite outputs: fmi2Discard, state unchanged;
  * - parameters are fixed once the model is set up: setting one then is refused
- *   (fmi2Error, the value kept); setting an output likewise;
+ *   (fmi2Error, the value kept); setting an output likewise. mu is tunable: the law is
+ *   rebuilt at the next step (or, in contact mode, the next output read);
  * - a model that cannot be set up (bad parameters): fmi2Error at
  *   exitInitializationMode, with the reason.
  * Memory comes from the importer's callbacks; there is no mutable global: instances
@@ -49,7 +50,7 @@ enum { T_REAL, T_INTEGER, T_STRING };
 
 /* the parameters and inputs the model reads, by role */
 enum {
-    R_MU, R_RX, R_RY, R_K1, R_K2, R_KB, R_KS, R_M, R_IY, R_VY_RATIO, R_VX0, R_OMEGA_Y0,
+    R_MU, R_RX, R_RY, R_K1, R_K2, R_KB, R_KS, R_M, R_IY, R_VY_RATIO, R_VX0, R_SLIP0,
     R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX,
     R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
     R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
@@ -325,7 +326,7 @@ static const char *nonfinite(const double *out, char *r, size_t n) {
 static const char *contact_outputs(const cf_core *c, cf_params *p, cf_body *b,
                                    double out[N_OUT], char *r, size_t n) {
     const double *v = c->val;
-    if (v[R_P] != p->P) law_at_load(c, v[R_P], p, b);
+    if (v[R_P] != p->P || v[R_MU] != p->mu) law_at_load(c, v[R_P], p, b); /* mu: tunable */
     const double Vx = v[R_VX], vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY];
     const double Omega_z = v[R_OMEGA_Z];
     double T[3], tab[4];
@@ -361,7 +362,7 @@ static int build_rigid(Inst *I) {
             return 0;
         }
     c->rb_Vx = v[R_VX0];
-    c->rb_Omega_y = v[R_OMEGA_Y0];
+    c->rb_Omega_y = (v[R_VX0] - v[R_SLIP0]) / v[R_RX]; /* kinematics.spin_for_slip */
     c->b.out[O_VX] = c->rb_Vx;
     c->b.out[O_OMEGA_Y] = c->rb_Omega_y;
     c->built = 1;
@@ -454,11 +455,12 @@ static int build(Inst *I) {
         p.dyn_vy = CF_DYN_VY, p.dyn_spin = CF_DYN_SPIN;
         p.Iz = CF_DYN_SPIN ? v[R_IZ] : 0.0;
         ensure_grid(I, &p, &b, &p);
-        /* BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, Vy0, Omega_z0), the held ratios */
+        /* BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, Vy0, Omega_z0), the held ratios, with
+         * Omega_y0 = (Vx0 - vx0)/Rx (kinematics.spin_for_slip) */
         cf_vstate y;
         memset(&y, 0, sizeof y);
         y.Vx = v[R_VX0];
-        y.vx = y.Vx - v[R_OMEGA_Y0] * Rx;
+        y.vx = y.Vx - (v[R_VX0] - v[R_SLIP0]) / Rx * Rx;
         y.Vy = CF_DYN_VY ? v[R_VY0] : p.ry * y.Vx;
         y.Oz = CF_DYN_SPIN ? v[R_OMEGA_Z0] : p.rz * y.Vx;
         y.t = c->time;
@@ -478,7 +480,7 @@ static int build(Inst *I) {
     }
     /* BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, ry Vx0, 0), the forces there */
     s.Vx = v[R_VX0];
-    s.vx = s.Vx - v[R_OMEGA_Y0] * Rx;
+    s.vx = s.Vx - (v[R_VX0] - v[R_SLIP0]) / Rx * Rx; /* Omega_y0 = (Vx0 - vx0)/Rx */
     s.t = c->time;
     cf_initial_forces(&p, &s);
     cf_body_outputs(&p, &s, &b);
@@ -614,7 +616,8 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     cf_body b = c->b;
     cf_state w = c->s;
     const double P = c->val[R_P];
-    if (P != c->P_law) law_at_load(c, P, &p, &b); /* set_load: Eq. (34) at the new P */
+    /* set_load: Eq. (34) at the new P; set_mu: the law at a tuned mu */
+    if (P != c->P_law || c->val[R_MU] != p.mu) law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
     { /* integrator.LOAD_LIMIT: beyond it the eliminated form loses Eq. (8)'s balance */
         const double cap = CF_LOAD_LIMIT * p.mu * P;
@@ -662,6 +665,13 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
                 "FloatingPointError: output %s = %s is not finite", rt, rh, v->name, r);
             return fmi2Discard;
         }
+    }
+    if (!within_range(b.out)) { /* body_model.within_range */
+        REPRS();
+        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: the loads "
+            "drive a speed beyond abs %g m/s or a rate beyond abs %g rad/s", rt, rh,
+            CF_SPEED_MAX, CF_RATE_MAX);
+        return fmi2Discard;
     }
     c->p = p, c->b = b, c->s = w, c->vs = vw, c->P_law = P;
     for (int i = 0; i < CF_N_VARS; i++)
@@ -960,7 +970,7 @@ static int settable(Inst *I, int i, const char *value) {
             value);
         return 0;
     }
-    if (v->kind == K_PARAMETER && I->c.built) {
+    if (v->kind == K_PARAMETER && I->c.built && v->role != R_MU) { /* mu is tunable */
         char now[80];
         if (v->type == T_STRING) snprintf(now, sizeof now, "'%s'", I->c.method_text);
         else py_repr(I->c.var[i], now, sizeof now);
@@ -997,7 +1007,8 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
         if (var->role < R_COUNT) C->val[var->role] = v[k];
         const int bad = requirement(var, v[k]) != NULL;
         mark(C, i, bad);
-        if (var->kind == K_INPUT) C->dirty = 1;
+        /* an input, or the tunable mu: a force element's outputs follow */
+        if (var->kind == K_INPUT || (var->role == R_MU && !bad)) C->dirty = 1;
         if (bad) { /* refused: fmi2Error, the value held (as the pythonfmu FMU) */
             char msg[256];
             bad_text(var, v[k], msg, sizeof msg);

@@ -760,6 +760,14 @@ void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
 }
 
 #define CF_LOAD_LIMIT 1e9 /* integrator.LOAD_LIMIT */
+#define CF_SPEED_MAX 1e4 /* fmu/variables.SPEED_MAX (m/s), RATE_MAX (rad/s): body_model.within_range */
+#define CF_RATE_MAX 1e7
+
+/* The body's speeds and rates within their physical ranges (else Python refuses) */
+static int within_range(const double *o) {
+    return fabs(o[O_VX]) <= CF_SPEED_MAX && fabs(o[O_VY]) <= CF_SPEED_MAX &&
+           fabs(o[O_OMEGA_Y]) <= CF_RATE_MAX && fabs(o[O_OMEGA_Z]) <= CF_RATE_MAX;
+}
 
 /* BodyModel.step (inputs held, h > 0 checked by the caller) and the outputs, all
  * finite; CF_FALLBACK with *y and b->out unchanged for whatever Python must do: a new
@@ -780,6 +788,7 @@ int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
     cf_body_outputs(p, &w, &next);
     for (int i = 0; i < N_OUT; i++)
         if (!isfinite(next.out[i])) return CF_FALLBACK;
+    if (!within_range(next.out)) return CF_FALLBACK;
     *y = w;
     *b = next;
     return CF_OK;

@@ -48,7 +48,7 @@ from numpy.typing import NDArray
 from scipy import integrate
 
 from ..dynamics import Body, Lateral, Loads
-from ..kinematics import rigid_slip
+from ..kinematics import rigid_slip, spin_for_slip
 from ..layer import LayerContact
 from ..scenario.schema import Case, Scene
 from .equations import RollingEquations, quasistationary_force, quasistationary_slip
@@ -189,7 +189,8 @@ def _integrate(
     p = case.parameters
     P0 = segments[0][2](0.0)[0]
     base = RollingEquations(scene_law(scene, p, P0), body(p), lateral(scene, p), segments[0][2])
-    y = base.initial(p["Vx0"], p["Omega_y0"], p.get("Vy0", 0.0), p.get("Omega_z0", 0.0))
+    Omega_y0 = spin_for_slip(p["Vx0"], p["vx0"], p["Rx"])
+    y = base.initial(p["Vx0"], Omega_y0, p.get("Vy0", 0.0), p.get("Omega_z0", 0.0))
     v_scale = base.law.creep_full_slip * max(abs(p["Vx0"]), 1e-3)
     atol = np.full(base.size, ATOL_FRACTION * v_scale)
     atol[0] = ATOL_FRACTION * max(abs(p["Vx0"]), 1e-3)
@@ -293,8 +294,8 @@ def _transient_run(
         )
     tb = TransientRollingBody(
         law(p, float(u["P"][0])), body(p), lateral(scene, p), Vx0=p["Vx0"],
-        Omega_y0=p["Omega_y0"], Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0),
-        nx=nx, ny=ny,
+        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]), Vy0=p.get("Vy0", 0.0),
+        Omega_z0=p.get("Omega_z0", 0.0), nx=nx, ny=ny,
     )  # fmt: skip
     cells = float(p.get("cells_per_step", 0.5))
     out = np.empty((times.size, 4))  # Tx, Ty, vx, Vx

@@ -92,7 +92,7 @@ def params(
         "mu": mu, "Rx": ex.Rx, "Ry": ex.Ry, "k1": k1, "k2": k2,
         "kb": kb * k_scale, "ks": ks * k_scale, "M": ex.M,
         "Iy": 0.0 if math.isinf(eta) else ex.M * ex.Rx**2 / eta,
-        "Vx0": Vx0, "Omega_y0": Vx0 / ex.Rx,
+        "Vx0": Vx0, "vx0": 0.0,
     }  # fmt: skip
 
 
@@ -140,7 +140,7 @@ def cases() -> list[StiffCase]:
     # 1e-4 s for Lobatto IIIC) through the whole floating-point range towards zero
     out.append(StiffCase(
         "slip decay", "load", "no load; an initial slip of 1e-3 Vx decays to zero (eta = 2)",
-        {**params(eta=2.0), "Omega_y0": SPEED / ex.Rx * (1.0 - 1e-3)},
+        {**params(eta=2.0), "vx0": SPEED * 1e-3},
         {"P": ex.P, "Fx_ex": 0.0, "My_ex": 0.0}, 1e-4, 200, substeps=1,
     ))  # fmt: skip
     beyond = {

@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 
 from ..dynamics import Body, Lateral, Loads
 from ..integrator import RollingBody
-from ..kinematics import rigid_slip
+from ..kinematics import rigid_slip, spin_for_slip
 from ..layer import LayerContact
 from .runner import write_reference
 from .schema import Case, Reference, Scene
@@ -128,8 +128,8 @@ def by_simulation(
     substeps = refine * max(1, math.ceil(scene.step / p["h_max"] - 1e-9))
     rb = RollingBody(
         _law(p, float(P[0])), _body(p), lateral, case.method, Vx0=p["Vx0"],
-        Omega_y0=p["Omega_y0"], Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0),
-        scheme=case.scheme,
+        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]), Vy0=p.get("Vy0", 0.0),
+        Omega_z0=p.get("Omega_z0", 0.0), scheme=case.scheme,
     )  # fmt: skip
     loads = np.array([case.inputs[n](t) if n in case.inputs else np.zeros(t.size)
                       for n in Loads._fields])  # fmt: skip
@@ -166,7 +166,8 @@ def by_transient(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArr
     nx, ny = (int(n) for n in o["grid"])
     cells = float(o["cells"])
     tb = TransientRollingBody(
-        _law(p, float(P[0])), _body(p), lateral, Vx0=p["Vx0"], Omega_y0=p["Omega_y0"],
+        _law(p, float(P[0])), _body(p), lateral, Vx0=p["Vx0"],
+        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]),
         Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0), nx=nx, ny=ny,
     )  # fmt: skip
     loads = np.array([case.inputs[n](t) if n in case.inputs else np.zeros(t.size)

@@ -195,10 +195,16 @@ class Checker:
         name, value = op["name"], op["value"]
         causality = self.kind.variables[name].causality
         st = rec["status"]
-        if causality == "output" or (causality == "parameter" and tr.phase == "ready"):
+        tunable = self.kind.variables[name].variability == "tunable"  # mu: takes effect
+        if causality == "output" or (
+            causality == "parameter" and tr.phase == "ready" and not tunable
+        ):
             return  # illegal set: ignored by the FMU (an error status is the right answer)
         if st <= WARNING:
             tr.values[name] = value
+            if tunable and tr.phase == "ready" and tr.inforce is not None:
+                if self.kind.admissible(name, value):  # the next step's (the body's outputs
+                    tr.inforce[name] = value  # keep tr.load until then)
             if not self.kind.admissible(name, value):
                 tr.named[name] = [m for _, m in rec["log"]]
             else:
@@ -325,7 +331,8 @@ class Checker:
             n = 16.0 * N_BODY
             # the stepper's state is the slip vx and Omega_y (Eq. 20), Vx = vx + Rx Omega_y:
             # its Vx carries the rounding of Rx |Omega_y| and its Omega_y that of |Vx| / Rx
-            spin = Rx * _sizes(x0, x1, "Omega_y", fallback=abs(float(p.get("Omega_y0", 0.0))))
+            Omega_y0 = (float(p.get("Vx0", 0.0)) - float(p.get("vx0", 0.0))) / Rx
+            spin = Rx * _sizes(x0, x1, "Omega_y", fallback=abs(Omega_y0))
             slip = _sizes(x0, x1, "vx")
             terms = h * (abs(Fx) + mu * P) / M
             checks = [("Vx", h * Fx / M, h * mu * P / M, n, terms, spin + slip)]
