@@ -18,15 +18,9 @@ from contact_fmu.halfspace.contact import HalfSpaceContact
 from contact_fmu.halfspace.hertz import Material
 from contact_fmu.halfspace.railway import wheel_on_rail
 
-# Table E3: a/b -> (C11, C22, C23) for nu = 0, 0.25, 0.5.
-KALKER_E3 = {
-    0.2: ((2.59, 3.37, 4.81), (2.59, 2.63, 2.66), (0.483, 0.603, 0.809)),
-    0.5: ((2.88, 3.62, 4.83), (2.88, 3.01, 3.14), (0.827, 0.929, 1.07)),
-    1.0: ((3.40, 4.12, 5.20), (3.40, 3.67, 3.98), (1.33, 1.47, 1.63)),
-    2.0: ((4.37, 5.10, 6.11), (4.37, 4.90, 5.56), (2.35, 2.62, 2.96)),
-    5.0: ((6.96, 7.78, 8.82), (6.96, 8.14, 9.79), (5.72, 6.63, 7.89)),
-}
-NUS = (0.0, 0.25, 0.5)
+# Kalker (1990), Table E3 (published data, kept once beside the validation page's script)
+from contact_fmu.halfspace.validation import KALKER_E3, NUS
+
 # Elements of the contact's bounding box: about 64 x 64 in all, square elements.
 ELEMENTS = 64
 # Measured errors against the table on these grids: at most 1.83 % (C23, a/b = 0.2,
