@@ -277,7 +277,6 @@ def test_own_state_with_a_bad_input_into_an_instance_of_other_parameters():
         b.set("P", ex.P)
         b.set_state(b.deserialize_state(spin, a.time))
         assert b.step(1e-4, time=a.time) == OK and math.isfinite(b.get("Tx"))
-    shutil.rmtree(OUT / "unused", ignore_errors=True)
 
 
 @pytest.mark.skipif(shutil.which("objdump") is None, reason="no objdump")
