@@ -151,9 +151,7 @@ def _direction(
             -(tx * F[iS] + ty * F[m + iS]) - f * (tx * rKd0[iS] + ty * rKd0[m + iS]),
         ]
     )
-    _, _, u, info = dgesv(A, rhs, overwrite_a=1, overwrite_b=1)  # LAPACK, no checks
-    if info != 0:
-        raise RuntimeError(f"steady rolling (direct): singular Newton matrix ({info})")
+    u = _solve(A, rhs)
     dt = d0
     dt[cols] += u[:nH2]
     dt[iS] += u[nH2:] * tx
@@ -197,7 +195,12 @@ def _woodbury(
     KU = rKinv[:, rows]
     Cap = V @ KU
     Cap[np.arange(2 * k), np.arange(2 * k)] += 1.0
-    _, _, c, info = dgesv(Cap, V @ y, overwrite_a=1, overwrite_b=1)
+    return y - KU @ _solve(Cap, V @ y)
+
+
+def _solve(A: FloatArray, b: FloatArray) -> FloatArray:
+    """x with A x = b by LAPACK's dgesv (no scipy checks; A and b overwritten)."""
+    _, _, x, info = dgesv(A, b, overwrite_a=1, overwrite_b=1)
     if info != 0:
         raise RuntimeError(f"steady rolling (direct): singular Newton matrix ({info})")
-    return y - KU @ c
+    return x
