@@ -15,7 +15,9 @@ What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, met
 from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the half-space
 creep-force table of one load node without layers, body and contact mode (rail_traction,
 rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
-law without a spin input (sweep); the rigid_body mode (``--full rigid_body``). Everything
+law, with a spin input Omega_z too (sweep, ``--full contact``: the strip march on the
+law's spin grid, built in C for each load, with its forward-mode derivative for the
+directional derivatives); the rigid_body mode (``--full rigid_body``). Everything
 else is refused here with a message that names the scene's feature
 (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
@@ -84,11 +86,6 @@ def unsupported(cfg: ModelConfig) -> str | None:
             )
         if spec.kb + spec.ks > 0.0:
             return "[halfspace] kb + ks > 0 (a table with layers has a load range to check)"
-    if cfg.mode == "contact" and "Omega_z" in cfg.inputs and not cfg.has_table:
-        return (
-            "input Omega_z (spin: the strip march of the thin-layer law needs its grid, "
-            "which the native FMU does not build)"
-        )
     if cfg.phase != "steady":
         return f'phase = "{cfg.phase}" (the transient traction field is not in the C kernel)'
     if cfg.spin == "ratio" and cfg.vy != "eq10":
@@ -201,6 +198,9 @@ def header(cfg: ModelConfig, guid: str) -> str:
         f"#define CF_DYN_VY {int(cfg.mode == 'body' and cfg.vy == 'eq10')}",
         f"#define CF_DYN_SPIN {int(cfg.mode == 'body' and cfg.spin == 'eq11')}",
         "#define CF_VECTOR (CF_DYN_VY || CF_DYN_SPIN)",
+        # the contact mode's spin input on the thin-layer law: the march on its grid
+        "#define CF_CONTACT_SPIN "
+        f"{int(cfg.mode == 'contact' and 'Omega_z' in cfg.inputs and not cfg.has_table)}",
         f"#define CF_SPIN_NX {layer.SPIN_GRID[0]}",
         f"#define CF_SPIN_NY {layer.SPIN_GRID[1]}",
         f"#define CF_TINY {_c(layer.TINY)}",

@@ -1,6 +1,7 @@
 /* The FMI 2.0 co-simulation layer of the native FMU (fmu_build --native): contact_fmu's
  * body mode on the compiled stepper (stepper.c, included: one translation unit), its
- * contact mode (the thin-layer law without spin, fmu/contact_model.py) and its
+ * contact mode (fmu/contact_model.py: the thin-layer law, with a spin input by the strip
+ * march on the law's spin grid, and its analytic directional derivatives) and its
  * rigid_body mode (fmu/rigid_body.py), with no Python anywhere (CF_MODE picks one).
  *
  * The body model is the one of fmu/body_model.py on its compiled paths: the thin-layer
@@ -100,11 +101,13 @@ typedef struct {
     cf_body b;
 } cf_core;
 
-/* the spin grid of the vector path (layer._Grid of SPIN_GRID): a function of the
- * parameters and the load, rebuilt for each new load, not part of the FMU state */
+/* the spin grid of the vector path and of the contact mode's spin input (layer._Grid of
+ * SPIN_GRID): a function of the law at its load (a1, a2, p0, mu, kb + ks), rebuilt when
+ * one of them changes (a new load, a tuned mu, a reset), not part of the FMU state */
 #define GRID_N (CF_SPIN_NX * CF_SPIN_NY)
+#define CF_GRID ((CF_VECTOR || CF_CONTACT_SPIN) && !CF_TABLE)
 typedef struct {
-    double P;                     /* the load it is for (NaN: none yet) */
+    double key[5];                /* the law it is for: a1, a2, p0, mu, k (NaN: none yet) */
     cf_strips strips;
     double x[CF_SPIN_NX], y[CF_SPIN_NY], dist[GRID_N], mid[GRID_N], cap[GRID_N], w[GRID_N];
     unsigned char inside[GRID_N];
@@ -118,7 +121,7 @@ typedef struct {
     int logging;
     cf_core c;
     char method_out[METHOD_TEXT]; /* what getString hands out */
-    spin_grid *grid;              /* CF_VECTOR with the thin-layer law only */
+    spin_grid *grid;              /* CF_GRID only */
     double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
 } Inst;
 
@@ -318,21 +321,58 @@ static const char *nonfinite(const double *out, char *r, size_t n) {
     return NULL;
 }
 
+/* the spin grid g for the law at its load (p, b: a1, a2, p0 there) with the parameters
+ * of c (mu, kb + ks), built unless it is already for these */
+static const cf_strips *grid_at(spin_grid *g, const cf_core *c, const cf_params *law,
+                                const cf_body *b) {
+    const double *v = c->val;
+    const double key[5] = {law->a1, b->a2, b->p0, v[R_MU], v[R_KB] + v[R_KS]};
+    int same = 1;
+    for (int k = 0; k < 5; k++) same = same && g->key[k] == key[k];
+    if (!same) {
+        cf_grid_build(&g->strips, g->x, g->y, g->dist, g->mid, g->cap, g->w, g->inside,
+                      CF_SPIN_NX, CF_SPIN_NY, key[0], key[1], key[2], key[3], key[4], CF_TINY);
+        memcpy(g->key, key, sizeof key);
+    }
+    return &g->strips;
+}
+
+/* LayerContact.forces for one input with spin phi != 0 on the spin grid g: rolling,
+ * cf_layer_forces (the closed form plus the march with the spin less the march without
+ * it); at standstill the same with the sliding field (cf_march_standstill), as numpy. */
+static void spin_forces(const cf_params *p, const cf_strips *g, double vx, double vy,
+                        double phi, double Vx, double T[3]) {
+    if (Vx != 0.0) {
+        cf_layer_forces(p, g, 1, &vx, &vy, &phi, &Vx, T); /* NaN for a non-finite input */
+        return;
+    }
+    double with[3], without[3];
+    forces(p, vx, vy, Vx, T);
+    cf_march_standstill(g, vx, vy, phi, with);
+    cf_march_standstill(g, vx, vy, 0.0, without);
+    for (int k = 0; k < 3; k++) T[k] += with[k] - without[k];
+}
+
 /* ContactElement.evaluate: the law at the inputs' load and kinematics, rigid slip of
  * Eq. (3) at the contact centre (kinematics.rigid_slip), the forces (the closed form,
- * LayerContact._forces_scalar: this mode has no spin input) and
+ * LayerContact._forces_scalar, or with a spin input Omega_z != 0 LayerContact.forces
+ * by the strip march on the spin grid g, built here for the load) and
  * kinematics.contact_quantities; p and b hold the law at the load afterwards. The name
  * of a non-finite output, or NULL. */
-static const char *contact_outputs(const cf_core *c, cf_params *p, cf_body *b,
+static const char *contact_outputs(const cf_core *c, spin_grid *g, cf_params *p, cf_body *b,
                                    double out[N_OUT], char *r, size_t n) {
     const double *v = c->val;
     if (v[R_P] != p->P || v[R_MU] != p->mu) law_at_load(c, v[R_P], p, b); /* mu: tunable */
     const double Vx = v[R_VX], vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY];
     const double Omega_z = v[R_OMEGA_Z];
     double T[3], tab[4];
+    const cf_strips *grid = NULL;
     if (CF_TABLE) {
         table_scalar(p, vx, vy, Omega_z, Vx, tab); /* CreepTable._scalar, spin included */
         T[0] = tab[0], T[1] = tab[1], T[2] = tab[2];
+    } else if (CF_CONTACT_SPIN && Omega_z != 0.0 && g != NULL) {
+        grid = grid_at(g, c, p, b);
+        spin_forces(p, grid, vx, vy, Omega_z, Vx, T);
     } else {
         forces(p, vx, vy, Vx, T);
     }
@@ -342,7 +382,10 @@ static const char *contact_outputs(const cf_core *c, cf_params *p, cf_body *b,
     const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
     out[O_XI_X] = vx / V, out[O_XI_Y] = vy / V, out[O_XI_SP] = Omega_z / V;
     out[O_A1] = p->a1, out[O_A2] = b->a2, out[O_P0] = b->p0;
-    out[O_ADHESION] = CF_TABLE ? tab[3] : adhesion_fraction(p, vx, vy, Vx);
+    out[O_ADHESION] = CF_TABLE ? tab[3]
+                      : grid ? cf_spin_adhesion(grid, vx, vy, Vx, Omega_z, g->tau, g->slip,
+                                                g->inside)
+                             : adhesion_fraction(p, vx, vy, Vx);
     out[O_REGIME] = full_slip(p, vx, vy, Vx) ? 1.0 : 0.0;
     return nonfinite(out, r, n);
 }
@@ -370,18 +413,10 @@ static int build_rigid(Inst *I) {
     return 1;
 }
 
-/* the spin grid at load P (the law's a1, a2, p0 there) into p->strips */
+/* the spin grid at the law's load into p->strips */
 static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_params *p) {
-    spin_grid *g = I->grid;
-    if (g == NULL) return;
-    if (!(g->P == law->P)) {
-        const double *v = I->c.val;
-        cf_grid_build(&g->strips, g->x, g->y, g->dist, g->mid, g->cap, g->w, g->inside,
-                      CF_SPIN_NX, CF_SPIN_NY, law->a1, b->a2, b->p0, v[R_MU], v[R_KB] + v[R_KS],
-                      CF_TINY);
-        g->P = law->P;
-    }
-    p->strips = &g->strips;
+    if (I->grid == NULL) return;
+    p->strips = grid_at(I->grid, &I->c, law, b);
 }
 
 /* BodyModel / RollingBody set up from the parameters and inputs at the FMU's time;
@@ -421,7 +456,7 @@ static int build(Inst *I) {
     if (CF_MODE == MODE_CONTACT) {
         law_at_load(c, v[R_P], &p, &b);
         double out[N_OUT];
-        const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+        const char *bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
         if (bad) {
             say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
                 "is not finite", bad, r);
@@ -512,7 +547,7 @@ static fmi2Status other_step(Inst *I, double t, double h) {
         cf_params p = c->p;
         cf_body b = c->b;
         double out[N_OUT];
-        bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+        bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
         if (!bad) {
             c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
             memcpy(c->b.out, out, sizeof out);
@@ -561,7 +596,7 @@ static fmi2Status refresh(Inst *I) {
     cf_body b = c->b;
     double out[N_OUT];
     char r[40];
-    const char *bad = contact_outputs(c, &p, &b, out, r, sizeof r);
+    const char *bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
     if (bad) {
         say(I, fmi2Error, "no outputs for the current inputs: FloatingPointError: output "
             "%s = %s is not finite", bad, r);
@@ -828,7 +863,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         cb->freeMemory(I);
         return NULL;
     }
-    if (CF_VECTOR && !CF_TABLE) {
+    if (CF_GRID) {
         I->grid = (spin_grid *)cb->allocateMemory(1, sizeof(spin_grid));
         if (I->grid == NULL) {
             cb->freeMemory(I->name);
@@ -836,7 +871,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
             say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
             return NULL;
         }
-        I->grid->P = NAN;
+        for (int k = 0; k < 5; k++) I->grid->key[k] = NAN;
         I->grid->strips.ny = 0;
     }
     I->logging = logging != fmi2False;
@@ -1166,33 +1201,67 @@ static void law_jacobian(const cf_params *p, double vx, double vy, double V, dou
     }
 }
 
-/* the output i's row of d(outputs)/d(Vx, Vy, Omega_y) where it is analytic, else 0 */
-static int analytic_row(const cf_core *c, int role, double row[3]) {
-    const double *v = c->val, Vx = v[R_VX], Rx = v[R_RX];
-    const double vx = Vx - v[R_OMEGA_Y] * Rx, vy = v[R_VY];
+/* d(Tx, Ty, Mz)/d(vx, vy, V, phi) of what contact_outputs computes at the current
+ * inputs (the law at their load in c->p), rolling (V != 0) on the thin-layer law: the
+ * closed form's (law_jacobian) and, with a spin phi != 0, the march with the spin less
+ * the march without it differentiated in forward mode (cf_march_jacobian), whose phi
+ * column is the only one in phi. At phi = 0 the FMU computes the closed form alone, and
+ * the phi column is the march's slope there (the correction's, which vanishes at 0;
+ * marched only where the direction has a component in phi: need_phi). 0 where no
+ * analytic form is had: standstill, the table. */
+static int contact_jacobian(Inst *I, int need_phi, double J[3][4]) {
+    const cf_core *c = &I->c;
+    const double *v = c->val, Vx = v[R_VX];
+    const double vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY], phi = v[R_OMEGA_Z];
+    if (Vx == 0.0 || CF_TABLE) return 0;
+    double L[3][3];
+    law_jacobian(&c->p, vx, vy, Vx, L);
+    for (int k = 0; k < 3; k++) {
+        for (int j = 0; j < 3; j++) J[k][j] = L[k][j];
+        J[k][3] = 0.0;
+    }
+    if (CF_CONTACT_SPIN && I->grid != NULL && (phi != 0.0 || need_phi)) {
+        const cf_strips *g = grid_at(I->grid, c, &c->p, &c->b);
+        double D[12], D0[12];
+        cf_march_jacobian(g, vx, vy, Vx, phi, D);
+        if (phi != 0.0) cf_march_jacobian(g, vx, vy, Vx, 0.0, D0);
+        for (int k = 0; k < 3; k++) {
+            J[k][3] = D[4 * k + 3];
+            if (phi != 0.0)
+                for (int j = 0; j < 3; j++) J[k][j] += D[4 * k + j] - D0[4 * k + j];
+        }
+    }
+    return 1;
+}
+
+/* the output's row of d(outputs)/d(Vx, Vy, Omega_y, Omega_z) where it is analytic (J:
+ * contact_jacobian's, have: whether there is one), else 0 */
+static int analytic_row(const cf_core *c, int role, int have, const double J[3][4],
+                        double row[4]) {
+    const double Rx = c->val[R_RX];
     int k;
     switch (role - R_OUT) {
     case O_TX: k = 0; break;
     case O_TY: k = 1; break;
     case O_MZ: k = 2; break;
-    case O_VX_SLIP: row[0] = 1.0, row[1] = 0.0, row[2] = -Rx; return 1;
-    case O_VY_SLIP: row[0] = 0.0, row[1] = 1.0, row[2] = 0.0; return 1;
+    case O_VX_SLIP: row[0] = 1.0, row[1] = 0.0, row[2] = -Rx, row[3] = 0.0; return 1;
+    case O_VY_SLIP: row[0] = 0.0, row[1] = 1.0, row[2] = 0.0, row[3] = 0.0; return 1;
     default: return 0;
     }
-    if (Vx == 0.0 || CF_TABLE) return 0; /* standstill, or the table: differences */
-    double J[3][3];
-    law_jacobian(&c->p, vx, vy, Vx, J);
-    /* chain rule: vx = Vx - Omega_y Rx, vy = Vy, V = Vx */
+    if (!have) return 0; /* standstill, or the table: differences */
+    /* chain rule: vx = Vx - Omega_y Rx, vy = Vy, V = Vx, phi = Omega_z */
     row[0] = J[k][0] + J[k][2];
     row[1] = J[k][1];
     row[2] = -Rx * J[k][0];
+    row[3] = J[k][3];
     return 1;
 }
 
 /* Contact mode: the directional derivative of the outputs (vUnknown) along the inputs
  * (vKnown, direction dvKnown) at the current inputs. Tx, Ty, Mz, vx, vy with respect
- * to Vx, Vy, Omega_y analytic (law_jacobian); any other pair (P, the creepages, the
- * adhesion) by central differences of the outputs along the direction. */
+ * to Vx, Vy, Omega_y, Omega_z analytic (contact_jacobian); any other pair (P, the
+ * creepages, the adhesion) by central differences of the outputs along the direction.
+ * A derivative that is not finite (inputs near overflow) is an error, never served. */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference zr[], size_t nz,
                                         const fmi2ValueReference ur[], size_t nu,
                                         const fmi2Real du[], fmi2Real dz[]) {
@@ -1212,9 +1281,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         say(I, fmi2Error, "fmi2GetDirectionalDerivative: an input is invalid (see setReal)");
         return fmi2Error;
     }
-    if (C->dirty) refresh(I);
-    int only_kin = 1; /* every known among (Vx, Vy, Omega_y) */
-    double dir[3] = {0.0, 0.0, 0.0};
+    if (C->dirty && refresh(I) != fmi2OK) return fmi2Error; /* logged there */
+    int only_kin = 1; /* every known among (Vx, Vy, Omega_y, Omega_z) */
+    double dir[4] = {0.0, 0.0, 0.0, 0.0};
     for (size_t j = 0; j < nu; j++) {
         if (ur[j] >= CF_N_VARS || CF_VARS[ur[j]].kind != K_INPUT || CF_VARS[ur[j]].type != T_REAL) {
             say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
@@ -1222,7 +1291,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
             return fmi2Error;
         }
         const int role = CF_VARS[ur[j]].role;
-        const int k = role == R_VX ? 0 : role == R_VY ? 1 : role == R_OMEGA_Y ? 2 : -1;
+        const int k = role == R_VX ? 0 : role == R_VY ? 1 : role == R_OMEGA_Y ? 2
+                    : role == R_OMEGA_Z ? 3 : -1;
         if (k < 0) only_kin = 0;
         else dir[k] += du[j];
         if (!isfinite(du[j])) {
@@ -1231,9 +1301,10 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         }
     }
     /* central differences along the direction for what is not analytic */
-    double plus[N_OUT], minus[N_OUT], eps = 0.0;
-    int have_fd = 0;
-    for (size_t i = 0; i < nz; i++) {
+    double plus[N_OUT], minus[N_OUT], eps = 0.0, J[3][4];
+    int have_fd = 0, have_J = -1; /* -1: contact_jacobian not yet called */
+    size_t i;
+    for (i = 0; i < nz; i++) {
         if (zr[i] >= CF_N_VARS || CF_VARS[zr[i]].kind != K_OUTPUT ||
             CF_VARS[zr[i]].type != T_REAL) {
             say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
@@ -1241,9 +1312,12 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
             return fmi2Error;
         }
         const int role = CF_VARS[zr[i]].role;
-        double row[3];
-        if (only_kin && analytic_row(C, role, row)) {
-            dz[i] = row[0] * dir[0] + row[1] * dir[1] + row[2] * dir[2];
+        double row[4];
+        if (only_kin && have_J < 0 && role - R_OUT <= O_MZ && role - R_OUT >= O_TX)
+            have_J = contact_jacobian(I, dir[3] != 0.0, J);
+        if (only_kin && analytic_row(C, role, have_J > 0, J, row)) {
+            dz[i] = row[0] * dir[0] + row[1] * dir[1] + row[2] * dir[2] + row[3] * dir[3];
+            if (!isfinite(dz[i])) goto not_finite;
             continue;
         }
         if (!have_fd) {
@@ -1261,7 +1335,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                                  (sgn ? -eps : eps) * du[j];
                 cf_params p = C->p;
                 cf_body b = C->b;
-                if (contact_outputs(&X, &p, &b, sgn ? minus : plus, r, sizeof r)) {
+                if (contact_outputs(&X, I->grid, &p, &b, sgn ? minus : plus, r, sizeof r)) {
                     say(I, fmi2Error, "fmi2GetDirectionalDerivative: the outputs are not "
                         "finite next to the inputs");
                     return fmi2Error;
@@ -1271,8 +1345,13 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         }
         const int o = role - R_OUT;
         dz[i] = eps > 0.0 ? (plus[o] - minus[o]) / (2.0 * eps) : 0.0;
+        if (!isfinite(dz[i])) goto not_finite;
     }
     return fmi2OK;
+not_finite:
+    say(I, fmi2Error, "fmi2GetDirectionalDerivative: the derivative of %s is not finite at "
+        "the current inputs", CF_VARS[zr[i]].name);
+    return fmi2Error;
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,

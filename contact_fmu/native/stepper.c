@@ -950,6 +950,80 @@ int cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double 
     return status;
 }
 
+/* ---- the native FMU's contact mode with a spin input ------------------------------- */
+/* layer._Grid._march_numpy at standstill (Vx = 0; no rolling: every point slides, Eq. 5):
+ * tau = mu p v/|v| with the slip v = (vx - phi y) + i (vy + phi x) of Eq. (3) at each
+ * node (x in column order), 0 where v = 0; R = (Tx, Ty, Mz) of _Grid.resultants. numpy
+ * sums in another order: the two agree to rounding. */
+void cf_march_standstill(const cf_strips *g, double vx, double vy, double phi, double R[3]) {
+    double Tr = 0.0, Ti = 0.0, M = 0.0;
+    for (int i = 0; i < g->ny; i++)
+        for (int j = 0; j < g->nx; j++) {
+            const size_t e = (size_t)i * g->nx + j;
+            const double a = vx - phi * g->y[i], b = vy + phi * g->x[j], mag = hypot(a, b);
+            if (!(mag > 0.0)) continue;
+            const double tr = g->cap[e] * a / mag, ti = g->cap[e] * b / mag;
+            Tr += g->w[e] * tr;
+            Ti += g->w[e] * ti;
+            M += g->w[e] * (g->x[j] * ti - g->y[i] * tr);
+        }
+    R[0] = Tr, R[1] = Ti, R[2] = M;
+}
+
+/* The forward-mode derivative of march_one (rolling, Vx != 0) for one input: D (3 x 4,
+ * row major) = d(Tx, Ty, Mz)/d(vx, vy, Vx, phi) of its resultants, through each node's
+ * operations in march_one's order (the same doubles decide each node's branch). The
+ * increment inc = gd ((vx - phi y) + i (vy - s phi mid)), gd = dist/(|Vx| k), is linear
+ * in vx, vy, phi and goes as 1/|Vx|: d inc = gd (dvx - y dphi) + i gd (dvy - s mid dphi)
+ * - inc dVx/Vx. A node in adhesion (|trial| <= cap) passes dtrial on; one in slip,
+ * t = cap trial/|trial|, passes cap (dtrial - e (e . dtrial))/|trial| with e =
+ * trial/|trial| (the projection's derivative); below tiny the factor cap/tiny is a
+ * constant. At a node exactly on the boundary (|trial| = cap) it takes the adhesion
+ * side: a one-sided derivative, as everywhere the march has a kink. */
+void cf_march_jacobian(const cf_strips *g, double vx, double vy, double Vx, double phi,
+                       double D[12]) {
+    const int ny = g->ny, nx = g->nx;
+    const double s = Vx > 0.0 ? 1.0 : -1.0;
+    const double gain = 1.0 / (fabs(Vx) * g->k);
+    const double sphi = s * phi;
+    for (int k = 0; k < 12; k++) D[k] = 0.0;
+    for (int i = 0; i < ny; i++) {
+        const double yi = g->y[i], re = vx - phi * yi;
+        double tr = 0.0, ti = 0.0, dr[4] = {0.0}, di[4] = {0.0};
+        for (int j = 0; j < nx; j++) {
+            const size_t e = (size_t)i * nx + j;
+            const double gd = gain * g->dist[e], c = g->cap[e], im = vy - sphi * g->mid[e];
+            const double a = tr + gd * re, b = ti + gd * im; /* march_one's trial */
+            double mag = sqrt(a * a + b * b);
+            if (!(mag <= DBL_MAX)) mag = hypot(a, b);
+            const double q = c / (g->tiny > mag ? g->tiny : mag);
+            /* the increment's derivative, added to the carried one: dtrial */
+            dr[0] += gd, di[1] += gd;
+            dr[2] -= gd * re / Vx, di[2] -= gd * im / Vx;
+            dr[3] -= gd * yi, di[3] -= gd * s * g->mid[e];
+            if (q < 1.0 && !(g->tiny > mag)) { /* slip: the projection on |tau| = cap */
+                const double ea = a / mag, eb = b / mag;
+                for (int k = 0; k < 4; k++) {
+                    const double along = ea * dr[k] + eb * di[k];
+                    dr[k] = q * (dr[k] - ea * along);
+                    di[k] = q * (di[k] - eb * along);
+                }
+            } else if (q < 1.0) { /* below tiny: the constant factor cap/tiny */
+                for (int k = 0; k < 4; k++) dr[k] *= q, di[k] *= q;
+            }
+            const double f = q < 1.0 ? q : 1.0;
+            tr = a * f;
+            ti = b * f;
+            const double w = g->w[e], sx = -s * g->x[j];
+            for (int k = 0; k < 4; k++) {
+                D[k] += w * dr[k];
+                D[4 + k] += w * di[k];
+                D[8 + k] += w * (sx * di[k] - yi * dr[k]);
+            }
+        }
+    }
+}
+
 /* ---- integrator.RollingBody._lobatto_vector: Vy and/or Omega_z as stage unknowns ---- */
 /* The Lobatto IIIC step with n = 2 or 3 unknowns u = (vx[, Vy][, Omega_z]) and its
  * Newton iteration (solvers.newton with the block Jacobian of _lobatto_vector), for the
@@ -1396,11 +1470,36 @@ void cf_initial_vforces(const cf_params *p, cf_vstate *y) {
     y->jac_valid = 0;
 }
 
+/* LayerContact.adhesion_fraction with spin phi: the share of the area (weights) whose
+ * nodes do not slip in the strip march (the same march; its sums in another order than
+ * numpy's: equal to rounding); at standstill or for a non-finite input
+ * (layer._march_numpy) every node slips where v != 0. tau, slip: scratch (2 ny nx
+ * doubles, ny nx bytes); inside: the grid's mask. */
+double cf_spin_adhesion(const cf_strips *g, double vx, double vy, double Vx, double phi,
+                        double *tau, unsigned char *slip, const unsigned char *inside) {
+    const size_t n = (size_t)g->ny * g->nx;
+    if (Vx != 0.0 && isfinite(Vx) && isfinite(vx) && isfinite(vy) && isfinite(phi)) {
+        double R[3];
+        march_one(g, vx, vy, Vx, phi, tau, slip, R);
+    } else { /* standstill (layer._march_numpy): slip wherever v != 0 */
+        for (int i = 0; i < g->ny; i++)
+            for (int j = 0; j < g->nx; j++) {
+                const double a = vx - phi * g->y[i], c = vy + phi * g->x[j];
+                slip[(size_t)i * g->nx + j] = !(a == 0.0 && c == 0.0);
+            }
+    }
+    double stuck = 0.0, area = 0.0;
+    for (size_t e = 0; e < n; e++)
+        if (inside[e]) {
+            area += g->w[e];
+            if (!slip[e]) stuck += g->w[e];
+        }
+    return stuck / area;
+}
+
 /* RollingBody.outputs() on the vector path into b->out: kinematics, forces and
- * kinematics.contact_quantities; with spin the adhesion is the share of the area
- * (weights) whose nodes do not slip in the strip march (LayerContact.adhesion_fraction,
- * the same march; its sums in another order than numpy's: equal to rounding). tau, slip,
- * inside: scratch (2 ny nx doubles, ny nx bytes) and the grid's inside mask. */
+ * kinematics.contact_quantities; with spin the adhesion of the strip march
+ * (cf_spin_adhesion, with its scratch tau, slip and the grid's mask inside). */
 void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double *tau,
                       unsigned char *slip, const unsigned char *inside) {
     const double Vx = y->Vx, vx = y->vx, Vy = y->Vy, Oz = y->Oz;
@@ -1428,25 +1527,8 @@ void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double
     } else if (Oz == 0.0 || p->strips == NULL) {
         o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
     } else {
-        const cf_strips *g = (const cf_strips *)p->strips;
-        const size_t n = (size_t)g->ny * g->nx;
-        if (Vx != 0.0 && isfinite(Vx) && isfinite(vx) && isfinite(Vy) && isfinite(Oz)) {
-            double R[3];
-            march_one(g, vx, Vy, Vx, Oz, tau, slip, R);
-        } else { /* standstill (layer._march_numpy): slip wherever v != 0 */
-            for (int i = 0; i < g->ny; i++)
-                for (int j = 0; j < g->nx; j++) {
-                    const double a = vx - Oz * g->y[i], c = Vy + Oz * g->x[j];
-                    slip[(size_t)i * g->nx + j] = !(a == 0.0 && c == 0.0);
-                }
-        }
-        double stuck = 0.0, area = 0.0;
-        for (size_t e = 0; e < n; e++)
-            if (inside[e]) {
-                area += g->w[e];
-                if (!slip[e]) stuck += g->w[e];
-            }
-        o[O_ADHESION] = stuck / area;
+        o[O_ADHESION] = cf_spin_adhesion((const cf_strips *)p->strips, vx, Vy, Vx, Oz, tau, slip,
+                                         inside);
     }
     o[O_REGIME] = full_slip(p, vx, Vy, Vx) ? 1.0 : 0.0;
 }
