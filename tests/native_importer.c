@@ -285,10 +285,16 @@ static int fuzz(const api *f, const char *guid, const char *ident, FILE *in, uns
             free(b);
             break;
         }
-        case 8: { /* the directional derivative: not provided, an error, no harm */
-            fmi2ValueReference u = s.in[0], z = s.out[0];
+        case 8: { /* the directional derivative (or, where not provided, an error, no
+                   * harm) of an output along an input, both taken in turn by the call's
+                   * index (no draw: the random sequence of the other calls is kept) */
+            fmi2ValueReference u = s.in[k % s.n_in], z = s.out[(k / 7) % s.n_out];
             double dv = 1.0, dz = 0.0;
             st = f->DirDer(c, &u, 1, &z, 1, &dv, &dz);
+            if (st == fmi2OK && !isfinite(dz)) {
+                fprintf(stderr, "non-finite derivative served with fmi2OK\n");
+                return 3;
+            }
             break;
         }
         default: /* now and then start over */

@@ -188,7 +188,6 @@ def test_rigid_body_fmu_steps_eqs_8_9_to_the_pythonfmu_doubles(tmp_path):
     [
         ("spin_ratio", 'spin = "ratio" without vy = "eq10"'),
         ("two_loads", "loads = [50000.0, 100000.0]"),
-        ("full_contact", "input Omega_z"),
         ("fig12_transient", 'phase = "transient"'),
         ("full_body", "scheme ['lobatto3c', 'sdirk2']"),
     ],
@@ -602,14 +601,17 @@ def _fuzz(exe: Path, md, spec: Path, seeds: int, calls: int, env=None) -> dict[s
     return counts
 
 
-@pytest.mark.parametrize("mode", ["contact", "rigid_body", "cornering", "rail_creep"])
+@pytest.mark.parametrize(
+    "mode", ["contact", "full_contact", "rigid_body", "cornering", "rail_creep"]
+)
 def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly(
     scenes, native_fmus, tmp_path, mode
 ):
     """The contact mode (the sweep scene's FMU: direct feedthrough, the directional
-    derivatives and their difference path) and the rigid_body mode under the sanitized
-    importer's random calls: no sanitizer report, no fmi2Fatal, no non-finite output
-    served with fmi2OK, no damaged bytes accepted."""
+    derivatives and their difference path; the full contact FMU: the spin input's strip
+    march on the grid built for each load and its forward-mode derivative) and the
+    rigid_body mode under the sanitized importer's random calls: no sanitizer report,
+    no fmi2Fatal, no non-finite output served with fmi2OK, no damaged bytes accepted."""
     import fmpy
 
     if mode == "contact":
@@ -617,7 +619,7 @@ def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly
     elif mode in ("cornering", "rail_creep"):
         path = native_fmus[mode]
     else:
-        path = native_fmu.build(ModelConfig.full("rigid_body"), OUT).path
+        path = native_fmu.build(ModelConfig.full(mode.removeprefix("full_")), OUT).path
     unzip = tmp_path / "fmu"
     fmpy.extract(str(path), str(unzip))
     md = fmpy.read_model_description(str(unzip))
@@ -628,6 +630,9 @@ def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly
     else:
         vr = {v.name: v.valueReference for v in md.modelVariables}
         ins, outs = ("Tx", "Fx_ex", "My_ex"), ("Vx", "Omega_y")
+        if mode == "full_contact":  # every input, every Real output
+            ins = ("P", "Vx", "Vy", "Omega_y", "Omega_z")
+            outs = ("Tx", "Ty", "Mz", "vx", "vy", "xi_sp", "adhesion")
         spec.write_text(
             f"{len(ins)} {' '.join(str(vr[n]) for n in ins)}\n"
             f"{len(outs)} {' '.join(str(vr[n]) for n in outs)}\n0\n"

@@ -1,0 +1,183 @@
+"""The native contact FMU with a spin input (``--native --full contact``): the strip march
+of the thin-layer law on its spin grid, built in C for each load (fmu2.c, grid_at), and
+the forward-mode derivative of that march behind its directional derivatives
+(stepper.c, cf_march_jacobian), against the pythonfmu FMU and central differences."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fmu_build
+from contact_fmu import examples as ex
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.scenario.instance import DISCARD, ERROR, OK, Instance
+from fmu_build import native_fmu
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+MU_P = ex.mu * ex.P
+LAW = ex.contact()
+
+pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+
+
+@pytest.fixture(scope="module")
+def fmus() -> dict[str, Path]:
+    cfg = ModelConfig.full("contact")
+    return {"native": native_fmu.build(cfg, OUT).path, "pythonfmu": fmu_build.build(cfg, OUT).path}
+
+
+def _inputs(rng: np.random.Generator, k: int) -> dict[str, float]:
+    """A random input of the force element: both rolling directions and standstill (every
+    tenth), creepages from adhesion to beyond full slip, spin creepage phi a1/|Vx| of
+    the same size (or no spin, every fourth), loads about the examples'."""
+    Vx = 0.0 if k % 10 == 0 else float(rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-1, 1.3))
+    V = max(abs(Vx), 1.0)
+    size = 10 ** rng.uniform(-1.5, 0.7) * LAW.creep_full_slip
+    xi = rng.uniform(-1.0, 1.0, 3) * size
+    return {
+        "P": float(rng.uniform(0.5, 1.5) * ex.P),
+        "Vx": Vx,
+        "Vy": float(xi[1] * V),
+        "Omega_y": float((Vx - xi[0] * V) / ex.Rx),
+        "Omega_z": 0.0 if k % 4 == 3 else float(xi[2] * V / LAW.a1),
+    }
+
+
+def test_full_contact_fmu_with_spin_gives_the_pythonfmu_outputs(fmus):
+    """60 random inputs (spin, lateral slip, standstill, a new load each time, mu tuned
+    half way): the native FMU's outputs are the pythonfmu FMU's within 1e-12 of each
+    output's scale (the march's sums run in another order than numpy's; C's hypot and
+    sqrt against numpy's complex abs), the same doubles without spin and lateral slip
+    (the same closed form), and every force within the Coulomb bound |T| <= mu P
+    (Eq. 35 integrated over the contact)."""
+    runs = {}
+    for target, path in fmus.items():
+        rng = np.random.default_rng(18)
+        rows = []
+        with Instance(path, target) as c:
+            for k in range(60):
+                if k == 30:
+                    c.set("mu", 0.2)  # tunable: the law and its spin grid follow it
+                u = _inputs(rng, k)
+                for name, value in u.items():
+                    c.set(name, value)
+                rows.append((u | {"mu": c.get("mu")}, c.outputs()))
+        runs[target] = rows
+    native, python = runs["native"], runs["pythonfmu"]
+    names = [n for n in python[0][1] if n != "regime"]
+    spinning = sum(u["Omega_z"] != 0.0 for u, _ in python)
+    assert spinning >= 40 and any(u["Vx"] == 0.0 and u["Omega_z"] for u, _ in python)
+    for name in names:
+        x = np.array([o[name] for _, o in native])
+        y = np.array([o[name] for _, o in python])
+        assert np.max(np.abs(x - y)) <= 1e-12 * np.max(np.abs(y)), name
+    for (u, a), (_, b) in zip(native, python, strict=True):
+        assert a["regime"] == b["regime"]
+        if u["Omega_z"] == 0.0 and u["Vy"] == 0.0:
+            assert a == b
+        assert math.hypot(a["Tx"], a["Ty"]) <= u["mu"] * u["P"] * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("target", ["native", "pythonfmu"])
+def test_bad_spin_input_is_refused_naming_it_and_the_instance_recovers(fmus, target):
+    """Omega_z = NaN or inf: fmi2Error at setReal and at getReal of the outputs,
+    fmi2Discard at doStep, each naming Omega_z and the value; 1e308 overflows the march's
+    increments: no outputs (fmi2Error naming the output that is not finite; doStep
+    fmi2Discard, state unchanged); 1e300 is the saturated sliding field of a pure spin
+    (|T| <= mu P). Corrected, the instance gives a fresh instance's doubles."""
+    from fmpy.fmi1 import FMICallException
+
+    u = {"Vx": 5.0, "Vy": 0.002, "Omega_y": (5.0 - 0.003) / ex.Rx, "Omega_z": 0.8}
+    with Instance(fmus[target], "fresh") as fresh:
+        for name, value in u.items():
+            fresh.set(name, value)
+        want = fresh.outputs()
+    with Instance(fmus[target], "bad") as c:
+        for name, value in u.items():
+            c.set(name, value)
+        for value, text in ((math.nan, "nan"), (-math.inf, "-inf")):
+            with pytest.raises(FMICallException) as e:
+                c.set("Omega_z", value)
+            assert e.value.status == ERROR
+            assert f"Omega_z = {text} is invalid: must be finite" in c.messages[-1][1]
+            with pytest.raises(FMICallException) as e:
+                c.get("Tx")
+            assert e.value.status == ERROR and f"Omega_z = {text}" in c.messages[-1][1]
+            assert c.step(1e-3) == DISCARD and f"Omega_z = {text}" in c.messages[-1][1]
+        c.set("Omega_z", 1e308)
+        with pytest.raises(FMICallException) as e:
+            c.get("Tx")
+        assert e.value.status == ERROR and "is not finite" in c.messages[-1][1]
+        assert c.step(1e-3) == DISCARD and "is not finite" in c.messages[-1][1]
+        c.set("Omega_z", 1e300)
+        out = c.outputs()
+        assert all(math.isfinite(v) for v in out.values())
+        assert math.hypot(out["Tx"], out["Ty"]) <= MU_P * (1 + 1e-12)
+        assert out["adhesion"] == 0.0  # every node slides
+        c.set("Omega_z", u["Omega_z"])
+        assert c.outputs() == want
+        assert c.step(1e-3) == OK and c.outputs() == want
+
+
+def test_directional_derivatives_with_spin_are_central_differences_of_the_outputs(fmus):
+    """d(Tx, Ty, Mz)/d(Vx, Vy, Omega_y, Omega_z) of the native FMU (the closed form's
+    partials plus the strip march differentiated in forward mode) against central
+    differences of its own outputs at 24 random points, 8 each in adhesion, partial slip
+    and full slip (creepages 0.05, 0.6 and 3 of the onset of full slip, spin creepage of
+    the same size; a quarter without spin, where d/dOmega_z is the march's slope at 0).
+    Step d = 1e-9 of the input's scale u (|Vx|, |Vx|/Rx, |Vx|/a1): truncation d^2 f'''
+    is below 1e-17 of mu P/u; the outputs' rounding, about sqrt(3072) eps mu P (the
+    march's nodes), divided by 2 d is 6e-6 mu P/u (bound 2e-5); the rounding of the slip
+    vx = Vx - Omega_y Rx, 2 ulp of Vx against a step of 1e-9 |Vx|, changes the step by
+    up to 4.4e-7 (bound 1e-6 of the difference). A kink of the march (a node at its
+    adhesion limit within d) would add up to a strip's share of the slope: at these
+    points none lies within the step (120 points measured: worst 0.1 of the bound). A
+    combined direction is the sum of the single ones; vx and vy are exact."""
+    rng = np.random.default_rng(7)
+    outs = ("Tx", "Ty", "Mz")
+    scale = {"Tx": MU_P, "Ty": MU_P, "Mz": MU_P * LAW.a1}
+    with Instance(fmus["native"], "dd") as c:
+        vr = {n: v.valueReference for n, v in c.vars.items()}
+        zr = [vr[o] for o in outs]
+        for k in range(24):
+            Vx = float(rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-0.5, 1.3))
+            size = (0.05, 0.6, 3.0)[k % 3] * LAW.creep_full_slip
+            xi = rng.uniform(-1.0, 1.0, 3) * size
+            u = {
+                "Vx": Vx,
+                "Vy": float(xi[1] * abs(Vx)),
+                "Omega_y": float((Vx - xi[0] * abs(Vx)) / ex.Rx),
+                "Omega_z": 0.0 if k % 4 == 3 else float(xi[2] * abs(Vx) / LAW.a1),
+            }
+            for name, value in u.items():
+                c.set(name, value)
+            unit = {"Vx": abs(Vx), "Vy": abs(Vx), "Omega_y": abs(Vx) / ex.Rx,
+                    "Omega_z": abs(Vx) / LAW.a1}  # fmt: skip
+            grads = {}
+            for name in u:
+                got = c.fmu.getDirectionalDerivative(zr, [vr[name]], [1.0])
+                grads[name] = got
+                d = 1e-9 * unit[name]
+                c.set(name, u[name] + d)
+                hi = c.outputs()
+                c.set(name, u[name] - d)
+                lo = c.outputs()
+                c.set(name, u[name])
+                for o, g in zip(outs, got, strict=True):
+                    fd = (hi[o] - lo[o]) / (2 * d)
+                    tol = 2e-5 * scale[o] / unit[name] + 1e-6 * abs(fd)
+                    assert abs(g - fd) <= tol, (k, o, name, g, fd, u)
+            both = c.fmu.getDirectionalDerivative(zr, [vr["Vx"], vr["Omega_z"]], [2.0, -3.0])
+            for i, o in enumerate(outs):
+                want = 2.0 * grads["Vx"][i] - 3.0 * grads["Omega_z"][i]
+                assert abs(both[i] - want) <= 1e-12 * (abs(want) + scale[o] / unit["Vx"])
+            slip = c.fmu.getDirectionalDerivative(
+                [vr["vx"], vr["vy"]], [vr["Omega_y"], vr["Vy"], vr["Omega_z"]], [1.0, 1.0, 1.0]
+            )
+            assert slip == [-ex.Rx, 1.0]
