@@ -723,6 +723,17 @@ def _contact_config(name: str = "force_element") -> ModelConfig:
     )
 
 
+def central_differences(inst: Instance, name: str, value: float, d: float) -> dict:
+    """(outputs(value + d) - outputs(value - d)) / (2 d) along the input ``name`` (held at
+    ``value`` before and after)."""
+    inst.set(name, value + d)
+    hi = inst.outputs()
+    inst.set(name, value - d)
+    lo = inst.outputs()
+    inst.set(name, value)
+    return {o: (hi[o] - lo[o]) / (2 * d) for o in hi}
+
+
 def test_directional_derivatives_of_the_force_element_are_its_slopes():
     """providesDirectionalDerivative in contact mode: d(Tx, Ty, Mz, vx)/d(Vx, Vy, Omega_y)
     analytic (the closed form's partials), d/dP and d(xi_x, adhesion) by central
@@ -747,13 +758,9 @@ def test_directional_derivatives_of_the_force_element_are_its_slopes():
             for name in ("Vx", "Vy", "Omega_y", "P"):
                 got = c.fmu.getDirectionalDerivative([vr[o] for o in outs], [vr[name]], [1.0])
                 d = 1e-7 * max(abs(u[name]), 1e-3 * abs(Vx))
-                c.set(name, u[name] + d)
-                hi = c.outputs()
-                c.set(name, u[name] - d)
-                lo = c.outputs()
-                c.set(name, u[name])
+                diff = central_differences(c, name, u[name], d)
                 for o, g in zip(outs, got, strict=True):
-                    fd = (hi[o] - lo[o]) / (2 * d)
+                    fd = diff[o]
                     scale = {"Tx": MU_P, "Ty": MU_P, "Mz": MU_P * law.a1}.get(o, 1.0)
                     tol = 1e-6 * scale / max(abs(u[name]), 1e-3) + 1e-6 * abs(fd)
                     if name == "P" or o in ("xi_x", "adhesion"):
