@@ -10,10 +10,11 @@ C sources (``<SourceFiles>``) that the FMU carries under ``sources/``, so that f
 build (or any importer's) compiles it on Windows or macOS; the FMI headers are fmpy's
 (``fmpy/c-code``), found at build time and not carried in this repository.
 
-What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC, methods
-"full" and "quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or
-from Eq. (11) (the scenes fig13, brake, fig12, railway, cornering); the half-space
-creep-force table of one load node without layers, body and contact mode (rail_traction,
+What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC and SDIRK2
+(the String parameter ``scheme`` where the FMU offers both), methods "full" and
+"quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or from
+Eq. (11) (the scenes fig13, brake, fig12, railway, cornering; ``--full body``); the
+half-space creep-force table of one load node without layers, body and contact mode (rail_traction,
 rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
 law without a spin input (sweep); the rigid_body mode (``--full rigid_body``). Everything
 else is refused here with a message that names the scene's feature
