@@ -125,12 +125,21 @@ def step_costs(steps: int, repeats: int) -> dict[str, float]:
         runs[f"{label} pythonfmu"] = (path, {}, ins, outs)
         path, ins, outs = trivial_native(OUT, a, b)
         runs[f"{label} native"] = (path, {}, ins, outs)
+    runs = {
+        name: (path, st, ins, [o for o in outs if o != "regime"],
+               trivial if name.startswith(("trivial", "null")) else table, scene.step)
+        for name, (path, st, ins, outs) in runs.items()
+    }  # fmt: skip
+    return interleaved(runs, steps, repeats)
+
+
+def interleaved(runs: dict, steps: int, repeats: int) -> dict[str, float]:
+    """Seconds per step of each run (path, starts, inputs, outputs, input table, h):
+    the repeats interleaved run by run, the mean over the steps of each step's fastest."""
     times = {k: np.empty((repeats, steps)) for k in runs}
     for r in range(repeats):
-        for name, (path, st, ins, outs) in runs.items():
-            tab = trivial if name.startswith(("trivial", "null")) else table
-            s = Stepper(path, name.replace(" ", "_"), st, ins, [o for o in outs if o != "regime"],
-                        tab, scene.step)  # fmt: skip
+        for name, (path, st, ins, outs, tab, h) in runs.items():
+            s = Stepper(path, name.replace(" ", "_"), st, ins, outs, tab, h)
             try:
                 for k in range(steps):
                     times[name][r, k] = s.step(k)
@@ -153,19 +162,9 @@ def full_body_costs(steps: int, repeats: int) -> dict[str, float]:
              "Fy_ex": 90.0 * s, "My_ex": np.zeros(steps + 1), "Mz_ex": 0.015 * s}  # fmt: skip
     outputs = [v.name for v in cfg.variables if v.causality["body"] == "output"]
     outputs = [o for o in outputs if o != "regime"]
-    runs = {f"{t} {sch}": (p, {"scheme": sch}) for sch in ("lobatto3c", "sdirk2")
-            for t, p in paths.items()}  # fmt: skip
-    times = {k: np.empty((repeats, steps)) for k in runs}
-    for r in range(repeats):
-        for name, (path, st) in runs.items():
-            stepper = Stepper(path, name.replace(" ", "_"), st, list(table), outputs, table,
-                              FULL_BODY_H)  # fmt: skip
-            try:
-                for k in range(steps):
-                    times[name][r, k] = stepper.step(k)
-            finally:
-                stepper.close()
-    return {k: float(np.mean(np.min(v, axis=0))) for k, v in times.items()}
+    runs = {f"{t} {sch}": (p, {"scheme": sch}, list(table), outputs, table, FULL_BODY_H)
+            for sch in ("lobatto3c", "sdirk2") for t, p in paths.items()}  # fmt: skip
+    return interleaved(runs, steps, repeats)
 
 
 def full_report(full: dict[str, float], args) -> str:

@@ -218,7 +218,8 @@ def full_body() -> dict[str, Path]:
 
 def test_full_body_fmu_runs_both_schemes_and_methods_to_the_pythonfmu_doubles(full_body):
     """The full body FMU, Eqs. (8)-(11) with the law's spin (stepper.c's vector step on
-    both targets), validates, and for each method and scheme (the String parameters)
+    both targets), validates, has the pythonfmu FMU's variables (the String parameters
+    method and scheme among them) and structure, and for each method and scheme
     20 communication steps under swept lateral loads give the pythonfmu FMU's doubles;
     the adhesion with spin sums the grid in another order than numpy's (1e-12). The
     scheme is honoured: in the slip transient after the load is applied (internal steps
@@ -227,6 +228,9 @@ def test_full_body_fmu_runs_both_schemes_and_methods_to_the_pythonfmu_doubles(fu
     from fmpy.validation import validate_fmu
 
     assert validate_fmu(str(full_body["native"])) == []
+    a, b = _md(full_body["native"]), _md(full_body["pythonfmu"])
+    for tag in ("ModelVariables", "ModelStructure"):
+        assert ET.tostring(a.find(tag)) == ET.tostring(b.find(tag)), tag
     runs = {}
     for method, scheme in itertools.product(("full", "quasistationary"), ("lobatto3c", "sdirk2")):
         for target, path in full_body.items():
