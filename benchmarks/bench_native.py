@@ -16,8 +16,12 @@ machine):
    second of the native Fig. 13 FMU at the scene's step, both methods (the fastest of
    three runs of N steps).
 3. FMU sizes.
+4. The full body FMU (Eqs. 8-11 with the law's spin; stepper.c's vector step on both
+   targets) through fmpy's FMU2Slave, native and pythonfmu, each scheme (the full
+   method), as 1. with lateral loads swept, communication steps of 2.5e-4 s.
 
-``--write`` replaces the section SECTION of docs/performance.md.
+``--write`` replaces the sections SECTION (1-3) and FULL_SECTION (4) of
+docs/performance.md; ``--full-body-only`` measures and writes FULL_SECTION alone.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
 SECTION = "## Native FMU: step cost, C importer rate, size"
+FULL_SECTION = "## Native full body FMU: Lobatto IIIC and SDIRK2"
 TRIVIAL_C = Path(__file__).with_name("trivial_fmu.c")
 IMPORTER = ROOT / "tests" / "native_importer.c"
 
@@ -120,18 +125,74 @@ def step_costs(steps: int, repeats: int) -> dict[str, float]:
         runs[f"{label} pythonfmu"] = (path, {}, ins, outs)
         path, ins, outs = trivial_native(OUT, a, b)
         runs[f"{label} native"] = (path, {}, ins, outs)
+    runs = {
+        name: (path, st, ins, [o for o in outs if o != "regime"],
+               trivial if name.startswith(("trivial", "null")) else table, scene.step)
+        for name, (path, st, ins, outs) in runs.items()
+    }  # fmt: skip
+    return interleaved(runs, steps, repeats)
+
+
+def interleaved(runs: dict, steps: int, repeats: int) -> dict[str, float]:
+    """Seconds per step of each run (path, starts, inputs, outputs, input table, h):
+    the repeats interleaved run by run, the mean over the steps of each step's fastest."""
     times = {k: np.empty((repeats, steps)) for k in runs}
     for r in range(repeats):
-        for name, (path, st, ins, outs) in runs.items():
-            tab = trivial if name.startswith(("trivial", "null")) else table
-            s = Stepper(path, name.replace(" ", "_"), st, ins, [o for o in outs if o != "regime"],
-                        tab, scene.step)  # fmt: skip
+        for name, (path, st, ins, outs, tab, h) in runs.items():
+            s = Stepper(path, name.replace(" ", "_"), st, ins, outs, tab, h)
             try:
                 for k in range(steps):
                     times[name][r, k] = s.step(k)
             finally:
                 s.close()
     return {k: float(np.mean(np.min(v, axis=0))) for k, v in times.items()}
+
+
+FULL_BODY_H = 2.5e-4  # s: 3 internal steps of the default h_max (1e-4 s)
+
+
+def full_body_costs(steps: int, repeats: int) -> dict[str, float]:
+    """Seconds per step of the full body FMU, native and pythonfmu, per scheme (the full
+    method): Fx_ex = 0.3 mu P, Fy_ex = 0.3 mu P sin(k/20), Mz_ex = 5e-5 mu P sin(k/20)
+    (N m; mu P = 300 N at the defaults), interleaved as step_costs."""
+    cfg = ModelConfig.full("body")
+    paths = {"native": native_fmu.build(cfg, OUT).path, "pythonfmu": fmu_build.build(cfg, OUT).path}
+    s = np.sin(np.arange(steps + 1) / 20.0)
+    table = {"P": np.full(steps + 1, 1000.0), "Fx_ex": np.full(steps + 1, 90.0),
+             "Fy_ex": 90.0 * s, "My_ex": np.zeros(steps + 1), "Mz_ex": 0.015 * s}  # fmt: skip
+    outputs = [v.name for v in cfg.variables if v.causality["body"] == "output"]
+    outputs = [o for o in outputs if o != "regime"]
+    runs = {f"{t} {sch}": (p, {"scheme": sch}, list(table), outputs, table, FULL_BODY_H)
+            for sch in ("lobatto3c", "sdirk2") for t, p in paths.items()}  # fmt: skip
+    return interleaved(runs, steps, repeats)
+
+
+def full_report(full: dict[str, float], args) -> str:
+    lines = [
+        f"Made by `benchmarks/bench_native.py --steps {args.steps} --repeats {args.repeats}"
+        f" --full-body-only --write` on {datetime.date.today()} ({platform.machine()}, "
+        f"Python {platform.python_version()}; a shared 2-core machine: the ratios are the "
+        "result).",
+        "",
+        "The full body FMU (`--full body`: Eqs. 8-11 with the law's spin, stepper.c's vector "
+        "step on both targets) through fmpy's FMU2Slave, the full method: Fx_ex = 0.3 mu P, "
+        f"Fy_ex and Mz_ex swept; the first {args.steps} steps of {FULL_BODY_H:.1e} s (3 "
+        f"internal steps each), mean of each step's fastest of {args.repeats} interleaved runs:",
+        "",
+        "| FMU, scheme | us per step | native / pythonfmu | / Lobatto IIIC |",
+        "|---|---|---|---|",
+    ]
+    for k, v in full.items():
+        target, scheme = k.split()
+        a, b = v / full[f"pythonfmu {scheme}"], v / full[f"{target} lobatto3c"]
+        lines.append(f"| {k} | {1e6 * v:.2f} | {a:.2f} | {b:.2f} |")
+    lines += [
+        "",
+        "SDIRK2's stages are solved in turn by Newton with a new matrix every iteration "
+        "(integrator._sdirk_vector, mirrored in C: the same iteration), Lobatto IIIC's "
+        "coupled pair keeps its matrix from step to step (simplified Newton).",
+    ]
+    return "\n".join(lines) + "\n"
 
 
 def importer_rates(n: int) -> dict[str, float]:
@@ -221,12 +282,18 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--importer-steps", type=int, default=200_000)
     ap.add_argument("--write", action="store_true")
+    ap.add_argument("--full-body-only", action="store_true")
     args = ap.parse_args()
-    text = report(step_costs(args.steps, args.repeats), importer_rates(args.importer_steps),
-                  sizes(), args)  # fmt: skip
+    if not args.full_body_only:
+        text = report(step_costs(args.steps, args.repeats),
+                      importer_rates(args.importer_steps), sizes(), args)  # fmt: skip
+        print(text)
+        if args.write:
+            replace_section(DOC, SECTION, text)
+    text = full_report(full_body_costs(args.steps, args.repeats), args)
     print(text)
     if args.write:
-        replace_section(DOC, SECTION, text)
+        replace_section(DOC, FULL_SECTION, text)
     return 0
 
 

@@ -193,14 +193,14 @@ class RollingBody(BodyState):
 
     def _native_kernel(self) -> native.Kernel | None:
         """The compiled twin of this stepper's path (contact_fmu/native), where it
-        covers it: Lobatto IIIC and a law with ``native_constants`` (thin layer,
+        covers it: either scheme and a law with ``native_constants`` (thin layer,
         half-space table), and either vx the only unknown with vy held at a ratio and no
-        spin (``_lobatto_scalar``: the Python path's doubles for the thin layer without
-        lateral slip, the same to rounding else) or Vy and/or Omega_z as unknowns, either
-        method (``_lobatto_vector`` and the quasistationary regime: the same to the stage
-        tolerance)."""
+        spin (``_lobatto_scalar``, ``_sdirk_scalar``: the Python path's doubles for the
+        thin layer without lateral slip, the same to rounding else) or Vy and/or Omega_z
+        as unknowns, either method (``_lobatto_vector``, ``_sdirk_vector`` and the
+        quasistationary regime: the same to the stage tolerance)."""
         law_constants = getattr(type(self.law), "native_constants", None)
-        if law_constants is None or self.scheme != "lobatto3c":
+        if law_constants is None:
             return None
         scalar = (
             len(self._idx) == 1
@@ -225,6 +225,8 @@ class RollingBody(BodyState):
             "contraction_fast": solvers.CONTRACTION_FAST,
             "newton_iterations": solvers.NEWTON_ITERATIONS,
             "algebraic_key": ALGEBRAIC,
+            "gamma": GAMMA,
+            "sdirk": int(self.scheme == "sdirk2"),
         }
         if vector:
             return native.VectorKernel(lib, constants, self.method == "quasistationary")

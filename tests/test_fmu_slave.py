@@ -12,6 +12,7 @@ input is corrected.
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 import math
 import pickle
 
@@ -386,20 +387,23 @@ def _compiled_and_python(monkeypatch, cfg: ModelConfig = BODY, **params: float):
 
 
 @pytest.mark.skipif(native.library() is None, reason="no C compiler")
-@pytest.mark.parametrize("calls", ["fmi.c", "ctypes"])
-def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatch, calls):
+@pytest.mark.parametrize(
+    ("calls", "scheme"), [("fmi.c", "lobatto3c"), ("ctypes", "lobatto3c"), ("fmi.c", "sdirk2")]
+)
+def test_compiled_step_repeats_the_python_step_through_every_fmi_path(monkeypatch, calls, scheme):
     """A body FMU whose steps run in C (state in the struct, Python synced on demand)
     gives the Python adapter's outputs bit for bit (no lateral slip: stepper.c's
     contract) through all that hands the state between them: a load change (P: Python
     takes that step), internal steps at the cap (Python's note), a bad input (discard)
     and its correction, get state / step / set state / step, Integer outputs. Both
     ways of calling the step: the FMI calls themselves in C (native/fmi.c) and the
-    adapter's Python calling the step through ctypes."""
+    adapter's Python calling the step through ctypes; both schemes (the FMU's one)."""
     if calls == "fmi.c" and native.fmi_module() is None:
         pytest.skip("no Python headers for native/fmi.c")
     if calls == "ctypes":
         monkeypatch.setattr(native, "fmi_module", lambda: None)
-    fast, slow = _compiled_and_python(monkeypatch)
+    fast, slow = _compiled_and_python(monkeypatch, dataclasses.replace(BODY, schemes=(scheme,)))
+    assert fast.s._model.stepper.scheme == scheme
     assert fast.s._fast is not None and slow.s._fast is None
     assert (fast.s._fast_fmi is not None) == (calls == "fmi.c")
     compiled = [0]

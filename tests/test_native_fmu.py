@@ -11,6 +11,7 @@ where the tool is missing (CI has them all).
 from __future__ import annotations
 
 import ctypes
+import itertools
 import math
 import os
 import re
@@ -189,7 +190,6 @@ def test_rigid_body_fmu_steps_eqs_8_9_to_the_pythonfmu_doubles(tmp_path):
         ("spin_ratio", 'spin = "ratio" without vy = "eq10"'),
         ("two_loads", "loads = [50000.0, 100000.0]"),
         ("fig12_transient", 'phase = "transient"'),
-        ("full_body", "scheme ['lobatto3c', 'sdirk2']"),
     ],
 )
 def test_models_the_c_kernel_does_not_cover_are_refused_naming_the_feature(scene, feature):
@@ -206,6 +206,75 @@ def test_models_the_c_kernel_does_not_cover_are_refused_naming_the_feature(scene
         cfg = load(ROOT / "scenarios" / f"{scene}.toml").config
     with pytest.raises(native_fmu.NativeUnsupportedError, match=re.escape(feature)):
         native_fmu.build(cfg, OUT)
+
+
+@pytest.fixture(scope="module")
+def full_body() -> dict[str, Path]:
+    """The full body FMU (Eqs. 10-11, both methods and both schemes) of both targets."""
+    cfg = ModelConfig.full("body")
+    return {"native": native_fmu.build(cfg, OUT).path, "pythonfmu": fmu_build.build(cfg, OUT).path}
+
+
+def test_full_body_fmu_runs_both_schemes_and_methods_to_the_pythonfmu_doubles(full_body):
+    """The full body FMU, Eqs. (8)-(11) with the law's spin (stepper.c's vector step on
+    both targets), validates, has the pythonfmu FMU's variables (the String parameters
+    method and scheme among them) and structure, and for each method and scheme
+    20 communication steps under swept lateral loads give the pythonfmu FMU's doubles;
+    the adhesion with spin sums the grid in another order than numpy's (1e-12). The
+    scheme is honoured: in the slip transient after the load is applied (internal steps
+    of 6 tau_r, where Lobatto IIIC's R(z) is 0.04 and SDIRK2's -0.20) their Tx differ by
+    more than 1e-4 mu P (measured: 5e-4 mu P at the first step)."""
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(full_body["native"])) == []
+    a, b = _md(full_body["native"]), _md(full_body["pythonfmu"])
+    for tag in ("ModelVariables", "ModelStructure"):
+        assert ET.tostring(a.find(tag)) == ET.tostring(b.find(tag)), tag
+    runs = {}
+    for method, scheme in itertools.product(("full", "quasistationary"), ("lobatto3c", "sdirk2")):
+        for target, path in full_body.items():
+            rows = []
+            with Instance(path, target, {"method": method, "scheme": scheme}) as b:
+                names = list(b.outputs())
+                for k in range(20):
+                    s = math.sin(k / 5)
+                    b.set("Fx_ex", 0.3 * MU_P)
+                    b.set("Fy_ex", 0.3 * MU_P * s)
+                    b.set("Mz_ex", 5e-5 * MU_P * s)
+                    assert b.step(2.5e-4) == OK, b.messages[-1:]
+                    rows.append([b.get(n) for n in names])
+                assert (b.get("method"), b.get("scheme")) == (method, scheme)
+            runs[method, scheme, target] = dict(zip(names, np.array(rows).T, strict=True))
+        got, ref = runs[method, scheme, "native"], runs[method, scheme, "pythonfmu"]
+        for n in names:
+            if n == "adhesion":
+                assert np.max(np.abs(got[n] - ref[n])) <= 1e-12
+            else:
+                assert np.array_equal(got[n], ref[n]), (method, scheme, n)
+        assert np.any(got["Omega_z"] != 0.0) and np.any(got["Vy"] != 0.0)
+    lob, sd = runs["full", "lobatto3c", "native"], runs["full", "sdirk2", "native"]
+    assert np.max(np.abs(lob["Tx"] - sd["Tx"])) > 1e-4 * MU_P
+
+
+@pytest.mark.parametrize("target", ["pythonfmu", "native"])
+def test_a_bad_scheme_is_refused_naming_it_until_corrected(full_body, target):
+    """scheme = 'rk4': refused with RollingBody's words (the native FMU at setString,
+    the pythonfmu FMU at initialisation), no initialisation with it; corrected, the
+    model starts and steps."""
+    from fmpy.fmi1 import FMICallException
+
+    with Instance(full_body[target], "bad", initialise=False) as b:
+        try:
+            b.set("scheme", "rk4")
+        except FMICallException:
+            assert target == "native"
+        with pytest.raises(FMICallException):
+            b.initialise()
+        want = """scheme = 'rk4' is invalid: must be "lobatto3c" or "sdirk2\""""
+        assert any(want in m for _, m in b.messages), b.messages
+        b.set("scheme", "sdirk2")
+        b.initialise()
+        assert b.step(1e-4) == OK and b.get("scheme") == "sdirk2"
 
 
 def test_command_line_prints_the_fmu_path_last(native_fmus):
@@ -602,31 +671,62 @@ def _fuzz(exe: Path, md, spec: Path, seeds: int, calls: int, env=None) -> dict[s
 
 
 @pytest.mark.parametrize(
-    "mode", ["contact", "full_contact", "rigid_body", "cornering", "rail_creep"]
+    "mode",
+    [
+        "contact",
+        "full_contact",
+        "rigid_body",
+        "cornering",
+        "rail_creep",
+        "fig13_sdirk2",
+        "full_body_sdirk2",
+    ],
 )
 def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly(
     scenes, native_fmus, tmp_path, mode
 ):
     """The contact mode (the sweep scene's FMU: direct feedthrough, the directional
     derivatives and their difference path; the full contact FMU: the spin input's strip
-    march on the grid built for each load and its forward-mode derivative) and the
-    rigid_body mode under the sanitized importer's random calls: no sanitizer report,
-    no fmi2Fatal, no non-finite output served with fmi2OK, no damaged bytes accepted."""
+    march on the grid built for each load and its forward-mode derivative), the
+    rigid_body mode and SDIRK2 (Fig. 13's FMU with that scheme: the scalar stages; the
+    full body FMU with scheme "sdirk2" and the quasistationary method: the vector stages,
+    algebraic while rolling, with the masses in gross sliding) under the sanitized
+    importer's random calls: no sanitizer report, no fmi2Fatal, no non-finite output
+    served with fmi2OK, no damaged bytes accepted."""
+    import dataclasses
+
     import fmpy
 
     if mode == "contact":
         path = native_fmus["sweep"]
     elif mode in ("cornering", "rail_creep"):
         path = native_fmus[mode]
+    elif mode == "fig13_sdirk2":
+        cfg = dataclasses.replace(scenes["fig13"].config, schemes=("sdirk2",))
+        path = native_fmu.build(cfg, OUT).path
+    elif mode == "full_body_sdirk2":
+        cfg = ModelConfig.full("body")
+        starts = {**cfg.starts, "scheme": "sdirk2", "method": "quasistationary"}
+        path = native_fmu.build(dataclasses.replace(cfg, starts=starts), OUT).path
     else:
         path = native_fmu.build(ModelConfig.full(mode.removeprefix("full_")), OUT).path
     unzip = tmp_path / "fmu"
     fmpy.extract(str(path), str(unzip))
     md = fmpy.read_model_description(str(unzip))
     spec = tmp_path / "spec.txt"
-    if mode in ("contact", "cornering", "rail_creep"):
-        scene = scenes["sweep" if mode == "contact" else mode]
+    if mode in ("contact", "cornering", "rail_creep", "fig13_sdirk2"):
+        scene = scenes[{"contact": "sweep", "fig13_sdirk2": "fig13"}.get(mode, mode)]
         spec.write_text(_spec(md, scene, scene.cases[0], rows=False))
+    elif mode == "full_body_sdirk2":  # its inputs and Real outputs, the start parameters
+        ins = [v.valueReference for v in md.modelVariables if v.causality == "input"]
+        outs = [
+            v.valueReference
+            for v in md.modelVariables
+            if v.causality == "output" and v.type == "Real"
+        ]
+        spec.write_text(
+            f"{len(ins)} {' '.join(map(str, ins))}\n{len(outs)} {' '.join(map(str, outs))}\n0\n"
+        )
     else:
         vr = {v.name: v.valueReference for v in md.modelVariables}
         ins, outs = ("Tx", "Fx_ex", "My_ex"), ("Vx", "Omega_y")
@@ -641,7 +741,7 @@ def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly
         exe = _sanitized(tmp_path, unzip)
     except subprocess.CalledProcessError as e:  # pragma: no cover - gcc without libasan
         pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
-    calls = 600 if mode == "cornering" else 2000  # the spin grid's march: slower
+    calls = 600 if mode in ("cornering", "full_body_sdirk2") else 2000  # the spin march: slower
     env = {**os.environ, "FMU_RESOURCES": (unzip / "resources").as_uri()}
     counts = _fuzz(exe, md, spec, 1, calls, env)
     assert counts["ok"] > calls // 3 and counts["error"] > calls // 30, counts

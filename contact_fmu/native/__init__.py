@@ -1,12 +1,12 @@
 """Compiled twin of the integrator's commonest path (stepper.c), loaded with ctypes.
 
 ``RollingBody`` hands a communication step to ``Kernel.advance`` when its path is
-covered (Lobatto IIIC, the thin-layer law or the half-space creep-force table, vx the
-only stage unknown, vy held at a ratio to Vx, no spin, held loads). The kernel mirrors
+covered (Lobatto IIIC or SDIRK2, the thin-layer law or the half-space creep-force table,
+vx the only stage unknown, vy held at a ratio to Vx, no spin, held loads). The kernel mirrors
 the Python code expression by expression: for the thin-layer law without lateral slip
 it gives the same doubles, otherwise the same to rounding (hypot, the table's patch
 sums); it answers "not covered" (the Python path then takes the step) for what it
-leaves out. ``VectorKernel`` does the same for the full method with Vy and/or Omega_z
+leaves out. ``VectorKernel`` does the same for either method with Vy and/or Omega_z
 as stage unknowns (Eqs. 10-11; the law with spin), equal to the Python path to the
 stage tolerance. See stepper.c. The same library holds the thin-layer law for arrays, spin
 included (``cf_layer_forces``, ``cf_strip_march``: LayerContact.forces and
@@ -66,6 +66,7 @@ class Params(ctypes.Structure):
         ("contraction_max", ctypes.c_double), ("contraction_fast", ctypes.c_double),
         ("newton_iterations", ctypes.c_int), ("algebraic_key", ctypes.c_double),
         ("bracket", ctypes.c_int), ("max_expansions", ctypes.c_int),
+        ("gamma", ctypes.c_double), ("sdirk", ctypes.c_int),
     ]  # fmt: skip
 
 
@@ -303,10 +304,10 @@ class Kernel:
 
 
 class VectorKernel(Kernel):
-    """The compiled Lobatto IIIC step with Vy and/or Omega_z as stage unknowns, either
-    method (stepper.c, cf_advance_vector; integrator.RollingBody._lobatto_vector and, for
-    the quasistationary method, its algebraic stage and regime): the same Newton
-    iteration, equal to the Python path's to the stage tolerance."""
+    """The compiled step with Vy and/or Omega_z as stage unknowns, either scheme and
+    method (stepper.c, cf_advance_vector; integrator.RollingBody._lobatto_vector or
+    _sdirk_vector and, for the quasistationary method, the algebraic stages and regime):
+    the same Newton iteration, equal to the Python path's to the stage tolerance."""
 
     def __init__(self, lib: Any, constants: dict[str, float], quasistationary: bool) -> None:
         super().__init__(lib, constants, quasistationary)

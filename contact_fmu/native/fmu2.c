@@ -6,8 +6,9 @@
  *
  * The body model is the one of fmu/body_model.py on its compiled paths: the thin-layer
  * law (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
- * parameters and the load P: cf_layer_law), Lobatto IIIC, methods "full" and
- * "quasistationary"; vx the only stage unknown (vy zero or held at a ratio, no spin:
+ * parameters and the load P: cf_layer_law), Lobatto IIIC or SDIRK2 (the String parameter
+ * scheme where the FMU offers both), methods "full" and "quasistationary"; vx the only
+ * stage unknown (vy zero or held at a ratio, no spin:
  * cf_advance) or Vy and/or Omega_z as unknowns too (Eqs. 10-11: cf_advance_vector, the
  * law's spin by the strip march on its grid, built here for each load: cf_grid_build).
  * The build refuses every other model (fmu_build/native_fmu.py). The variables, their
@@ -55,6 +56,7 @@ enum {
     R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX,
     R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
     R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
+    R_SCHEME, /* the integrator's scheme (a String, as R_METHOD) */
     R_COUNT
 };
 /* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
@@ -76,6 +78,8 @@ typedef struct {
 
 #define N_METHODS 2
 static const char *const METHOD_NAMES[N_METHODS] = {"full", "quasistationary"};
+#define N_SCHEMES 2
+static const char *const SCHEME_NAMES[N_SCHEMES] = {"lobatto3c", "sdirk2"}; /* integrator */
 #define METHOD_TEXT 64
 
 /* ---- the instance ------------------------------------------------------------------ */
@@ -89,6 +93,8 @@ typedef struct {
     unsigned next_bad;
     int method;                   /* index into METHOD_NAMES, -1: not a method */
     char method_text[METHOD_TEXT]; /* the string set (cut at METHOD_TEXT - 1) */
+    int scheme;                   /* index into SCHEME_NAMES, -1: not a scheme */
+    char scheme_text[METHOD_TEXT]; /* the string set, as method_text */
     double time;
     int phase, built;
     int init_tried;               /* fmi2ExitInitializationMode was called */
@@ -121,6 +127,7 @@ typedef struct {
     int logging;
     cf_core c;
     char method_out[METHOD_TEXT]; /* what getString hands out */
+    char scheme_out[METHOD_TEXT];
     spin_grid *grid;              /* CF_GRID only */
     double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
 } Inst;
@@ -235,6 +242,18 @@ static int any_bad(const cf_core *c) {
     return 0;
 }
 
+/* the String parameters, method and scheme (by the role of variable i): the text held,
+ * and the requirement of RollingBody's check (its words) */
+static int is_scheme(int i) { return CF_VARS[i].role == R_SCHEME; }
+
+static const char *string_text(const cf_core *c, int i) {
+    return is_scheme(i) ? c->scheme_text : c->method_text;
+}
+
+static const char *string_choices(int i) {
+    return is_scheme(i) ? "\"lobatto3c\" or \"sdirk2\"" : "\"full\" or \"quasistationary\"";
+}
+
 /* the messages of the bad values held, in the order they became bad, joined by "; " */
 static void bad_list(const Inst *I, char *out, size_t n) {
     const cf_core *c = &I->c;
@@ -249,8 +268,8 @@ static void bad_list(const Inst *I, char *out, size_t n) {
         last = c->bad[best];
         char one[256];
         if (CF_VARS[best].type == T_STRING)
-            snprintf(one, sizeof one, "%s = '%s' is invalid: must be \"full\" or "
-                     "\"quasistationary\"", CF_VARS[best].name, c->method_text);
+            snprintf(one, sizeof one, "%s = '%s' is invalid: must be %s", CF_VARS[best].name,
+                     string_text(c, best), string_choices(best));
         else
             bad_text(&CF_VARS[best], c->var[best], one, sizeof one);
         int w = snprintf(out + k, n - k, "%s%s", k ? "; " : "", one);
@@ -278,6 +297,7 @@ static void set_constants(cf_params *p, cf_body *b) {
     p->algebraic_key = CF_ALGEBRAIC_KEY;
     p->bracket = 1; /* a stage Newton cannot close: bracket and brentq, as Python does */
     p->max_expansions = CF_MAX_EXPANSIONS;
+    p->gamma = CF_GAMMA;
     p->law = CF_TABLE ? LAW_TABLE : LAW_LAYER;
     p->saturation_width = CF_SAT_WIDTH;
     p->coef = p->ax1 = p->ax2 = p->ax3 = NULL; /* the table's: attach_table */
@@ -475,6 +495,7 @@ static int build(Inst *I) {
     cf_body_inertia(&p, M, Rx, Iy);
     p.ry = v[R_VY_RATIO];
     p.quasistationary = c->method == 1;
+    p.sdirk = c->scheme == 1;
     const double P = v[R_P];
     law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = v[R_FX_EX], b.My_ex = v[R_MY_EX], b.h_max = v[R_H_MAX];
@@ -725,6 +746,8 @@ static void start_values(Inst *I) {
     memset(c, 0, sizeof *c);
     c->method = CF_METHOD_START;
     snprintf(c->method_text, METHOD_TEXT, "%s", METHOD_NAMES[CF_METHOD_START]);
+    c->scheme = CF_SCHEME_START;
+    snprintf(c->scheme_text, METHOD_TEXT, "%s", SCHEME_NAMES[CF_SCHEME_START]);
     for (int i = 0; i < CF_N_VARS; i++) {
         const cf_var *v = &CF_VARS[i];
         if (v->type == T_STRING) continue;
@@ -991,8 +1014,9 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_STRING, "fmi2GetString")) return fmi2Error;
-        snprintf(I->method_out, METHOD_TEXT, "%s", I->c.method_text);
-        v[i] = I->method_out;
+        char *out = is_scheme((int)vr[i]) ? I->scheme_out : I->method_out;
+        snprintf(out, METHOD_TEXT, "%s", string_text(&I->c, (int)vr[i]));
+        v[i] = out;
     }
     return fmi2OK;
 }
@@ -1007,7 +1031,7 @@ static int settable(Inst *I, int i, const char *value) {
     }
     if (v->kind == K_PARAMETER && I->c.built && v->role != R_MU) { /* mu is tunable */
         char now[80];
-        if (v->type == T_STRING) snprintf(now, sizeof now, "'%s'", I->c.method_text);
+        if (v->type == T_STRING) snprintf(now, sizeof now, "'%s'", string_text(&I->c, i));
         else py_repr(I->c.var[i], now, sizeof now);
         say(I, fmi2Error, "%s is a fixed parameter and the model is initialised: %s = %s is "
             "ignored (%s stays %s)", v->name, v->name, value, v->name, now);
@@ -1093,15 +1117,18 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
             continue;
         }
         cf_core *C = &I->c;
-        snprintf(C->method_text, METHOD_TEXT, "%s", s);
-        C->method = -1;
-        for (int m = 0; m < N_METHODS; m++)
-            if (strcmp(s, METHOD_NAMES[m]) == 0) C->method = m;
+        const int i = (int)vr[k], scheme = is_scheme(i);
+        char *text = scheme ? C->scheme_text : C->method_text;
+        int *choice = scheme ? &C->scheme : &C->method;
+        snprintf(text, METHOD_TEXT, "%s", s);
+        *choice = -1;
+        for (int m = 0; m < (scheme ? N_SCHEMES : N_METHODS); m++)
+            if (strcmp(s, (scheme ? SCHEME_NAMES : METHOD_NAMES)[m]) == 0) *choice = m;
         /* RollingBody's check, at set-up in Python: here at once, the same words */
-        mark(C, (int)vr[k], C->method < 0);
-        if (C->method < 0) {
-            say(I, fmi2Error, "method = '%s' is invalid: must be \"full\" or \"quasistationary\"; "
-                "doStep answers fmi2Discard until it is corrected", C->method_text);
+        mark(C, i, *choice < 0);
+        if (*choice < 0) {
+            say(I, fmi2Error, "%s = '%s' is invalid: must be %s; doStep answers fmi2Discard "
+                "until it is corrected", CF_VARS[i].name, text, string_choices(i));
             status = fmi2Error;
         }
     }
@@ -1380,6 +1407,9 @@ static void sanitize(cf_core *c) {
     if (c->method < -1 || c->method >= N_METHODS) c->method = -1;
     c->method_text[METHOD_TEXT - 1] = '\0';
     c->p.quasistationary = c->method == 1;
+    if (c->scheme < -1 || c->scheme >= N_SCHEMES) c->scheme = -1;
+    c->scheme_text[METHOD_TEXT - 1] = '\0';
+    c->p.sdirk = c->scheme == 1;
     c->built = c->built != 0;
     c->dirty = c->dirty != 0;
     if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED) c->phase = PH_STEP;

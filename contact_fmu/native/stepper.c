@@ -1,4 +1,5 @@
-/* Compiled twin of integrator.RollingBody.advance on its Lobatto IIIC paths.
+/* Compiled twin of integrator.RollingBody.advance on its Lobatto IIIC and SDIRK2 paths
+ * (cf_params.sdirk picks the scheme: integrator.SCHEMES).
  *
  * The path: the thin-layer law (layer.LayerContact, Eqs. 40-43 corrected) or the
  * half-space creep-force table (halfspace/table.py) without spin, with lateral slip
@@ -20,8 +21,9 @@
  *
  * Then the strip march of the thin-layer law with spin (layer._Grid.march), which
  * the Python steppers call: one loop of the same operations; and, at the end, the
- * Lobatto IIIC step with Vy and/or Omega_z as stage unknowns (_lobatto_vector), which
- * agrees with the Python path to the stage tolerance.
+ * Lobatto IIIC and SDIRK2 steps with Vy and/or Omega_z as stage unknowns
+ * (_lobatto_vector, _sdirk_vector), which agree with the Python path to the stage
+ * tolerance.
  */
 #include <float.h>
 #include <math.h>
@@ -98,6 +100,10 @@ typedef struct {
      * Python path does; 0: CF_FALLBACK, the Python path solves it (its own kernel) */
     int bracket;
     int max_expansions; /* solvers.MAX_EXPANSIONS */
+    /* the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES), and SDIRK2's gamma =
+     * 1 - 1/sqrt(2) (integrator.GAMMA) */
+    double gamma;
+    int sdirk;
 } cf_params;
 
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
@@ -573,6 +579,46 @@ static int lobatto_scalar(const cf_params *p, cf_state *y, double h, double Fx, 
     return CF_OK;
 }
 
+/* RollingBody._sdirk_scalar's stage residual m (v - v_hat)/(h gamma) + T(v) - Fe and its
+ * slope, in the fields of the Lobatto stage: Vb in V2b, Fe in Fe2, v_hat in vn, h gamma
+ * in h */
+static void residual_sdirk(const stage *s, double v, double f[2]) {
+    double o[2];
+    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, o);
+    f[0] = s->m * (v - s->vn) / s->h + o[0] - s->Fe2;
+    f[1] = s->m / s->h + o[1];
+}
+
+/* RollingBody._sdirk_scalar with held loads (L1 = L2): two sequential stages, v_hat_1 =
+ * vn, v_hat_2 = vn + (1 - gamma)/gamma (v1 - vn) (v1 in the algebraic limit m = 0), the
+ * speed's explicit part likewise; the force closes the last stage's balance */
+static int sdirk_scalar(const cf_params *p, cf_state *y, double h, double Fx, double My,
+                        int algebraic, double T[3]) {
+    const double g = p->gamma, hg = h * g;
+    const double Vn = y->Vx, vn = y->vx;
+    const double G = drive(p, Fx, My), Fe = target_x(p, Fx, My);
+    stage s = {p, 0, 0, Fe, Fe, vn, hg, 0, 0, 0};
+    s.m = algebraic ? 0.0 : p->m_slip;
+    s.k = s.m / p->M;
+    double V_hat = Vn, v = 0.0, V = 0.0;
+    for (int i = 0; i < 2; i++) {
+        s.V2b = V_hat + hg * G / p->M;
+        s.scale = p->creep_full_slip * py_max(fabs(s.V2b), p->v_scale_floor);
+        if (newton_increasing(&s, residual_sdirk, s.vn + y->dv * hg, s.scale, &v))
+            return CF_FALLBACK;
+        V = s.V2b + s.k * (v - s.vn);
+        if (i == 0) { /* the explicit part of stage 2 from stage 1's slope */
+            V_hat = Vn + (1.0 - g) / g * (V - Vn);
+            s.vn = s.m > 0.0 ? vn + (1.0 - g) / g * (v - vn) : v;
+        }
+    }
+    law(p, v, V, T);
+    T[0] = Fe - s.m * (v - s.vn) / hg;
+    y->Vx = V;
+    y->vx = v;
+    return CF_OK;
+}
+
 /* RollingBody._step */
 static int step(const cf_params *p, cf_state *y, double h, double Fx, double My) {
     int ok = admissible(p, Fx, My);
@@ -580,7 +626,8 @@ static int step(const cf_params *p, cf_state *y, double h, double Fx, double My)
     else if (p->m_slip == 0.0 && !ok) return CF_FALLBACK; /* Python raises */
     int algebraic = p->quasistationary && !y->sliding;
     double vn = y->vx, T[3];
-    if (lobatto_scalar(p, y, h, Fx, My, algebraic, T)) return CF_FALLBACK;
+    if ((p->sdirk ? sdirk_scalar : lobatto_scalar)(p, y, h, Fx, My, algebraic, T))
+        return CF_FALLBACK;
     y->dv = (y->vx - vn) / h;
     double cap = p->mu * p->P;
     if (hypot(T[0], T[1]) > cap) {
@@ -1283,10 +1330,119 @@ static int vadmissible(const cf_params *p, const double L[4]) {
     return hypot(target_x(p, L[0], L[2]), p->dyn_vy ? L[1] : 0.0) < cap;
 }
 
+/* the end of RollingBody._step on the vector path: the step's state Y and forces T into
+ * w, with _dv, the force's rounding at mu P and the regime flag */
+static int vcommit(const cf_params *p, cf_vstate *w, double h, const double Y[4], double T[3]) {
+    w->dv = (Y[1] - w->vx) / h;
+    double cap = p->mu * p->P;
+    if (hypot(T[0], T[1]) > cap) {
+        double r = cap / hypot(T[0], T[1]);
+        T[0] *= r;
+        T[1] *= r;
+    }
+    w->Vx = Y[0], w->vx = Y[1], w->Vy = Y[2], w->Oz = Y[3];
+    w->Tx = T[0], w->Ty = T[1], w->Mz = T[2];
+    w->out_sliding = full_slip(p, Y[1], Y[2], Y[0]);
+    return CF_OK;
+}
+
+/* ---- integrator.RollingBody._sdirk_vector: SDIRK2 with Vy and/or Omega_z as unknowns -- */
+/* A stage of SDIRK2 in a vstage: y the explicit part y_hat, un its unknowns u_hat, Vb[1]
+ * the stage's speed without the slip, F2 the targets, h the step times gamma. Its
+ * residuals m (u - u_hat)/(h gamma) + T(u) - F (n of them; the quasistationary stage with
+ * the masses zero), the stage forces into T. */
+static void sresiduals(const vstage *s, const double *U, double *R, double *T) {
+    stage_forces(s, U, 1, T);
+    for (int i = 0; i < s->n; i++) R[i] = s->m[i] * (U[i] - s->un[i]) / s->h + T[i] - s->F2[i];
+}
+
+/* solvers.newton without a memo (as _sdirk_vector calls it): the forward-difference
+ * Jacobian of the residuals formed anew at every iterate, backtracking on |r|;
+ * CF_FALLBACK where Python goes on with scipy's hybrid method (a singular matrix, no
+ * convergence in newton_iterations) */
+static int snewton(const vstage *s, const double *scale, double *u) {
+    const cf_params *p = s->p;
+    const int n = s->n;
+    double r[3], T[3], J[9], du[3], step[3], un[3], rn[3], U[3], Rp[3];
+    sresiduals(s, u, r, T);
+    for (int it = 0; it < p->newton_iterations; it++) {
+        for (int j = 0; j < n; j++) du[j] = p->fd_step * (fabs(u[j]) + scale[j]);
+        for (int j = 0; j < n; j++) {
+            for (int i = 0; i < n; i++) U[i] = u[i];
+            U[j] = u[j] + du[j];
+            sresiduals(s, U, Rp, T);
+            for (int i = 0; i < n; i++) J[i * n + j] = (Rp[i] - r[i]) / du[j];
+        }
+        for (int i = 0; i < n; i++) step[i] = -r[i];
+        if (solve_small(n, J, step)) return CF_FALLBACK;
+        double lam = 1.0, norm0 = norm2(n, r), norm;
+        for (;;) {
+            for (int i = 0; i < n; i++) un[i] = u[i] + lam * step[i];
+            sresiduals(s, un, rn, T);
+            norm = norm2(n, rn);
+            if (norm < norm0 || lam < p->line_search_min) break;
+            lam *= 0.5;
+        }
+        int done = 1;
+        for (int i = 0; i < n; i++) {
+            u[i] = un[i];
+            r[i] = rn[i];
+            if (!(fabs(lam * step[i]) <= p->solve_rtol * (fabs(u[i]) + scale[i]))) done = 0;
+        }
+        if (done) return CF_OK;
+    }
+    return CF_FALLBACK;
+}
+
+/* RollingBody._step with _sdirk_vector, held loads L = (Fx_ex, Fy_ex, My_ex, Mz_ex): the
+ * two stages in turn, each from its explicit part, y_hat_2 = y_n + (1 - gamma)/gamma
+ * (Y1 - y_n) (the unknowns Y1's in the algebraic limit: no memory there); the forces
+ * close the last stage's balance. The kept Newton matrix is Lobatto's alone. */
+static int sdirk_vstep(const cf_params *p, cf_vstate *w, double h, const double L[4],
+                       int algebraic) {
+    const double Fx = L[0], Fy = L[1], My = L[2], Mz = L[3];
+    if (p->m_slip == 0.0 && !p->quasistationary && !vadmissible(p, L)) return CF_FALLBACK;
+    march_cache cache = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
+    const double g = p->gamma, hg = h * g, yn[4] = {w->Vx, w->vx, w->Vy, w->Oz};
+    vstage s = {p, 0, {0, 0, 0}, 0, {yn[0], yn[1], yn[2], yn[3]}, {0}, {0}, {0}, {0},
+                {0}, hg, &cache};
+    const double F[3] = {target_x(p, Fx, My), Fy, Mz}, m[3] = {p->m_slip, p->M, p->Iz};
+    s.act[s.n++] = 0;
+    if (p->dyn_vy) s.act[s.n++] = 1;
+    if (p->dyn_spin) s.act[s.n++] = 2;
+    for (int i = 0; i < s.n; i++) {
+        s.F2[i] = F[s.act[i]];
+        s.m[i] = algebraic ? 0.0 : m[s.act[i]];
+    }
+    const double G = drive(p, Fx, My);
+    double u[3], Y[4], T[3];
+    for (int st = 0; st < 2; st++) {
+        s.Vb[1] = s.y[0] + hg * G / p->M;
+        const double v = p->creep_full_slip * py_max(fabs(s.Vb[1]), p->v_scale_floor);
+        const double sc[3] = {v, v, v / p->a1};
+        double scale[3];
+        for (int i = 0; i < s.n; i++) {
+            u[i] = s.un[i] = s.y[s.act[i] + 1];
+            scale[i] = sc[s.act[i]];
+        }
+        if (snewton(&s, scale, u)) return CF_FALLBACK;
+        vstate_at(&s, u, 1, Y);
+        if (st == 0) {
+            for (int k = 0; k < 4; k++) s.y[k] = yn[k] + (1.0 - g) / g * (Y[k] - yn[k]);
+            if (algebraic)
+                for (int i = 0; i < s.n; i++) s.y[s.act[i] + 1] = Y[s.act[i] + 1];
+        }
+    }
+    forces_at(p, Y, T, &cache);
+    for (int i = 0; i < s.n; i++) T[s.act[i]] = s.F2[i] - s.m[i] * (u[i] - s.un[i]) / hg;
+    return vcommit(p, w, h, Y, T);
+}
+
 /* RollingBody._step with _lobatto_vector, held loads L = (Fx_ex, Fy_ex, My_ex, Mz_ex):
  * the Lobatto stages, or (algebraic) the quasistationary stage T(u2) = F2 with the
  * masses of the unknowns zero (its Newton matrix kept under p->algebraic_key) */
 static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], int algebraic) {
+    if (p->sdirk) return sdirk_vstep(p, w, h, L, algebraic);
     const double Fx = L[0], Fy = L[1], My = L[2], Mz = L[3];
     march_cache cache = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
     vstage s = {p, 0, {0, 0, 0}, algebraic, {w->Vx, w->vx, w->Vy, w->Oz}, {0}, {0}, {0}, {0},
@@ -1344,17 +1500,7 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], 
     forces_at(p, Y, T, &cache);
     if (algebraic) /* the stage balances the targets: T[act] = F2 */
         for (int i = 0; i < s.n; i++) T[s.act[i]] = s.F2[i];
-    w->dv = (Y[1] - w->vx) / h;
-    double cap = p->mu * p->P;
-    if (hypot(T[0], T[1]) > cap) {
-        double r = cap / hypot(T[0], T[1]);
-        T[0] *= r;
-        T[1] *= r;
-    }
-    w->Vx = Y[0], w->vx = Y[1], w->Vy = Y[2], w->Oz = Y[3];
-    w->Tx = T[0], w->Ty = T[1], w->Mz = T[2];
-    w->out_sliding = full_slip(p, Y[1], Y[2], Y[0]);
-    return CF_OK;
+    return vcommit(p, w, h, Y, T);
 }
 
 /* RollingBody._step of the quasistationary method: gross sliding entered where the loads
