@@ -127,6 +127,9 @@ def newton(
 
 
 _WORKSPACE = threading.local()
+# Scratch vectors are kept between solves up to this many floats each (8 MiB; contacts
+# of up to 512 elements); larger ones (method="direct" forced on a big grid) are freed.
+WORKSPACE_KEEP = 4 * 512 * 512
 
 
 def _workspace(size: int) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -135,8 +138,9 @@ def _workspace(size: int) -> tuple[FloatArray, FloatArray, FloatArray]:
     faults cost as much as the gathering itself (measured on 19 x 19)."""
     ws = getattr(_WORKSPACE, "buffers", None)
     if ws is None or ws[0].size < size:
-        ws = tuple(np.empty(size) for _ in range(3))
-        _WORKSPACE.buffers = ws
+        ws = (np.empty(size), np.empty(size), np.empty(size))
+        if size <= WORKSPACE_KEEP:
+            _WORKSPACE.buffers = ws
     return ws
 
 
