@@ -4,7 +4,7 @@ direct path and the iterative path (``method="iterative"``, GMRES Newton steps),
 run.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace_small.py \\
-        [--repeat 21] [--grids 11 19 23 35] [--baseline a6f0032]
+        [--repeat 21] [--grids 11 19 23 35] [--baseline a6f0032] [--force-direct]
 
 The railway wheel on rail (contact_fmu.halfspace.railway) on mx x my elements over the
 potential contact area (``HalfSpaceContact(n=(m, m))``, CONTACT's meaning of the grid),
@@ -20,8 +20,10 @@ Baseline ("previous"): the default path of the git revision --baseline: for cont
 within that revision's DIRECT_MAX_ELEMENTS its contact_fmu/halfspace/direct.py (read by
 ``git show``), called the way its solve_rolling called it (``patch.rhs``, its
 ``newton`` from the projected full-adhesion guess, the same ``_solution``) on the same
-patch; above, the iterative path. The table's last column: max |dTx|, |dTy| of new
-against previous, relative to mu P (both converged to the Newton tolerance).
+patch; above, the iterative path. --force-direct: "new" takes the direct path on every
+grid (the crossover with the iterative path, which sets DIRECT_MAX_ELEMENTS). The
+table's last column: max |dTx|, |dTy| of new against previous, relative to mu P (both
+converged to the Newton tolerance).
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ import time  # noqa: E402
 import types  # noqa: E402
 from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+import scipy.linalg as sla  # noqa: E402
 
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import (  # noqa: E402
@@ -81,7 +85,11 @@ def cpu(f: Callable[[], RollingSolution]) -> tuple[float, RollingSolution]:
 
 
 def time_case(
-    p: RollingPatch, a: tuple[float, float, float], old: types.ModuleType | None, repeat: int
+    p: RollingPatch,
+    a: tuple[float, float, float],
+    old: types.ModuleType | None,
+    repeat: int,
+    method: str,
 ) -> tuple[list[list[float]], RollingSolution, RollingSolution]:
     """CPU times of the iterative path, the previous solver (its direct path if ``old``,
     else its iterative path) and today's default, alternately; the last solutions of the
@@ -98,7 +106,7 @@ def time_case(
         times[0].append(cpu(lambda: solve_rolling(p, *a, method="iterative"))[0])
         dt, so = cpu(previous)
         times[1].append(dt)
-        dt, s = cpu(lambda: solve_rolling(p, *a))
+        dt, s = cpu(lambda: solve_rolling(p, *a, method=method))
         times[2].append(dt)
     return times, so, s
 
@@ -108,10 +116,16 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=21)
     ap.add_argument("--grids", type=int, nargs="+", default=[11, 19, 23, 35])
     ap.add_argument("--baseline", default="a6f0032", help="git revision of the previous path")
+    ap.add_argument(
+        "--force-direct",
+        action="store_true",
+        help='"new" with method="direct" on every grid (the crossover with the iterative path)',
+    )
     args = ap.parse_args()
+    method = "direct" if args.force_direct else "auto"
     old, old_limit = previous_direct(args.baseline)
     print(f"# {platform.processor() or platform.machine()}, python {platform.python_version()}")
-    print(f"# direct path for contacts of at most {DIRECT_MAX_ELEMENTS} elements")
+    print(f"# direct path for contacts of at most {DIRECT_MAX_ELEMENTS} elements; new: {method}")
     print(f"# previous: {args.baseline}, its direct path for at most {old_limit} elements")
     print(f"# load average before: {os.getloadavg()[0]:.2f}")
     print(
@@ -129,14 +143,16 @@ def main() -> None:
         xref = c.mu * c.P / (c.elastic.G * c.c**2)
         # build what each path caches: FASTSIM calibration, dense operator, its inverse
         solve_rolling(p, xref, method="iterative")
-        if n_c <= DIRECT_MAX_ELEMENTS:
-            solve_rolling(p, xref)
+        if n_c <= DIRECT_MAX_ELEMENTS or args.force_direct:
+            solve_rolling(p, xref, method="direct")
             _ = p.dense_contact_inverse
+        if n_c <= old_limit:  # what the previous path cached on the patch besides
+            p.dense_contact_lu = sla.lu_factor(p.dense_contact_operator)
         setup = time.perf_counter() - t0
         ref = CONTACT_PUBLISHED.get(m)
         for name, w in CASES.items():
             a = (w[0] * xref, w[1] * xref, w[2] * xref / c.c)
-            times, so, s = time_case(p, a, old if n_c <= old_limit else None, args.repeat)
+            times, so, s = time_case(p, a, old if n_c <= old_limit else None, args.repeat, method)
             med = [statistics.median(t) * 1e3 for t in times]
             best = [min(t) * 1e3 for t in times]
             paths = ", ".join("direct" if x.gmres_iterations == 0 else "iterative" for x in (so, s))
