@@ -38,7 +38,8 @@ MIN_STEP = 1.0 / 64.0
 # A chord step (the last factorisation reused while the slip set is unchanged) is taken
 # when it reduces |F|_2 by at least this factor; otherwise a fresh Newton step follows.
 # Measured on the railway wheel (40 random creepages and spins on 11, 19, 23 per side):
-# 0.25-0.9 take the same time within the scatter, 25-50 % less than fresh steps only.
+# 0.25-0.9 take the same time within the scatter, 24-54 % less than rejecting every
+# chord step (docs/performance.md).
 CHORD_DECREASE = 0.5
 
 
