@@ -15,15 +15,17 @@ from contact_fmu.halfspace.rolling import DIRECT_MAX_ELEMENTS, ellipse_patch, so
 
 def _patches():
     w = wheel_on_rail(n=(11, 11))
+    w23 = wheel_on_rail(n=(23, 23))  # 349 elements: near the direct path's limit
     lc = ex.contact()
     layer = ellipse_patch(lc.a1, lc.a2, 12, lc.pressure, lc.mu, lc.a1 / lc.k, 0.3, k=lc.k, P=lc.P)
     steel, alu = Material(210e9, 0.3), Material(70e9, 0.33)
     dissimilar = HalfSpaceContact(1000.0, 0.02, 0.02, steel, alu, 0.3, n=12)
-    return {"railway 11 x 11": (w.patch, w), "layers": (layer, None),
+    return {"railway 11 x 11": (w.patch, w), "railway 23 x 23": (w23.patch, w23),
+            "layers": (layer, None),
             "dissimilar": (dissimilar.patch, dissimilar)}  # fmt: skip
 
 
-@pytest.mark.parametrize("name", ["railway 11 x 11", "layers", "dissimilar"])
+@pytest.mark.parametrize("name", ["railway 11 x 11", "railway 23 x 23", "layers", "dissimilar"])
 def test_direct_and_iterative_paths_agree(name):
     patch, c = _patches()[name]
     assert int(patch.contact.sum()) <= DIRECT_MAX_ELEMENTS  # "auto" takes the direct path
@@ -57,26 +59,36 @@ def test_direct_path_warm_start_and_full_adhesion():
     assert lin.Tx / (c.elastic.G * c.c**2 * 1e-6 * s) == pytest.approx(C11, rel=1e-6)
 
 
-def test_reduced_and_woodbury_newton_steps_agree():
-    """The two ways of solving a Newton system of the direct path (the reduced LU and
-    the Woodbury update of the adhesion inverse) give the same step, to round-off, on
-    a partial-slip state (a perturbed iterate, most elements slipping)."""
+@pytest.mark.parametrize("x, slip_form", [(0.1, True), (0.2, False)])
+def test_reduced_newton_steps_solve_the_full_jacobian(x, slip_form):
+    """Both reduced forms of a direct Newton step (the adhesion and slip-tangential
+    unknowns, or the slip elements' components through K^-1) solve the full generalised
+    Jacobian J dtau = -F, J = I - P (I - r K), to round-off, on partial-slip states (a
+    perturbed iterate; few elements slipping selects the slip form, most the reduced
+    one)."""
     from contact_fmu.halfspace import direct
 
     c = wheel_on_rail(n=(11, 11))
     p, C = c.patch, c.patch.contact
     s = c.mu * c.P / (c.elastic.G * c.c**2)
-    w = (0.1 * s, 0.05 * s, 0.1 * s / c.c)
+    w = (x * s, 0.5 * x * s, x * s / c.c)
     sol = solve_rolling(p, *w, method="iterative", tol=1e-3)
     m = int(C.sum())
     t = np.concatenate([sol.tau[0][C], sol.tau[1][C]]) * 1.01
-    K, r, g = p.dense_contact_operator, p.r, p.g[C]
+    K, Kinv, r, g = p.dense_contact_operator, p.dense_contact_inverse, p.r, p.g[C]
     W = p.rhs(*w)
     z = t + r * (np.concatenate([W[0][C], W[1][C]]) - K @ t)
     nz = np.hypot(z[:m], z[m:])
     slip = nz > g
-    assert 0.2 < slip.mean() < 0.9
+    assert 0.05 < slip.mean() < 0.95
     F = t - z * np.tile(np.where(slip, g / nz, 1.0), 2)
-    a = direct._direction(r * K, F, z[:m], z[m:], nz, g, slip)
-    b = direct._woodbury(r * K, p.dense_contact_inverse / r, F, z[:m], z[m:], nz, g, slip)
-    assert np.abs(a - b).max() < 1e-8 * np.abs(a).max()
+    jac = direct._Jacobian(K, Kinv, r, z[:m], z[m:], nz, g, slip)
+    assert jac.slip_form == slip_form
+    # the full J: P = f (I - zhat zhat^T) in the slip elements, I in the adhesion ones
+    P = np.eye(2 * m)
+    for e in np.flatnonzero(slip):
+        h = np.array([z[e], z[m + e]]) / nz[e]
+        ix = np.ix_([e, m + e], [e, m + e])
+        P[ix] = g[e] / nz[e] * (np.eye(2) - np.outer(h, h))
+    ref = np.linalg.solve(np.eye(2 * m) - P @ (np.eye(2 * m) - r * K), -F)
+    assert np.abs(jac.direction(F) - ref).max() < 1e-9 * np.abs(ref).max()

@@ -117,7 +117,7 @@ ARMIJO = 1e-4
 MIN_STEP = 1.0 / 64.0
 # Direct path (direct.py) for contacts of at most this many elements (solve_rolling,
 # method "auto"): measured crossover against the iterative path, docs/performance.md.
-DIRECT_MAX_ELEMENTS = 260
+DIRECT_MAX_ELEMENTS = 380
 # Nested iteration (docs/halfspace.md): ellipse_patch grids of n elements per side get a
 # coarse level of n/2 while n/2 >= NESTED_MIN_N, recursively. A 16 x 16 level costs
 # about what it saves (measured: 32 x 32 15-20 % slower nested from 16 x 16, 64 x 64 no
@@ -309,15 +309,9 @@ class RollingPatch:
         return direct.contact_operator(self)
 
     @cached_property
-    def dense_contact_lu(self):
-        """LU factors of ``dense_contact_operator`` (the direct path's initial guess)."""
-        return sla.lu_factor(self.dense_contact_operator)
-
-    @cached_property
     def dense_contact_inverse(self) -> FloatArray:
-        """K^-1 on the contact (the direct path's Woodbury steps, direct.py)."""
-        n = self.dense_contact_operator.shape[0]
-        return sla.lu_solve(self.dense_contact_lu, np.eye(n))
+        """K^-1 on the contact (the slip form of the direct path's Newton steps, direct.py)."""
+        return sla.inv(self.dense_contact_operator)
 
     # ---- operators ---------------------------------------------------------------------
     def apply_K(self, tau: FloatArray) -> FloatArray:
@@ -526,7 +520,8 @@ def solve_rolling(
     if method == "direct" or (
         method == "auto" and int(C.sum()) <= DIRECT_MAX_ELEMENTS and patch.backend == "fft"
     ):
-        tau, S, slip, newton = direct.newton(patch, W, tau0, tol, maxit)
+        guess = tau0 if tau0 is not None else patch.fastsim_guess(xi, eta, phi)
+        tau, S, slip, newton = direct.newton(patch, W, guess, tol, maxit)
         return _solution(patch, tau, S, slip, newton, 0, ())
     levels: tuple[tuple[int, int, int, int], ...] = ()
     tau = None
