@@ -120,6 +120,7 @@ typedef struct {
     char method_out[METHOD_TEXT]; /* what getString hands out */
     spin_grid *grid;              /* CF_VECTOR with the thin-layer law only */
     double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
+    unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
 } Inst;
 
 /* the creep-force table's arrays into p (after set_constants) */
@@ -308,7 +309,7 @@ static void publish(cf_core *c) {
 }
 
 /* the FMU's outputs: a bit per index of cf_body.out (cf_first_nonfinite) */
-static unsigned long served(void) {
+static unsigned long served_mask(void) {
     unsigned long m = 0;
     for (int i = 0; i < CF_N_VARS; i++)
         if (CF_VARS[i].kind == K_OUTPUT) m |= 1ul << (CF_VARS[i].role - R_OUT);
@@ -325,7 +326,7 @@ static const char *out_name(int i) {
 /* the name of the first of the FMU's outputs in out[] that is not finite (its value in
  * r), or NULL */
 static const char *nonfinite(const double *out, char *r, size_t n) {
-    const int i = cf_first_nonfinite(out, served());
+    const int i = cf_first_nonfinite(out, served_mask());
     if (i < 0) return NULL;
     py_repr(out[i], r, n);
     return out_name(i);
@@ -635,13 +636,11 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
         ensure_grid(I, &p, &b, &p);
         vector.tau = I->grid->tau, vector.slip = I->grid->slip, vector.inside = I->grid->inside;
     }
-    int n;
-    const int capped = cf_body_admit(&p, &b, h, &n) == CF_STEP_CAPPED; /* the note below */
-    /* the step and its checks, those of the pythonfmu FMU's fast path (stepper.c) */
-    int which = 0;
-    double value = 0.0;
-    const int why = cf_body_check(&p, &w, CF_VECTOR ? &vector : NULL, &b, h, 1, served(), &which,
-                                  &value);
+    /* the step and its checks, those of the pythonfmu FMU's fast path (stepper.c), on
+     * the copies p, b, w, vw */
+    int capped = 0, which = 0;
+    const int why = cf_body_check(&p, &w, CF_VECTOR ? &vector : NULL, &b, h, &capped,
+                                  I->served, &which);
     if (why != CF_OK) {
         char rv[40], why_text[512];
         REPRS();
@@ -654,11 +653,11 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
                      fx ? "" : " Rx", fx ? cap : cap * p.Rx, fx ? "N" : "N m");
         } else if (why == CF_STEP_RANGE) { /* body_model.within_range */
             const cf_ranged *q = &CF_RANGED[which];
-            py_repr(value, rv, sizeof rv);
+            py_repr(b.out[q->i], rv, sizeof rv);
             snprintf(why_text, sizeof why_text, "%s = %s is invalid: must be within abs <= %g "
                      "(the loads drive the body beyond it)", q->name, rv, q->bound);
         } else if (why == CF_STEP_NONFINITE) { /* slave._collect */
-            py_repr(value, rv, sizeof rv);
+            py_repr(b.out[which], rv, sizeof rv);
             snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
                      "finite", out_name(which), rv);
         } else { /* CF_STEP_NO_ROOT: no other code reaches here (the law is at P, h > 0) */
@@ -673,6 +672,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     publish(c);
     c->time = t + h;
 #undef REPRS
+    const int n = b.max_substeps;
     if (capped && h / b.h_max > n)
         say(I, fmi2Warning, "communication step h = %g s exceeds %d internal steps of h_max = "
             "%g s: taken in %d steps of %g s", h, n, b.h_max, n, h / n);
@@ -835,6 +835,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         I->grid->strips.ny = 0;
     }
     I->logging = logging != fmi2False;
+    I->served = served_mask();
     start_values(I);
     return I;
 }

@@ -1505,46 +1505,39 @@ typedef struct {
 #define CF_ALL_OUT ((1ul << N_OUT) - 1ul)
 
 /* BodyModel.step with the inputs held and its outputs, with every check of the adapter
- * (cf_body_admit, cf_body_out_check of the outputs served): CF_OK, or why not with the
- * state and b unchanged (*which: see cf_body_out_check; *value: the value of the output
- * it names, for the message). The scalar path on *y
- * (cf_advance), or with v the vector path on *v->y (cf_advance_vector). take_capped: a
- * step beyond max_substeps internal steps is taken in that many (the caller logs the
- * note) instead of refused. */
+ * (cf_body_admit, cf_body_out_check of the outputs served), in place: the scalar path
+ * on *y (cf_advance), or with v the vector path on *v->y (cf_advance_vector), the
+ * outputs into b->out. CF_OK, or why not (*which: see cf_body_out_check); then the
+ * state and b->out hold what the step reached, not to be served: callers step copies.
+ * capped: NULL, a step beyond max_substeps internal steps is refused; else it is taken
+ * in that many and *capped says so (the caller logs the note). */
 int cf_body_check(const cf_params *p, cf_state *y, const cf_vpath *v, cf_body *b, double h,
-                  int take_capped, unsigned long served, int *which, double *value) {
+                  int *capped, unsigned long served, int *which) {
     int n, why = cf_body_admit(p, b, h, &n);
-    if (why != CF_OK && !(why == CF_STEP_CAPPED && take_capped)) return why;
-    cf_body next = *b;
-    cf_state w;
-    cf_vstate vw;
+    if (capped != NULL) *capped = why == CF_STEP_CAPPED;
+    if (why != CF_OK && !(why == CF_STEP_CAPPED && capped != NULL)) return why;
     if (v != NULL) {
         const double L[4] = {b->Fx_ex, v->Fy_ex, b->My_ex, v->Mz_ex};
-        vw = *v->y;
-        if (cf_advance_vector(p, &vw, h, L, n) != CF_OK) return CF_STEP_NO_ROOT;
-        cf_vbody_outputs(p, &vw, &next, v->tau, v->slip, v->inside);
+        if (cf_advance_vector(p, v->y, h, L, n) != CF_OK) return CF_STEP_NO_ROOT;
+        cf_vbody_outputs(p, v->y, b, v->tau, v->slip, v->inside);
     } else {
-        w = *y;
-        if (cf_advance(p, &w, h, b->Fx_ex, b->My_ex, n) != CF_OK) return CF_STEP_NO_ROOT;
-        cf_body_outputs(p, &w, &next);
+        if (cf_advance(p, y, h, b->Fx_ex, b->My_ex, n) != CF_OK) return CF_STEP_NO_ROOT;
+        cf_body_outputs(p, y, b);
     }
-    if ((why = cf_body_out_check(next.out, served, which)) != CF_OK) {
-        *value = next.out[why == CF_STEP_RANGE ? CF_RANGED[*which].i : *which];
-        return why;
-    }
-    if (v != NULL) *v->y = vw;
-    else *y = w;
-    *b = next;
-    return CF_OK;
+    return cf_body_out_check(b->out, served, which);
 }
 
 /* The step of the pythonfmu FMU's fast path (FastBody, fmi.c): cf_body_check of the
- * scalar path, every output served, and CF_FALLBACK for whatever Python must do (a new
- * load P, the cap on internal steps and its note, a path cf_advance leaves out, a
- * refusal and its message) */
+ * scalar path on copies, every output served; CF_FALLBACK (*y and *b unchanged) for
+ * whatever Python must do (a new load P, the cap on internal steps and its note, a path
+ * cf_advance leaves out, a refusal and its message) */
 int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
+    cf_state w = *y;
+    cf_body next = *b;
     int which;
-    double value;
-    const int why = cf_body_check(p, y, NULL, b, h, 0, CF_ALL_OUT, &which, &value);
-    return why == CF_OK ? CF_OK : CF_FALLBACK;
+    if (cf_body_check(p, &w, NULL, &next, h, NULL, CF_ALL_OUT, &which) != CF_OK)
+        return CF_FALLBACK;
+    *y = w;
+    *b = next;
+    return CF_OK;
 }
