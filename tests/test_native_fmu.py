@@ -427,38 +427,60 @@ def test_serialized_native_state_restores_bit_for_bit_in_another_instance(native
         assert b.outputs() == a.outputs()
 
 
-def test_native_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(native_fmus):
-    """Foreign or damaged bytes (another FMU's state, a flipped byte, truncated, another
-    version): fmi2DeSerializeFMUstate answers fmi2Error naming the reason, nothing
-    changes, and the instance steps on."""
+# what each target's envelope names when it refuses bytes (pythonfmu_shim.c, fmu2.c)
+REFUSALS = {
+    "pythonfmu": {
+        "garbage": "not a serialized contact_fmu FMU state",
+        "foreign": "another FMU",
+        "flipped": "damaged (its checksum differs)",
+        "truncated": "truncated",
+        "extended": "truncated or extended",
+    },
+    "native": {
+        "garbage": "not an FMU state",
+        "foreign": "another FMU",
+        "flipped": "checksum",
+        "truncated": "length",
+        "extended": "length",
+        "version": "format version",
+    },
+}
+
+
+@pytest.mark.parametrize("target", list(REFUSALS))
+def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(
+    native_fmus, python_fmus, target
+):
+    """Foreign or damaged bytes (garbage, another FMU's state, a flipped byte,
+    truncated, extended, another format version): fmi2DeSerializeFMUstate answers
+    fmi2Error naming the reason (the envelope: magic, format, GUID, length, checksum),
+    nothing changes, and the instance steps on."""
     from fmpy.fmi1 import FMICallException
 
-    with Instance(native_fmus["railway"], "other") as other:
+    fmus = native_fmus if target == "native" else python_fmus
+    with Instance(fmus["railway"], "other") as other:
+        assert other.step(1e-4) == OK
         foreign = other.serialize_state(other.get_state())
-    with body(native_fmus["fig13"]) as b:
+    with body(fmus["fig13"]) as b:
         steps(b, 2)
         state = b.get_state()
         good = b.serialize_state(state)
         flipped = bytearray(good)
-        flipped[len(good) // 2] ^= 0x10
+        flipped[len(good) // 2] ^= 0x08  # in the pythonfmu FMU's: the key 'mu' read as 'iu'
         version = bytearray(good)
         version[8] ^= 1
-        cases = [
-            (b"garbage", "not an FMU state"),
-            (foreign, "another FMU"),
-            (bytes(flipped), "checksum"),
-            (good[:-20], "length"),
-            (bytes(version), "format version"),
-        ]
-        for data, reason in cases:
+        data = {"garbage": b"garbage", "foreign": foreign, "flipped": bytes(flipped)}
+        data |= {"truncated": good[:-20], "extended": good + b"x", "version": bytes(version)}
+        for case, reason in REFUSALS[target].items():
             before = b.outputs()
             with pytest.raises(FMICallException) as e:
-                b.deserialize_state(data, b.time)
+                b.deserialize_state(data[case], b.time)
             assert e.value.status == ERROR and reason in b.messages[-1][1], b.messages[-1:]
             assert b.outputs() == before
-        steps(b, 1)
+            steps(b, 1)
         b.set_state(b.deserialize_state(good, state[1]))
         steps(b, 1)
+        assert all(s < FATAL for s, _ in b.messages)
 
 
 def test_instances_are_independent_also_on_threads(native_fmus):
