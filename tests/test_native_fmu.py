@@ -374,29 +374,47 @@ BAD_CALLS = {
 }
 
 
+def _answer(b: Instance, calls: list) -> tuple[list[int], list[tuple[int, str]]]:
+    """The statuses of ``calls`` on b and the messages logged meanwhile."""
+    from fmpy.fmi1 import FMICallException
+
+    start, statuses = len(b.messages), []
+    for kind, *args in calls:
+        if kind == "step":
+            statuses.append(b.step(*args))
+            continue
+        try:
+            b.initialise() if kind == "initialise" else b.set(*args)
+            statuses.append(OK)
+        except FMICallException as e:
+            statuses.append(int(e.status))
+    return statuses, b.messages[start:]
+
+
 @pytest.mark.parametrize("calls", BAD_CALLS.values(), ids=list(BAD_CALLS))
 def test_both_targets_answer_a_bad_call_in_the_same_words(native_fmus, python_fmus, calls):
     """One C core behind two front ends: the same statuses and the same messages, naming
     the variable and its value, from the pythonfmu FMU and the native FMU."""
-    from fmpy.fmi1 import FMICallException
-
     answers = []
     for path in (python_fmus["fig13"], native_fmus["fig13"]):
         with body(path) as b:
             steps(b, 1)
-            start, statuses = len(b.messages), []
-            for kind, *args in calls:
-                if kind == "step":
-                    statuses.append(b.step(*args))
-                    continue
-                try:
-                    b.set(*args)
-                    statuses.append(OK)
-                except FMICallException as e:
-                    statuses.append(int(e.status))
-            answers.append((statuses, b.messages[start:]))
+            answers.append(_answer(b, calls))
     assert answers[0] == answers[1]
     assert answers[0][1], answers  # each case is answered with a message
+
+
+@pytest.mark.parametrize("params", [{"mu": -0.3}, {"M": math.inf, "h_max": 0.0}])
+def test_both_targets_refuse_a_bad_start_in_the_same_words(native_fmus, python_fmus, params):
+    """Bad parameters: the same fmi2Error at setReal, at exitInitializationMode and at
+    the doStep that follows, with the same messages, from both targets."""
+    calls = [("set", *kv) for kv in params.items()] + [("initialise",), ("step", H)]
+    answers = []
+    for path in (python_fmus["fig13"], native_fmus["fig13"]):
+        with Instance(path, "start", initialise=False) as b:
+            answers.append(_answer(b, calls))
+    assert answers[0] == answers[1]
+    assert answers[0][0] == [ERROR] * len(calls), answers
 
 
 def test_fmu_state_get_step_set_step_is_bit_identical(fig13):

@@ -235,24 +235,29 @@ static int any_bad(const cf_core *c) {
     return 0;
 }
 
+/* the message of the first bad value held that became bad after the order *last
+ * (they are told in the order they became bad), *last moved to it; 0 when none is left */
+static int next_bad(const cf_core *c, unsigned *last, char *one, size_t n) {
+    int best = -1; /* few variables: a scan each */
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (c->bad[i] > *last && (best < 0 || c->bad[i] < c->bad[best])) best = i;
+    if (best < 0) return 0;
+    *last = c->bad[best];
+    if (CF_VARS[best].type == T_STRING)
+        snprintf(one, n, "%s = '%s' is invalid: must be \"full\" or \"quasistationary\"",
+                 CF_VARS[best].name, c->method_text);
+    else
+        bad_text(&CF_VARS[best], c->var[best], one, n);
+    return 1;
+}
+
 /* the messages of the bad values held, in the order they became bad, joined by "; " */
 static void bad_list(const Inst *I, char *out, size_t n) {
-    const cf_core *c = &I->c;
     size_t k = 0;
-    out[0] = '\0';
     unsigned last = 0;
-    for (;;) { /* the next one in order: few variables, a scan each */
-        int best = -1;
-        for (int i = 0; i < CF_N_VARS; i++)
-            if (c->bad[i] > last && (best < 0 || c->bad[i] < c->bad[best])) best = i;
-        if (best < 0) break;
-        last = c->bad[best];
-        char one[256];
-        if (CF_VARS[best].type == T_STRING)
-            snprintf(one, sizeof one, "%s = '%s' is invalid: must be \"full\" or "
-                     "\"quasistationary\"", CF_VARS[best].name, c->method_text);
-        else
-            bad_text(&CF_VARS[best], c->var[best], one, sizeof one);
+    char one[256];
+    out[0] = '\0';
+    while (next_bad(&I->c, &last, one, sizeof one)) {
         int w = snprintf(out + k, n - k, "%s%s", k ? "; " : "", one);
         if (w < 0 || (size_t)w >= n - k) break;
         k += (size_t)w;
@@ -402,12 +407,14 @@ static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_para
  * 0 with the reasons logged (fmi2Error) where it cannot be */
 static int build(Inst *I) {
     cf_core *c = &I->c;
-    char list[1536];
-    bad_list(I, list, sizeof list);
-    if (list[0]) {
-        say(I, fmi2Error, "cannot initialise the model: %s", list);
-        return 0;
+    unsigned last = 0;
+    char one[256];
+    int held = 0;
+    while (next_bad(c, &last, one, sizeof one)) { /* one message each, as slave.py */
+        say(I, fmi2Error, "cannot initialise the model: %s", one);
+        held = 1;
     }
+    if (held) return 0;
     const double *v = c->val;
     char r[40];
     if (CF_MODE == MODE_RIGID) return build_rigid(I);
@@ -877,7 +884,13 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     INST(fmi2ExitInitializationMode);
     I->c.init_tried = 1;
-    if (!build(I)) return fmi2Error;
+    if (!build(I)) { /* slave.exit_initialization_mode's refusal, its words */
+        char list[1536];
+        bad_list(I, list, sizeof list);
+        say(I, fmi2Error, "exitInitializationMode: the model cannot start: %s",
+            list[0] ? list : "see the messages above");
+        return fmi2Error;
+    }
     I->c.phase = PH_STEP;
     return fmi2OK;
 }
