@@ -667,6 +667,10 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
             py_repr(b.out[which], rv, sizeof rv);
             snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
                      "finite", out_name(which), rv);
+        } else if (why == CF_STEP_NO_SLIDING) {
+            snprintf(why_text, sizeof why_text, "StageSolveError: eta = inf (Iy = 0) admits no "
+                     "gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = %.6g N reaches mu P = %.6g N",
+                     fabs(target_x(&p, b.Fx_ex, b.My_ex)), p.mu * p.P);
         } else { /* CF_STEP_NO_ROOT: no other code reaches here (the law is at P, h > 0) */
             snprintf(why_text, sizeof why_text, "StageSolveError: no root: the stage residual "
                      "keeps its sign (loads beyond mu P?)");

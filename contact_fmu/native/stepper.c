@@ -775,6 +775,7 @@ enum {
     CF_STEP_FX_LIMIT,  /* |Fx_ex| beyond integrator.LOAD_LIMIT mu P (or NaN) */
     CF_STEP_MY_LIMIT,  /* |My_ex| beyond LOAD_LIMIT mu P Rx (or NaN) */
     CF_STEP_CAPPED,    /* more internal steps than max_substeps (n is that cap) */
+    CF_STEP_NO_SLIDING, /* loads beyond mu P on an eta = inf body (Iy = 0), full method */
     CF_STEP_NO_ROOT,   /* the stepper declined: no stage root, a non-finite state */
     CF_STEP_RANGE,     /* a speed or rate beyond its range: body_model.within_range */
     CF_STEP_NONFINITE, /* an output served is not finite: slave._collect */
@@ -1516,8 +1517,12 @@ int cf_body_check(const cf_params *p, cf_state *y, const cf_vpath *v, cf_body *b
     int n, why = cf_body_admit(p, b, h, &n);
     if (capped != NULL) *capped = why == CF_STEP_CAPPED;
     if (why != CF_OK && !(why == CF_STEP_CAPPED && capped != NULL)) return why;
+    const double L[4] = {b->Fx_ex, v ? v->Fy_ex : 0.0, b->My_ex, v ? v->Mz_ex : 0.0};
+    /* RollingBody._step: an eta = inf body (m_slip = 0) has no gross sliding */
+    if (p->m_slip == 0.0 && !p->quasistationary &&
+        !(v != NULL ? vadmissible(p, L) : admissible(p, L[0], L[2])))
+        return CF_STEP_NO_SLIDING;
     if (v != NULL) {
-        const double L[4] = {b->Fx_ex, v->Fy_ex, b->My_ex, v->Mz_ex};
         if (cf_advance_vector(p, v->y, h, L, n) != CF_OK) return CF_STEP_NO_ROOT;
         cf_vbody_outputs(p, v->y, b, v->tau, v->slip, v->inside);
     } else {
