@@ -782,13 +782,13 @@ enum {
 };
 
 /* integrator.RollingBody's bound on |Fx_ex| (N; on |My_ex| times Rx) */
-double cf_load_cap(const cf_params *p) { return CF_LOAD_LIMIT * p->mu * p->P; }
+static double cf_load_cap(const cf_params *p) { return CF_LOAD_LIMIT * p->mu * p->P; }
 
 /* The loads and the step size: CF_OK, or the first check that fails in the order of
  * integrator.RollingBody (the load limit) and body_model.substeps, with *n the internal
  * steps ceil(h / h_max (1 - slack)), at least 1, at most max_substeps (also with
  * CF_STEP_CAPPED, after which a caller may take the step in those n) */
-int cf_body_admit(const cf_params *p, const cf_body *b, double h, int *n) {
+static int cf_body_admit(const cf_params *p, const cf_body *b, double h, int *n) {
     *n = 1;
     if (b->P != p->P || !isfinite(b->P)) return CF_STEP_LAW;
     if (!cf_step_size_ok(h) || !(b->h_max > 0.0)) return CF_STEP_SIZE;
@@ -815,7 +815,7 @@ static const cf_ranged CF_RANGED[4] = {
 
 /* The index into out of the first output served (a bit per index) that is not finite,
  * or -1: slave._collect */
-int cf_first_nonfinite(const double *out, unsigned long served) {
+static int cf_first_nonfinite(const double *out, unsigned long served) {
     for (int i = 0; i < N_OUT; i++)
         if ((served >> i & 1ul) && !isfinite(out[i])) return i;
     return -1;
@@ -826,7 +826,7 @@ int cf_first_nonfinite(const double *out, unsigned long served) {
  * served finite (slave._collect; served: a bit per index of out, whose order is the
  * variables'). CF_OK; CF_STEP_RANGE with *which the row of CF_RANGED; or
  * CF_STEP_NONFINITE with *which the index into out; the first that fails. */
-int cf_body_out_check(const double *out, unsigned long served, int *which) {
+static int cf_body_out_check(const double *out, unsigned long served, int *which) {
     for (int k = 0; k < 4; k++)
         if (!(fabs(out[CF_RANGED[k].i]) <= CF_RANGED[k].bound)) {
             *which = k;
@@ -1512,8 +1512,8 @@ typedef struct {
  * state and b->out hold what the step reached, not to be served: callers step copies.
  * capped: NULL, a step beyond max_substeps internal steps is refused; else it is taken
  * in that many and *capped says so (the caller logs the note). */
-int cf_body_check(const cf_params *p, cf_state *y, const cf_vpath *v, cf_body *b, double h,
-                  int *capped, unsigned long served, int *which) {
+static int cf_body_check(const cf_params *p, cf_state *y, const cf_vpath *v, cf_body *b,
+                         double h, int *capped, unsigned long served, int *which) {
     int n, why = cf_body_admit(p, b, h, &n);
     if (capped != NULL) *capped = why == CF_STEP_CAPPED;
     if (why != CF_OK && !(why == CF_STEP_CAPPED && capped != NULL)) return why;
