@@ -1,7 +1,8 @@
 """The native FMU: FMI 2.0 co-simulation in compiled C only (``python -m fmu_build --native``).
 
-The binary is contact_fmu/native/fmu2.c (the FMI layer) with stepper.c (the kernel)
-and a header generated here, cf_model.h: the FMU's variables from
+The binary is contact_fmu/native/fmu2.c (the FMI layer) with stepper.c (the kernel),
+cf_core.h (the checks of a value and of a doStep call, shared with the pythonfmu FMU's
+binding fmi.c) and a header generated here, cf_model.h: the FMU's variables from
 ``contact_fmu.fmu.variables`` (names, kinds, starts, ranges and the requirement texts of
 their check messages), its GUID and the Python integrator's constants, so that each
 lives once. The model description is written like the pythonfmu FMU's and completed by
@@ -50,7 +51,7 @@ from . import identifier as model_identifier
 
 FORMAT = "contact_fmu-native-fmu-1"
 NATIVE_DIR = Path(native.__file__).resolve().parent
-SOURCES = ("fmu2.c", "stepper.c")  # fmu2.c includes stepper.c: one translation unit
+SOURCES = ("fmu2.c", "stepper.c", "cf_core.h")  # fmu2.c includes the others: one unit
 HEADER = "cf_model.h"
 CFLAGS = (*native.CFLAGS, "-fvisibility=hidden", "-std=c11", "-D_DEFAULT_SOURCE")
 PLATFORM = "linux64"
@@ -375,7 +376,7 @@ def identity(cfg: ModelConfig) -> str:
 
 
 def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
-    """fmu2.c (with stepper.c and cf_model.h in ``src_dir``) into the shared library
+    """fmu2.c (with stepper.c, cf_core.h and cf_model.h in ``src_dir``) into the library
     ``target``; CalledProcessError with the compiler's output on failure."""
     cc = os.environ.get("CC", "cc")
     cmd = [cc, *CFLAGS, *extra, f"-I{src_dir}", f"-I{fmi_headers()}", "-o", str(target),

@@ -92,7 +92,7 @@ def closure(roots: list[str]) -> list[str]:
 
 
 # Files other than Python a module reads next to itself, by module.
-COMPANIONS = {"native": ("native/stepper.c", "native/fmi.c")}
+COMPANIONS = {"native": ("native/stepper.c", "native/fmi.c", "native/cf_core.h")}
 
 
 def files(modules: list[str], companions: bool = True) -> list[tuple[str, Path]]:

@@ -127,7 +127,9 @@ def test_body_fmu_carries_the_compiled_stepper_and_loads_it(built, tmp_path):
     compiled code (its law has no spin), carries the loader's Python alone, no library
     and no C source, and the rigid-body FMU no native part at all."""
     names = {f"native/{native.library_name()}", f"native/{native.fmi_name()}"}
-    assert {"native/stepper.c", "native/fmi.c", *names} <= _vendored(built["fig13"])
+    assert {"native/stepper.c", "native/fmi.c", "native/cf_core.h", *names} <= _vendored(
+        built["fig13"]
+    )
     assert {f for f in _vendored(built["sweep"]) if f.startswith("native/")} == {
         "native/__init__.py"
     }

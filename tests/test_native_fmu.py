@@ -144,7 +144,8 @@ def test_model_description_is_the_pythonfmu_ones_and_validates(native_fmus, pyth
     assert [f.get("name") for f in cs.find("SourceFiles")] == ["fmu2.c"]
     with zipfile.ZipFile(native_fmus[name]) as z:
         names = set(z.namelist())
-    assert {"sources/fmu2.c", "sources/stepper.c", "sources/cf_model.h"} <= names
+    carried = ("fmu2.c", "stepper.c", "cf_core.h", "cf_model.h")
+    assert {f"sources/{n}" for n in carried} <= names
     assert not any(n.endswith(".h") and "fmi2" in n for n in names)  # fmpy's headers
     assert validate_fmu(str(native_fmus[name])) == []
 
@@ -290,6 +291,12 @@ def test_command_line_prints_the_fmu_path_last(native_fmus):
 
 
 # ---- call by call, both targets ------------------------------------------------------------------
+# The pythonfmu FMU (its adapter slave.py, with the FMI calls of native/fmi.c) and the
+# native FMU (fmu2.c) make the same checks in the same C (cf_core.h, stepper.c's
+# cf_body_check): the bad-input and FMU-state tests run against both.
+H = 1.75e-4  # s, the Fig. 13 scene's communication step
+
+
 @pytest.fixture(params=["pythonfmu", "native"])
 def fig13(request, native_fmus, python_fmus) -> Path:
     return (native_fmus if request.param == "native" else python_fmus)["fig13"]
@@ -313,6 +320,8 @@ def steps(inst: Instance, n: int, h: float = 1.75e-4) -> None:
     [
         ("Fx_ex", math.nan, "finite"),
         ("My_ex", math.inf, "finite"),
+        ("My_ex", -math.inf, "finite"),
+        ("P", math.nan, "finite"),
         ("My_ex", 6e306, None),  # finite: the step itself fails (the drive overflows)
         ("Fx_ex", 1.2e308, None),
         ("P", 0.0, "> 0"),
@@ -358,24 +367,127 @@ def test_a_step_not_in_0_inf_gives_discard(fig13, h):
         assert b.step(1.75e-4) == OK
 
 
-def test_bad_parameter_gives_error_until_corrected(fig13):
+def test_a_step_not_at_the_fmu_time_gives_discard(fig13):
+    with body(fig13) as b:
+        steps(b, 1)
+        assert b.step(H, time=10 * H) == DISCARD
+        text = f"currentCommunicationPoint = {10 * H!r} is invalid: must be the FMU's time {H!r}"
+        assert b.messages[-1] == (DISCARD, text)
+        steps(b, 1)
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "good", "fragment"),
+    [
+        ("mu", 0.0, ex.mu, "mu = 0.0 is invalid: must be > 0"),
+        ("mu", -0.3, ex.mu, "mu = -0.3 is invalid: must be > 0"),
+        ("Rx", math.nan, ex.Rx, "Rx = nan is invalid: must be finite"),
+        ("h_max", 0.0, H / 4, "h_max = 0.0 is invalid: must be > 0"),
+        ("M", math.inf, ex.M, "M = inf is invalid: must be finite"),
+    ],
+)
+def test_bad_parameter_gives_error_until_corrected(fig13, name, value, good, fragment):
     """A parameter out of its range: fmi2Error at its setter and at
     exitInitializationMode (the model cannot start), naming it; doStep before a
-    successful initialisation fmi2Error; corrected, the model starts. Both targets."""
+    successful initialisation answers fmi2Error naming the reason; corrected, the model
+    starts and steps to the doubles of one that never saw the bad value."""
     from fmpy.fmi1 import FMICallException
 
-    with Instance(fig13, "bad", initialise=False) as b:
-        for call in (lambda: b.set("mu", -0.3), b.initialise):
+    with body(fig13) as fresh:
+        steps(fresh, 1)
+        expected = fresh.outputs()
+    with Instance(fig13, "bad", {"h_max": H / 4}, initialise=False) as b:
+        for call in (lambda: b.set(name, value), b.initialise):
             with pytest.raises(FMICallException) as e:
                 call()
             assert e.value.status == ERROR
-        assert any("mu = -0.3 is invalid: must be > 0" in m for _, m in b.messages)
-        assert b.step(1.75e-4) == ERROR
-        b.set("mu", 0.3)
+        assert any(fragment in m for _, m in b.messages), b.messages
+        assert b.step(H) == ERROR
+        refused = "doStep at t = 0.0 refused: called before the model is initialised "
+        assert b.messages[-1] == (
+            ERROR,
+            f"{refused}(fmi2ExitInitializationMode failed: {fragment})",
+        )
+        assert all(math.isfinite(v) for v in b.outputs().values())
+        b.set(name, good)  # the model is not set up: the parameter may still change
         b.initialise()
         b.set("Fx_ex", F)
-        assert b.step(1.75e-4) == OK
-        assert abs(b.get("Tx")) <= MU_P
+        b.set("My_ex", -0.1 * F * ex.Rx)
+        steps(b, 1)
+        assert b.outputs() == expected
+
+
+def test_a_step_before_initialisation_or_after_terminate_is_an_error(fig13):
+    with Instance(fig13, "early", initialise=False) as b:
+        assert b.step(H) == ERROR
+        assert "(fmi2ExitInitializationMode not called)" in b.messages[-1][1]
+    with body(fig13) as b:
+        steps(b, 1)
+        b.fmu.terminate()
+        assert b.step(H) == ERROR
+        assert b.messages[-1] == (ERROR, f"doStep at t = {H!r} refused: called after fmi2Terminate")
+
+
+# the start values and the calls after a first step, whose statuses and messages both
+# targets must give word for word (the pythonfmu FMU words them in Python, the native
+# one in C)
+BAD_CALLS = {
+    "two bad inputs": ({}, [("set", "P", -1.0), ("set", "My_ex", math.inf), ("step", H)]),
+    "a step of 0": ({}, [("step", 0.0)]),
+    "a step of nan": ({}, [("step", math.nan)]),
+    "a step not at the FMU's time": ({}, [("step", H, 1.0)]),
+    "Fx_ex beyond LOAD_LIMIT mu P": ({}, [("set", "Fx_ex", -1.2e308), ("step", H)]),
+    "My_ex beyond LOAD_LIMIT mu P Rx": ({}, [("set", "My_ex", 1e20), ("step", H)]),
+    "a step that spins the body beyond its range": ({}, [("set", "My_ex", 1e10), ("step", 1.0)]),
+    "a step beyond max_substeps internal steps": ({}, [("step", 10.0)]),
+    "loads beyond mu P on an eta = inf body": (
+        {"Iy": 0.0},
+        [("set", "My_ex", -2.0 * ex.mu * ex.P * ex.Rx), ("step", H)],
+    ),
+}
+
+
+def _answer(b: Instance, calls: list) -> tuple[list[int], list[tuple[int, str]]]:
+    """The statuses of ``calls`` on b and the messages logged meanwhile."""
+    from fmpy.fmi1 import FMICallException
+
+    start, statuses = len(b.messages), []
+    for kind, *args in calls:
+        if kind == "step":
+            statuses.append(b.step(*args))
+            continue
+        try:
+            b.initialise() if kind == "initialise" else b.set(*args)
+            statuses.append(OK)
+        except FMICallException as e:
+            statuses.append(int(e.status))
+    return statuses, b.messages[start:]
+
+
+@pytest.mark.parametrize(("params", "calls"), BAD_CALLS.values(), ids=list(BAD_CALLS))
+def test_both_targets_answer_a_bad_call_in_the_same_words(native_fmus, python_fmus, params, calls):
+    """One C core behind two front ends: the same statuses and the same messages, naming
+    the variable and its value, from the pythonfmu FMU and the native FMU."""
+    answers = []
+    for path in (python_fmus["fig13"], native_fmus["fig13"]):
+        with body(path, **params) as b:
+            steps(b, 1)
+            answers.append(_answer(b, calls))
+    assert answers[0] == answers[1]
+    assert answers[0][1], answers  # each case is answered with a message
+
+
+@pytest.mark.parametrize("params", [{"mu": -0.3}, {"M": math.inf, "h_max": 0.0}])
+def test_both_targets_refuse_a_bad_start_in_the_same_words(native_fmus, python_fmus, params):
+    """Bad parameters: the same fmi2Error at setReal, at exitInitializationMode and at
+    the doStep that follows, with the same messages, from both targets."""
+    calls = [("set", *kv) for kv in params.items()] + [("initialise",), ("step", H)]
+    answers = []
+    for path in (python_fmus["fig13"], native_fmus["fig13"]):
+        with Instance(path, "start", initialise=False) as b:
+            answers.append(_answer(b, calls))
+    assert answers[0] == answers[1]
+    assert answers[0][0] == [ERROR] * len(calls), answers
 
 
 def test_fmu_state_get_step_set_step_is_bit_identical(fig13):
@@ -406,38 +518,60 @@ def test_serialized_native_state_restores_bit_for_bit_in_another_instance(native
         assert b.outputs() == a.outputs()
 
 
-def test_native_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(native_fmus):
-    """Foreign or damaged bytes (another FMU's state, a flipped byte, truncated, another
-    version): fmi2DeSerializeFMUstate answers fmi2Error naming the reason, nothing
-    changes, and the instance steps on."""
+# what each target's envelope names when it refuses bytes (pythonfmu_shim.c, fmu2.c)
+REFUSALS = {
+    "pythonfmu": {
+        "garbage": "not a serialized contact_fmu FMU state",
+        "foreign": "another FMU",
+        "flipped": "damaged (its checksum differs)",
+        "truncated": "truncated",
+        "extended": "truncated or extended",
+    },
+    "native": {
+        "garbage": "not an FMU state",
+        "foreign": "another FMU",
+        "flipped": "checksum",
+        "truncated": "length",
+        "extended": "length",
+        "version": "format version",
+    },
+}
+
+
+@pytest.mark.parametrize("target", list(REFUSALS))
+def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(
+    native_fmus, python_fmus, target
+):
+    """Foreign or damaged bytes (garbage, another FMU's state, a flipped byte,
+    truncated, extended, another format version): fmi2DeSerializeFMUstate answers
+    fmi2Error naming the reason (the envelope: magic, format, GUID, length, checksum),
+    nothing changes, and the instance steps on."""
     from fmpy.fmi1 import FMICallException
 
-    with Instance(native_fmus["railway"], "other") as other:
+    fmus = native_fmus if target == "native" else python_fmus
+    with Instance(fmus["railway"], "other") as other:
+        assert other.step(1e-4) == OK
         foreign = other.serialize_state(other.get_state())
-    with body(native_fmus["fig13"]) as b:
+    with body(fmus["fig13"]) as b:
         steps(b, 2)
         state = b.get_state()
         good = b.serialize_state(state)
         flipped = bytearray(good)
-        flipped[len(good) // 2] ^= 0x10
+        flipped[len(good) // 2] ^= 0x08  # in the pythonfmu FMU's: the key 'mu' read as 'iu'
         version = bytearray(good)
         version[8] ^= 1
-        cases = [
-            (b"garbage", "not an FMU state"),
-            (foreign, "another FMU"),
-            (bytes(flipped), "checksum"),
-            (good[:-20], "length"),
-            (bytes(version), "format version"),
-        ]
-        for data, reason in cases:
+        data = {"garbage": b"garbage", "foreign": foreign, "flipped": bytes(flipped)}
+        data |= {"truncated": good[:-20], "extended": good + b"x", "version": bytes(version)}
+        for case, reason in REFUSALS[target].items():
             before = b.outputs()
             with pytest.raises(FMICallException) as e:
-                b.deserialize_state(data, b.time)
+                b.deserialize_state(data[case], b.time)
             assert e.value.status == ERROR and reason in b.messages[-1][1], b.messages[-1:]
             assert b.outputs() == before
-        steps(b, 1)
+            steps(b, 1)
         b.set_state(b.deserialize_state(good, state[1]))
         steps(b, 1)
+        assert all(s < FATAL for s, _ in b.messages)
 
 
 def test_instances_are_independent_also_on_threads(native_fmus):
@@ -466,12 +600,12 @@ def test_instances_are_independent_also_on_threads(native_fmus):
     assert both == alone and alone[0] != alone[1]
 
 
-def test_fixed_parameter_or_output_set_after_initialisation_is_refused(native_fmus):
+def test_fixed_parameter_or_output_set_after_initialisation_is_refused(fig13):
     """Illegal calls (FMI 2.0: a fixed parameter after initialisation, an output) answer
-    fmi2Error with the pythonfmu FMU's message; the value stays, the instance steps on."""
+    fmi2Error with a message naming it; the value stays, the instance steps on."""
     from fmpy.fmi1 import FMICallException
 
-    with body(native_fmus["fig13"]) as b:  # M: mu is tunable (test_fmu_interface)
+    with body(fig13) as b:  # M: mu is tunable (test_fmu_interface)
         M = b.get("M")
         for name, text in (("M", "M is a fixed parameter"), ("Tx", "Tx is an output")):
             with pytest.raises(FMICallException) as e:
@@ -481,12 +615,21 @@ def test_fixed_parameter_or_output_set_after_initialisation_is_refused(native_fm
         steps(b, 1)
 
 
-def test_a_model_that_cannot_start_is_an_error_at_initialisation(native_fmus):
+def test_a_parameter_combination_the_model_refuses_is_named_at_initialisation(fig13):
+    """k1 = k2 = 0 passes each range but leaves no normal compliance (Eq. 32): fmi2Error
+    at exitInitializationMode naming it; corrected, the model starts."""
     from fmpy.fmi1 import FMICallException
 
-    with pytest.raises(FMICallException) as e:
-        Instance(native_fmus["fig13"], "bad", {"k1": 0.0, "k2": 0.0})
-    assert e.value.status == ERROR
+    with Instance(fig13, "bad", {"k1": 0.0, "k2": 0.0}, initialise=False) as b:
+        with pytest.raises(FMICallException) as e:
+            b.initialise()
+        assert e.value.status == ERROR
+        assert any("k1 + k2 = 0.0 is invalid" in m for _, m in b.messages), b.messages
+        assert b.step(H) == ERROR
+        b.set("k1", ex.k1)
+        b.set("k2", ex.k2)
+        b.initialise()
+        steps(b, 1)
 
 
 # ---- the library itself ---------------------------------------------------------------------

@@ -16,6 +16,8 @@ The body FMU's FMI calls themselves (doStep, setReal, getReal on the compiled st
 path) have a CPython extension, fmi.c (``fmi_module``), that the adapter puts in place
 of its Python methods while the compiled step runs; it is built for the running
 interpreter (its file name carries the extension suffix, so another Python finds none).
+Its checks of a value and a doStep call are cf_core.h's, and its step stepper.c's
+cf_body_step with the step's own checks: the same C as the native FMU's (fmu2.c).
 
 Both libraries are looked for next to this file, where an FMU carries them (built by
 fmu_build; a vendored copy uses only those). The package itself looks next in the
@@ -111,6 +113,8 @@ class BodyIO(ctypes.Structure):
 
 
 SOURCE_FMI = Path(__file__).with_name("fmi.c")
+# the checks both front ends make (included by stepper.c and fmi.c; fmu2.c through stepper.c)
+CORE = Path(__file__).with_name("cf_core.h")
 FMI_MODULE = "contact_fmu_fmi"  # its PyInit_ name
 
 
@@ -118,16 +122,21 @@ def _fmi_flags() -> tuple[str, ...]:
     return (*CFLAGS, f"-I{sysconfig.get_paths()['include']}")
 
 
+def _key(source: Path) -> str:
+    """The content key of a library built from ``source`` (and cf_core.h, which it
+    includes) with CFLAGS; OSError where a file is not there."""
+    text = source.read_bytes() + CORE.read_bytes() + " ".join(CFLAGS).encode()
+    return hashlib.sha256(text).hexdigest()[:12]
+
+
 def library_name() -> str:
     """File name of the library built from this stepper.c with CFLAGS."""
-    key = hashlib.sha256(SOURCE.read_bytes() + " ".join(CFLAGS).encode()).hexdigest()[:12]
-    return f"_stepper_{key}.so"
+    return f"_stepper_{_key(SOURCE)}.so"
 
 
 def fmi_name() -> str:
     """File name of the extension built from fmi.c for this interpreter."""
-    key = hashlib.sha256(SOURCE_FMI.read_bytes() + " ".join(CFLAGS).encode()).hexdigest()[:12]
-    return f"_fmi_{key}{sysconfig.get_config_var('EXT_SUFFIX')}"
+    return f"_fmi_{_key(SOURCE_FMI)}{sysconfig.get_config_var('EXT_SUFFIX')}"
 
 
 # Why a compiled part that was there could not be used (a file that does not load: a

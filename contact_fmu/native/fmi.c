@@ -7,9 +7,11 @@
  * common path and hands everything else to the adapter's own method, unchanged:
  *
  *   do_step(t, h)        no input held bad, 0 < h < inf, t the FMU's time (relative
- *                        tolerance rtol of max(|t|, time)), cf_body_step OK: the FMU's time advanced,
- *                        outputs marked stale, True. Otherwise the Python step.
- *   set_real(vrs, vals)  a float, finite and in the declared range of a Real input:
+ *                        tolerance rtol of max(|t|, |time|): cf_core.h), cf_body_step
+ *                        OK: the FMU's time advanced, outputs marked stale, True.
+ *                        Otherwise the Python step.
+ *   set_real(vrs, vals)  a float, finite and in the declared range of a Real input
+ *                        (cf_core.h's cf_value_check):
  *                        stored in the adapter's _values and _in, cleared from _bad,
  *                        written to the struct if the step reads it, _dirty set.
  *                        Otherwise that value goes through the adapter's set_real.
@@ -17,8 +19,10 @@
  *                        Otherwise the adapter's get_real.
  *
  * Python state is read and written through the adapter's attributes on every call (no
- * copy kept here), so whatever the adapter reassigns stays the truth. The same checks
- * as slave.py; test_fmu_slave compares the two paths bit for bit.
+ * copy kept here), so whatever the adapter reassigns stays the truth. The checks are
+ * the native FMU's (fmu2.c): the value's range and the time's in cf_core.h, the step's
+ * caps, load limit and outputs in stepper.c's cf_body_step; each is slave.py's rule,
+ * and test_fmu_slave compares the two paths bit for bit.
  *
  * The GIL stays held through the compiled step (about a microsecond): released, taking
  * it back could wait for another thread's switch interval (5 ms), far longer. */
@@ -26,6 +30,8 @@
 #include <Python.h>
 #include <math.h>
 #include <stddef.h>
+
+#include "cf_core.h"
 
 typedef int (*step_fn)(void *, void *, void *, double);
 
@@ -107,8 +113,7 @@ static PyObject *do_step(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
     double time = PyFloat_AsDouble(now);
     Py_DECREF(now);
     if (time == -1.0 && PyErr_Occurred()) return NULL;
-    double scale = fmax(fabs(t), fabs(time)); /* slave.TIME_RTOL: ulps of t */
-    if (bad == 0 && 0.0 < h && h < INFINITY && isfinite(t) && fabs(t - time) <= b->rtol * scale &&
+    if (bad == 0 && cf_step_size_ok(h) && cf_time_ok(t, time, b->rtol) &&
         b->step(b->params, b->state, b->io, h) == 0) {
         PyObject *next = PyFloat_FromDouble(t + h);
         if (next == NULL) return NULL;
@@ -174,7 +179,7 @@ static PyObject *set_real(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
         if (j >= 0 && PyFloat_CheckExact(value)) {
             const slot *s = &b->slots[j];
             double v = PyFloat_AS_DOUBLE(value);
-            if (isfinite(v) && (s->open_lo ? s->lo < v : s->lo <= v) && v <= s->hi) {
+            if (cf_value_check(v, s->lo, s->hi, s->open_lo) == CF_VALUE_OK) {
                 if (store(b, s, value, v)) return NULL;
                 stored = 1;
                 continue;

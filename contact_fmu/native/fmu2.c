@@ -130,6 +130,7 @@ typedef struct {
     char scheme_out[METHOD_TEXT];
     spin_grid *grid;              /* CF_GRID only */
     double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
+    unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
 } Inst;
 
 /* the creep-force table's arrays into p (after set_constants) */
@@ -219,12 +220,14 @@ static void say(const Inst *I, fmi2Status status, const char *fmt, ...) {
                  "%s", msg);
 }
 
-/* Var.check for a Real: NULL if admissible, else the requirement */
+/* Var.check for a Real: NULL if admissible, else the requirement (the range check is
+ * cf_core.h's, fmi.c's too) */
 static const char *requirement(const cf_var *v, double x) {
-    if (!isfinite(x)) return "finite";
+    const int range = cf_value_check(x, v->lo, v->hi, v->open_lo);
+    if (range == CF_VALUE_NONFINITE) return "finite";
     if (v->type == T_INTEGER && x != floor(x)) return "an integer";
-    if (v->lo_req && (x < v->lo || (v->open_lo && x == v->lo))) return v->lo_req;
-    if (v->hi_req && x > v->hi) return v->hi_req;
+    if (range == CF_VALUE_BELOW) return v->lo_req;
+    if (range == CF_VALUE_ABOVE) return v->hi_req;
     if (v->fix_req && x != v->fix) return v->fix_req;
     return NULL;
 }
@@ -254,24 +257,29 @@ static const char *string_choices(int i) {
     return is_scheme(i) ? "\"lobatto3c\" or \"sdirk2\"" : "\"full\" or \"quasistationary\"";
 }
 
+/* the message of the first bad value held that became bad after the order *last
+ * (they are told in the order they became bad), *last moved to it; 0 when none is left */
+static int next_bad(const cf_core *c, unsigned *last, char *one, size_t n) {
+    int best = -1; /* few variables: a scan each */
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (c->bad[i] > *last && (best < 0 || c->bad[i] < c->bad[best])) best = i;
+    if (best < 0) return 0;
+    *last = c->bad[best];
+    if (CF_VARS[best].type == T_STRING)
+        snprintf(one, n, "%s = '%s' is invalid: must be %s", CF_VARS[best].name,
+                 string_text(c, best), string_choices(best));
+    else
+        bad_text(&CF_VARS[best], c->var[best], one, n);
+    return 1;
+}
+
 /* the messages of the bad values held, in the order they became bad, joined by "; " */
 static void bad_list(const Inst *I, char *out, size_t n) {
-    const cf_core *c = &I->c;
     size_t k = 0;
-    out[0] = '\0';
     unsigned last = 0;
-    for (;;) { /* the next one in order: few variables, a scan each */
-        int best = -1;
-        for (int i = 0; i < CF_N_VARS; i++)
-            if (c->bad[i] > last && (best < 0 || c->bad[i] < c->bad[best])) best = i;
-        if (best < 0) break;
-        last = c->bad[best];
-        char one[256];
-        if (CF_VARS[best].type == T_STRING)
-            snprintf(one, sizeof one, "%s = '%s' is invalid: must be %s", CF_VARS[best].name,
-                     string_text(c, best), string_choices(best));
-        else
-            bad_text(&CF_VARS[best], c->var[best], one, sizeof one);
+    char one[256];
+    out[0] = '\0';
+    while (next_bad(&I->c, &last, one, sizeof one)) {
         int w = snprintf(out + k, n - k, "%s%s", k ? "; " : "", one);
         if (w < 0 || (size_t)w >= n - k) break;
         k += (size_t)w;
@@ -328,17 +336,28 @@ static void publish(cf_core *c) {
         if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = c->b.out[CF_VARS[i].role - R_OUT];
 }
 
+/* the FMU's outputs: a bit per index of cf_body.out (cf_first_nonfinite) */
+static unsigned long served_mask(void) {
+    unsigned long m = 0;
+    for (int i = 0; i < CF_N_VARS; i++)
+        if (CF_VARS[i].kind == K_OUTPUT) m |= 1ul << (CF_VARS[i].role - R_OUT);
+    return m;
+}
+
+/* the name of the FMU's output out[i] */
+static const char *out_name(int i) {
+    for (int k = 0; k < CF_N_VARS; k++)
+        if (CF_VARS[k].kind == K_OUTPUT && CF_VARS[k].role == R_OUT + i) return CF_VARS[k].name;
+    return "?";
+}
+
 /* the name of the first of the FMU's outputs in out[] that is not finite (its value in
  * r), or NULL */
 static const char *nonfinite(const double *out, char *r, size_t n) {
-    for (int i = 0; i < CF_N_VARS; i++) {
-        const cf_var *v = &CF_VARS[i];
-        if (v->kind == K_OUTPUT && !isfinite(out[v->role - R_OUT])) {
-            py_repr(out[v->role - R_OUT], r, n);
-            return v->name;
-        }
-    }
-    return NULL;
+    const int i = cf_first_nonfinite(out, served_mask());
+    if (i < 0) return NULL;
+    py_repr(out[i], r, n);
+    return out_name(i);
 }
 
 /* the spin grid g for the law at its load (p, b: a1, a2, p0 there) with the parameters
@@ -443,12 +462,14 @@ static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_para
  * 0 with the reasons logged (fmi2Error) where it cannot be */
 static int build(Inst *I) {
     cf_core *c = &I->c;
-    char list[1536];
-    bad_list(I, list, sizeof list);
-    if (list[0]) {
-        say(I, fmi2Error, "cannot initialise the model: %s", list);
-        return 0;
+    unsigned last = 0;
+    char one[256];
+    int held = 0;
+    while (next_bad(c, &last, one, sizeof one)) { /* one message each, as slave.py */
+        say(I, fmi2Error, "cannot initialise the model: %s", one);
+        held = 1;
     }
+    if (held) return 0;
     const double *v = c->val;
     char r[40];
     if (CF_MODE == MODE_RIGID) return build_rigid(I);
@@ -540,20 +561,16 @@ static int build(Inst *I) {
     s.t = c->time;
     cf_initial_forces(&p, &s);
     cf_body_outputs(&p, &s, &b);
-    for (int i = 0; i < CF_N_VARS; i++) {
-        const cf_var *w = &CF_VARS[i];
-        if (w->kind == K_OUTPUT && !isfinite(b.out[w->role - R_OUT])) {
-            py_repr(b.out[w->role - R_OUT], r, sizeof r);
-            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
-                "is not finite", w->name, r);
-            return 0;
-        }
+    const char *bad = nonfinite(b.out, r, sizeof r);
+    if (bad) {
+        say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+            "is not finite", bad, r);
+        return 0;
     }
     c->p = p, c->b = b, c->s = s;
     c->P_law = P;
     c->built = 1;
-    for (int i = 0; i < CF_N_VARS; i++)
-        if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = b.out[CF_VARS[i].role - R_OUT];
+    publish(c);
     return 1;
 }
 
@@ -637,22 +654,23 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     char rt[40], rh[40];
 #define REPRS() (py_repr(t, rt, sizeof rt), py_repr(h, rh, sizeof rh))
     if (c->phase == PH_TERMINATED || !c->built) { /* slave._do_step's first refusal */
+        char list[1536] = "";
+        if (c->init_tried) bad_list(I, list, sizeof list); /* the values that stop it */
         REPRS();
-        say(I, fmi2Error, "doStep at t = %s refused: called %s", rt,
-            c->phase == PH_TERMINATED ? "after fmi2Terminate"
-            : c->init_tried ? "before the model is initialised (fmi2ExitInitializationMode "
-                              "failed: see its messages)"
-                            : "before the model is initialised (fmi2ExitInitializationMode "
-                              "not called)");
+        if (c->phase == PH_TERMINATED)
+            say(I, fmi2Error, "doStep at t = %s refused: called after fmi2Terminate", rt);
+        else
+            say(I, fmi2Error, "doStep at t = %s refused: called before the model is initialised "
+                "(fmi2ExitInitializationMode %s%s)", rt, c->init_tried ? "failed: " : "not called",
+                c->init_tried ? (list[0] ? list : "see the messages above") : "");
         return fmi2Error;
     }
-    if (!(h > 0.0 && h <= DBL_MAX)) {
+    if (!cf_step_size_ok(h)) {
         REPRS();
         say(I, fmi2Discard, "communicationStepSize = %s is invalid: must be > 0 and finite", rh);
         return fmi2Discard;
     }
-    double scale = fmax(fabs(t), fabs(c->time)); /* slave.TIME_RTOL: ulps of t */
-    if (!isfinite(t) || fabs(t - c->time) > CF_TIME_RTOL * scale) {
+    if (!cf_time_ok(t, c->time, CF_TIME_RTOL)) {
         char now[40];
         REPRS();
         py_repr(c->time, now, sizeof now);
@@ -671,72 +689,60 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     cf_params p = c->p;
     cf_body b = c->b;
     cf_state w = c->s;
+    cf_vstate vw = c->vs;
     const double P = c->val[R_P];
     /* set_load: Eq. (34) at the new P; set_mu: the law at a tuned mu */
     if (P != c->P_law || c->val[R_MU] != p.mu) law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
-    { /* integrator.LOAD_LIMIT: beyond it the eliminated form loses Eq. (8)'s balance */
-        const double cap = CF_LOAD_LIMIT * p.mu * P;
-        const char *name = fabs(b.Fx_ex) <= cap ? NULL : "Fx_ex";
-        if (name == NULL && !(fabs(b.My_ex) <= cap * p.Rx)) name = "My_ex";
-        if (name != NULL) {
-            char rv[40];
-            const int fx = name[0] == 'F';
-            py_repr(fx ? b.Fx_ex : b.My_ex, rv, sizeof rv);
-            REPRS();
-            say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: %s = "
-                "%s is invalid: must be <= %g mu P%s = %.6g %s in magnitude", rt, rh, name, rv,
-                CF_LOAD_LIMIT, fx ? "" : " Rx", fx ? cap : cap * p.Rx, fx ? "N" : "N m");
-            return fmi2Discard;
-        }
-    }
-    /* substeps(): ceil(h / h_max (1 - slack)), at least 1, at most max_substeps */
-    double q = ceil(h / b.h_max * (1.0 - b.substep_slack));
-    int n = q < b.max_substeps ? (q < 1.0 ? 1 : (int)q) : b.max_substeps;
-    cf_vstate vw = c->vs;
-    int failed;
+    cf_vpath vector = {&vw, c->val[R_FY_EX], c->val[R_MZ_EX], NULL, NULL, NULL};
     if (CF_VECTOR) {
         ensure_grid(I, &p, &b, &p);
-        const double L[4] = {b.Fx_ex, c->val[R_FY_EX], b.My_ex, c->val[R_MZ_EX]};
-        failed = cf_advance_vector(&p, &vw, h, L, n) != CF_OK;
-    } else {
-        failed = cf_advance(&p, &w, h, b.Fx_ex, b.My_ex, n) != CF_OK;
+        vector.tau = I->grid->tau, vector.slip = I->grid->slip, vector.inside = I->grid->inside;
     }
-    if (failed) {
+    /* the step and its checks, those of the pythonfmu FMU's fast path (stepper.c), on
+     * the copies p, b, w, vw */
+    int capped = 0, which = 0;
+    const int why = cf_body_check(&p, &w, CF_VECTOR ? &vector : NULL, &b, h, &capped,
+                                  I->served, &which);
+    if (why != CF_OK) {
+        char rv[40], why_text[512];
         REPRS();
-        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
-            "StageSolveError: no root: the stage residual keeps its sign (loads beyond mu P?)",
-            rt, rh);
-        return fmi2Discard;
-    }
-    if (CF_VECTOR) cf_vbody_outputs(&p, &vw, &b, I->grid->tau, I->grid->slip, I->grid->inside);
-    else cf_body_outputs(&p, &w, &b);
-    for (int i = 0; i < CF_N_VARS; i++) {
-        const cf_var *v = &CF_VARS[i];
-        if (v->kind == K_OUTPUT && !isfinite(b.out[v->role - R_OUT])) {
-            char r[40];
-            py_repr(b.out[v->role - R_OUT], r, sizeof r);
-            REPRS();
-            say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
-                "FloatingPointError: output %s = %s is not finite", rt, rh, v->name, r);
-            return fmi2Discard;
+        if (why == CF_STEP_FX_LIMIT || why == CF_STEP_MY_LIMIT) { /* RollingBody._bounded */
+            const int fx = why == CF_STEP_FX_LIMIT;
+            const double cap = cf_load_cap(&p);
+            py_repr(fx ? b.Fx_ex : b.My_ex, rv, sizeof rv);
+            snprintf(why_text, sizeof why_text, "%s = %s is invalid: must be <= %g mu P%s = "
+                     "%.6g %s in magnitude", fx ? "Fx_ex" : "My_ex", rv, CF_LOAD_LIMIT,
+                     fx ? "" : " Rx", fx ? cap : cap * p.Rx, fx ? "N" : "N m");
+        } else if (why == CF_STEP_RANGE) { /* body_model.within_range */
+            const cf_ranged *q = &CF_RANGED[which];
+            py_repr(b.out[q->i], rv, sizeof rv);
+            snprintf(why_text, sizeof why_text, "%s = %s is invalid: must be within abs <= %g "
+                     "(the loads drive the body beyond it)", q->name, rv, q->bound);
+        } else if (why == CF_STEP_NONFINITE) { /* slave._collect */
+            py_repr(b.out[which], rv, sizeof rv);
+            snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
+                     "finite", out_name(which), rv);
+        } else if (why == CF_STEP_NO_SLIDING) {
+            snprintf(why_text, sizeof why_text, "StageSolveError: eta = inf (Iy = 0) admits no "
+                     "gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = %.6g N reaches mu P = %.6g N",
+                     fabs(target_x(&p, b.Fx_ex, b.My_ex)), p.mu * p.P);
+        } else { /* CF_STEP_NO_ROOT: no other code reaches here (the law is at P, h > 0) */
+            snprintf(why_text, sizeof why_text, "StageSolveError: no root: the stage residual "
+                     "keeps its sign (loads beyond mu P?)");
         }
-    }
-    if (!within_range(b.out)) { /* body_model.within_range */
-        REPRS();
-        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: the loads "
-            "drive a speed beyond abs %g m/s or a rate beyond abs %g rad/s", rt, rh,
-            CF_SPEED_MAX, CF_RATE_MAX);
+        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
+            rh, why_text);
         return fmi2Discard;
     }
     c->p = p, c->b = b, c->s = w, c->vs = vw, c->P_law = P;
-    for (int i = 0; i < CF_N_VARS; i++)
-        if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = b.out[CF_VARS[i].role - R_OUT];
+    publish(c);
     c->time = t + h;
 #undef REPRS
-    if (n == b.max_substeps && h / b.h_max > b.max_substeps)
+    const int n = b.max_substeps;
+    if (capped && h / b.h_max > n)
         say(I, fmi2Warning, "communication step h = %g s exceeds %d internal steps of h_max = "
-            "%g s: taken in %d steps of %g s", h, b.max_substeps, b.h_max, n, h / n);
+            "%g s: taken in %d steps of %g s", h, n, b.h_max, n, h / n);
     return fmi2OK;
 }
 
@@ -898,6 +904,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         I->grid->strips.ny = 0;
     }
     I->logging = logging != fmi2False;
+    I->served = served_mask();
     start_values(I);
     return I;
 }
@@ -939,7 +946,13 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     INST(fmi2ExitInitializationMode);
     I->c.init_tried = 1;
-    if (!build(I)) return fmi2Error;
+    if (!build(I)) { /* slave.exit_initialization_mode's refusal, its words */
+        char list[1536];
+        bad_list(I, list, sizeof list);
+        say(I, fmi2Error, "exitInitializationMode: the model cannot start: %s",
+            list[0] ? list : "see the messages above");
+        return fmi2Error;
+    }
     I->c.phase = PH_STEP;
     return fmi2OK;
 }

@@ -29,6 +29,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "cf_core.h"
+
 /* The Python path's roundings wherever this file is compiled (the native FMU's
  * sources/ too, by a build this project does not control): no contraction into fused
  * multiply-adds (gcc takes -ffp-contract=off from its flags; clang and MSVC this). */
@@ -810,35 +812,74 @@ void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
 #define CF_SPEED_MAX 1e4 /* fmu/variables.SPEED_MAX (m/s), RATE_MAX (rad/s): body_model.within_range */
 #define CF_RATE_MAX 1e7
 
-/* The body's speeds and rates within their physical ranges (else Python refuses) */
-static int within_range(const double *o) {
-    return fabs(o[O_VX]) <= CF_SPEED_MAX && fabs(o[O_VY]) <= CF_SPEED_MAX &&
-           fabs(o[O_OMEGA_Y]) <= CF_RATE_MAX && fabs(o[O_OMEGA_Z]) <= CF_RATE_MAX;
+/* Why a communication step of the body is not served (else CF_OK): the checks of
+ * BodyModel.step and the adapter, once for both front ends. fmi.c's fast path takes
+ * any of them as CF_FALLBACK (cf_body_step: the Python adapter then words the refusal),
+ * fmu2.c's doStep words each as the adapter does. */
+enum {
+    CF_STEP_LAW = 2,   /* the law is not at the load P (Python rebuilds it: Eq. 34) */
+    CF_STEP_SIZE,      /* h not in (0, inf), or no h_max > 0 */
+    CF_STEP_FX_LIMIT,  /* |Fx_ex| beyond integrator.LOAD_LIMIT mu P (or NaN) */
+    CF_STEP_MY_LIMIT,  /* |My_ex| beyond LOAD_LIMIT mu P Rx (or NaN) */
+    CF_STEP_CAPPED,    /* more internal steps than max_substeps (n is that cap) */
+    CF_STEP_NO_SLIDING, /* loads beyond mu P on an eta = inf body (Iy = 0), full method */
+    CF_STEP_NO_ROOT,   /* the stepper declined: no stage root, a non-finite state */
+    CF_STEP_RANGE,     /* a speed or rate beyond its range: body_model.within_range */
+    CF_STEP_NONFINITE, /* an output served is not finite: slave._collect */
+};
+
+/* integrator.RollingBody's bound on |Fx_ex| (N; on |My_ex| times Rx) */
+static double cf_load_cap(const cf_params *p) { return CF_LOAD_LIMIT * p->mu * p->P; }
+
+/* The loads and the step size: CF_OK, or the first check that fails in the order of
+ * integrator.RollingBody (the load limit) and body_model.substeps, with *n the internal
+ * steps ceil(h / h_max (1 - slack)), at least 1, at most max_substeps (also with
+ * CF_STEP_CAPPED, after which a caller may take the step in those n) */
+static int cf_body_admit(const cf_params *p, const cf_body *b, double h, int *n) {
+    *n = 1;
+    if (b->P != p->P || !isfinite(b->P)) return CF_STEP_LAW;
+    if (!cf_step_size_ok(h) || !(b->h_max > 0.0)) return CF_STEP_SIZE;
+    const double cap = cf_load_cap(p);
+    if (!(fabs(b->Fx_ex) <= cap)) return CF_STEP_FX_LIMIT;
+    if (!(fabs(b->My_ex) <= cap * p->Rx)) return CF_STEP_MY_LIMIT;
+    const double q = ceil(h / b->h_max * (1.0 - b->substep_slack));
+    *n = q < b->max_substeps ? (q < 1.0 ? 1 : (int)q) : b->max_substeps;
+    return q < b->max_substeps ? CF_OK : CF_STEP_CAPPED; /* NaN q: capped */
 }
 
-/* BodyModel.step (inputs held, h > 0 checked by the caller) and the outputs, all
- * finite; CF_FALLBACK with *y and b->out unchanged for whatever Python must do: a new
- * load P (the law's ellipse, Eq. 34), the cap on internal steps (a note to log), a path
- * cf_advance leaves out, a non-finite output (the discard and its message). */
-int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
-    if (b->P != p->P || !isfinite(b->P)) return CF_FALLBACK;
-    if (!(h > 0.0 && h <= DBL_MAX && b->h_max > 0.0)) return CF_FALLBACK;
-    /* integrator.LOAD_LIMIT (and NaN): Python refuses the loads with a message */
-    double cap = CF_LOAD_LIMIT * p->mu * p->P;
-    if (!(fabs(b->Fx_ex) <= cap && fabs(b->My_ex) <= cap * p->Rx)) return CF_FALLBACK;
-    double q = ceil(h / b->h_max * (1.0 - b->substep_slack));
-    if (!(q < b->max_substeps)) return CF_FALLBACK; /* at the cap (or NaN): BodyModel */
-    int n = q < 1.0 ? 1 : (int)q;
-    cf_state w = *y;
-    if (cf_advance(p, &w, h, b->Fx_ex, b->My_ex, n)) return CF_FALLBACK;
-    cf_body next = *b;
-    cf_body_outputs(p, &w, &next);
+/* body_model.within_range's table: the output, its name, its bound */
+typedef struct {
+    int i;
+    const char *name;
+    double bound;
+} cf_ranged;
+static const cf_ranged CF_RANGED[4] = {
+    {O_VX, "Vx", CF_SPEED_MAX},
+    {O_VY, "Vy", CF_SPEED_MAX},
+    {O_OMEGA_Y, "Omega_y", CF_RATE_MAX},
+    {O_OMEGA_Z, "Omega_z", CF_RATE_MAX},
+};
+
+/* The index into out of the first output served (a bit per index) that is not finite,
+ * or -1: slave._collect */
+static int cf_first_nonfinite(const double *out, unsigned long served) {
     for (int i = 0; i < N_OUT; i++)
-        if (!isfinite(next.out[i])) return CF_FALLBACK;
-    if (!within_range(next.out)) return CF_FALLBACK;
-    *y = w;
-    *b = next;
-    return CF_OK;
+        if ((served >> i & 1ul) && !isfinite(out[i])) return i;
+    return -1;
+}
+
+/* The outputs of a step, checked as the Python adapter does: the body's speeds and
+ * rates within their ranges (body_model.within_range, NaN beyond), then each output
+ * served finite (slave._collect; served: a bit per index of out, whose order is the
+ * variables'). CF_OK; CF_STEP_RANGE with *which the row of CF_RANGED; or
+ * CF_STEP_NONFINITE with *which the index into out; the first that fails. */
+static int cf_body_out_check(const double *out, unsigned long served, int *which) {
+    for (int k = 0; k < 4; k++)
+        if (!(fabs(out[CF_RANGED[k].i]) <= CF_RANGED[k].bound)) {
+            *which = k;
+            return CF_STEP_RANGE;
+        }
+    return (*which = cf_first_nonfinite(out, served)) < 0 ? CF_OK : CF_STEP_NONFINITE;
 }
 
 /* ---- layer._Grid.march: the strip march of the spin law --------------------------- */
@@ -1677,4 +1718,59 @@ void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double
                                          inside);
     }
     o[O_REGIME] = full_slip(p, vx, Vy, Vx) ? 1.0 : 0.0;
+}
+
+/* ---- fmu/body_model.py: a communication step of the body, checked ------------------- */
+/* The vector path of a step (Eqs. 10-11: fmu2.c's CF_VECTOR): its state, the lateral
+ * loads, the spin grid's scratch and mask (cf_vbody_outputs) */
+typedef struct {
+    cf_vstate *y;
+    double Fy_ex, Mz_ex;
+    double *tau;
+    unsigned char *slip;
+    const unsigned char *inside;
+} cf_vpath;
+
+#define CF_ALL_OUT ((1ul << N_OUT) - 1ul)
+
+/* BodyModel.step with the inputs held and its outputs, with every check of the adapter
+ * (cf_body_admit, cf_body_out_check of the outputs served), in place: the scalar path
+ * on *y (cf_advance), or with v the vector path on *v->y (cf_advance_vector), the
+ * outputs into b->out. CF_OK, or why not (*which: see cf_body_out_check); then the
+ * state and b->out hold what the step reached, not to be served: callers step copies.
+ * capped: NULL, a step beyond max_substeps internal steps is refused; else it is taken
+ * in that many and *capped says so (the caller logs the note). */
+static int cf_body_check(const cf_params *p, cf_state *y, const cf_vpath *v, cf_body *b,
+                         double h, int *capped, unsigned long served, int *which) {
+    int n, why = cf_body_admit(p, b, h, &n);
+    if (capped != NULL) *capped = why == CF_STEP_CAPPED;
+    if (why != CF_OK && !(why == CF_STEP_CAPPED && capped != NULL)) return why;
+    const double L[4] = {b->Fx_ex, v ? v->Fy_ex : 0.0, b->My_ex, v ? v->Mz_ex : 0.0};
+    /* RollingBody._step: an eta = inf body (m_slip = 0) has no gross sliding */
+    if (p->m_slip == 0.0 && !p->quasistationary &&
+        !(v != NULL ? vadmissible(p, L) : admissible(p, L[0], L[2])))
+        return CF_STEP_NO_SLIDING;
+    if (v != NULL) {
+        if (cf_advance_vector(p, v->y, h, L, n) != CF_OK) return CF_STEP_NO_ROOT;
+        cf_vbody_outputs(p, v->y, b, v->tau, v->slip, v->inside);
+    } else {
+        if (cf_advance(p, y, h, b->Fx_ex, b->My_ex, n) != CF_OK) return CF_STEP_NO_ROOT;
+        cf_body_outputs(p, y, b);
+    }
+    return cf_body_out_check(b->out, served, which);
+}
+
+/* The step of the pythonfmu FMU's fast path (FastBody, fmi.c): cf_body_check of the
+ * scalar path on copies, every output served; CF_FALLBACK (*y and *b unchanged) for
+ * whatever Python must do (a new load P, the cap on internal steps and its note, a path
+ * cf_advance leaves out, a refusal and its message) */
+int cf_body_step(const cf_params *p, cf_state *y, cf_body *b, double h) {
+    cf_state w = *y;
+    cf_body next = *b;
+    int which;
+    if (cf_body_check(p, &w, NULL, &next, h, NULL, CF_ALL_OUT, &which) != CF_OK)
+        return CF_FALLBACK;
+    *y = w;
+    *b = next;
+    return CF_OK;
 }

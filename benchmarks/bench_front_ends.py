@@ -1,0 +1,154 @@
+"""The cost of a step through both front ends of the C core, this tree against a revision.
+
+    .venv/bin/python benchmarks/bench_front_ends.py [--base REV] [--steps N] [--repeats R]
+
+The checks of a call and the step are C code that both FMUs share (contact_fmu/native:
+cf_core.h, stepper.c's cf_body_check). This measures what a change to them costs, in one
+run, interleaved, so that the ratios are fair on a shared machine: the tree at REV
+(default HEAD; exported with git archive into a temporary folder) and this working tree,
+each in processes of its own (PYTHONPATH set to it):
+
+1. the pythonfmu FMU's per-step FMI calls on their C path (native/fmi.c): a ContactSlave
+   of the Fig. 13 scene, each method, called as pythonfmu calls it (set_real of the
+   loads, do_step, get_real of the outputs), N times; the fastest of 7 passes;
+2. the native Fig. 13 FMU, each method, from the C importer (tests/native_importer.c):
+   N communication steps at the scene's step, the fastest of its 3 passes.
+
+Each figure is the best of R processes; the ratio is this tree's over REV's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import fmpy
+
+ROOT = Path(__file__).resolve().parents[1]
+METHODS = ("quasistationary", "full")
+
+# run in a tree's own process: seconds per step of the adapter's C path
+SLAVE = """
+import ctypes, sys, time
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.fmu.slave import CELL_VR, ContactSlave
+from contact_fmu.scenario import load
+
+n, method = int(sys.argv[1]), sys.argv[2]
+scene = load("scenarios/fig13.toml")
+cfg = ModelConfig.from_dict(scene.config.to_dict() | {"methods": [method]})
+s = type("Model", (ContactSlave,), {"CONFIG": cfg.to_dict()})(instance_name="bench")
+cell = ctypes.c_int(0)
+s.set_string([CELL_VR], [f"status cell {hex(ctypes.addressof(cell))}"])
+vr = {v.name: k for k, v in s.vars.items()}
+s.setup_experiment(0.0)
+s.enter_initialization_mode()
+s.exit_initialization_mode()
+assert s._fast_fmi is not None, "no fmi.c binding"
+loads, values = [vr["Fx_ex"], vr["My_ex"]], [17.0, -0.001]
+outs = [vr[o] for o in cfg.outputs if o != "regime"]
+t, h, best = 0.0, scene.step, float("inf")
+for _ in range(7):
+    t0 = time.perf_counter()
+    for _ in range(n):
+        s.set_real(loads, values)
+        assert s.do_step(t, h)
+        s.get_real(outs)
+        t += h
+    best = min(best, (time.perf_counter() - t0) / n)
+print(best)
+"""
+
+# run in a tree's own process: the native Fig. 13 FMU of each method into argv[1]
+BUILD = """
+import sys
+from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.scenario import load
+from fmu_build import native_fmu
+
+scene = load("scenarios/fig13.toml")
+for m in sys.argv[2:]:
+    cfg = ModelConfig.from_dict(scene.config.to_dict() | {"methods": [m]})
+    print("FMU", m, native_fmu.build(cfg, sys.argv[1]).path)
+"""
+
+
+def _run(tree: Path, *args: str) -> str:
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    cmd = [sys.executable, *args]
+    return subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True, check=True).stdout
+
+
+def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple[str, str], list]:
+    """The C importer's command line for each tree's native FMU of each method."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_native_fmu import _spec
+
+    from contact_fmu.scenario import load
+    from fmu_build import native_fmu
+
+    scene = load(ROOT / "scenarios" / "fig13.toml")
+    case = scene.case("eta = 3")
+    exe = work / "importer"
+    cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe),
+           str(ROOT / "tests" / "native_importer.c"), "-ldl", "-lm"]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    runs = {}
+    for label, tree in trees.items():
+        built = _run(tree, "-c", BUILD, str(work / label), *METHODS).splitlines()
+        for _, m, path in (line.split(maxsplit=2) for line in built if line.startswith("FMU ")):
+            unzip = work / f"{label}-{m}"
+            fmpy.extract(path, str(unzip))
+            md = fmpy.read_model_description(str(unzip))
+            spec = unzip / "spec.txt"
+            spec.write_text(_spec(md, scene, case, rows=False))
+            ident = md.coSimulation.modelIdentifier
+            lib = unzip / "binaries" / "linux64" / f"{ident}.so"
+            runs[label, m] = [str(exe), str(lib), md.guid, ident, "bench", str(spec),
+                              repr(scene.step), str(n)]  # fmt: skip
+    return runs
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--base", default="HEAD", help="the revision to compare with")
+    ap.add_argument("--steps", type=int, default=3000, help="steps of the adapter's C path")
+    ap.add_argument("--importer-steps", type=int, default=20_000)
+    ap.add_argument("--repeats", type=int, default=5)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        base = work / "base"
+        base.mkdir()
+        archive = subprocess.run(["git", "archive", args.base], cwd=ROOT, capture_output=True,
+                                 check=True).stdout  # fmt: skip
+        subprocess.run(["tar", "-x", "-C", str(base)], input=archive, check=True)
+        trees = {args.base: base, "this tree": ROOT}
+        print(f"{args.base} against this tree; best of {args.repeats} interleaved processes")
+        for m in METHODS:
+            cost = {k: [] for k in trees}
+            for _ in range(args.repeats):
+                for k, tree in trees.items():
+                    cost[k].append(float(_run(tree, "-c", SLAVE, str(args.steps), m)))
+            b, a = min(cost[args.base]), min(cost["this tree"])
+            print(f"pythonfmu adapter on fmi.c, fig13 {m}: {b * 1e6:.3f} -> {a * 1e6:.3f} "
+                  f"us per step (setReal, doStep, getReal), ratio {a / b:.3f}")  # fmt: skip
+        runs = _importer_runs(trees, work, args.importer_steps)
+        for m in METHODS:
+            rate = {k: [] for k in trees}
+            for _ in range(args.repeats):
+                for k in trees:
+                    out = subprocess.run(runs[k, m], capture_output=True, text=True, check=True)
+                    rate[k].append(float(out.stdout.split()[-1]))
+            b, a = max(rate[args.base]), max(rate["this tree"])
+            print(f"native FMU from the C importer, fig13 {m}: {b:.4g} -> {a:.4g} steps/s, "
+                  f"time ratio {b / a:.3f}")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
