@@ -710,3 +710,35 @@ def test_c_bracket_fallback_gives_the_python_paths_doubles(monkeypatch):
         taken_by_python += counts["python"] > before and error is None
     # left to Python: only the steps that fail there too (no root: eta = inf beyond mu P)
     assert taken_by_python == 0 and counts["kernel"] > 2000, counts
+
+
+def test_c_sources_compile_without_warnings(tmp_path):
+    """stepper.c, fmi.c and fmu2.c (with the generated headers of the body FMU with Eqs.
+    10-11, of the half-space table's and of the full contact FMU: the model parts the
+    header switches on) under -Wall -Wextra -Werror and the flags they ship with: a
+    warning there is a defect left for a user's compiler to find."""
+    import subprocess
+
+    from contact_fmu.fmu.config import ModelConfig
+    from contact_fmu.scenario import load
+    from fmu_build import native_fmu
+
+    strict = ("-Wall", "-Wextra", "-Werror")
+    cc = os.environ.get("CC", "cc")
+    runs = [[*native.CFLAGS, *strict, "-o", str(tmp_path / "s.so"), str(native.SOURCE)]]
+    if Path(sysconfig.get_paths()["include"], "Python.h").is_file():
+        runs.append([*native._fmi_flags(), *strict, "-o", str(tmp_path / "f.so"),
+                     str(native.SOURCE_FMI)])  # fmt: skip
+    scenes = Path(__file__).resolve().parents[1] / "scenarios"
+    cfgs = {s: load(scenes / f"{s}.toml").config for s in ("cornering", "rail_traction")}
+    for name, cfg in (cfgs | {"contact": ModelConfig.full("contact")}).items():
+        src = tmp_path / name
+        src.mkdir()
+        for source in native_fmu.SOURCES:
+            shutil.copyfile(native_fmu.NATIVE_DIR / source, src / source)
+        (src / native_fmu.HEADER).write_text(native_fmu.header(cfg, "{}"))
+        runs.append([*native_fmu.CFLAGS, *strict, f"-I{src}", f"-I{native_fmu.fmi_headers()}",
+                     "-o", str(src / "m.so"), str(src / native_fmu.SOURCES[0])])  # fmt: skip
+    for args in runs:
+        proc = subprocess.run([cc, *args, "-lm"], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr[-3000:]
