@@ -18,6 +18,13 @@ machine):
 3. FMU sizes.
 
 ``--write`` replaces the section SECTION of docs/performance.md.
+
+    .venv/bin/python benchmarks/bench_native.py --spin [--steps 300] [--repeats 5] [--write]
+
+measures instead the full contact FMU with a spin input (the law marching its spin grid
+in every evaluation) as in 1.: the native FMU, the pythonfmu FMU with the compiled
+library it carries (fmu_build.compiles) and the same pythonfmu FMU built without it
+(numpy's march), in one run; ``--write`` replaces SECTION_SPIN.
 """
 
 from __future__ import annotations
@@ -46,6 +53,7 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
 SECTION = "## Native FMU: step cost, C importer rate, size"
+SECTION_SPIN = "## Contact FMU with spin: step cost"
 TRIVIAL_C = Path(__file__).with_name("trivial_fmu.c")
 IMPORTER = ROOT / "tests" / "native_importer.c"
 
@@ -120,18 +128,80 @@ def step_costs(steps: int, repeats: int) -> dict[str, float]:
         runs[f"{label} pythonfmu"] = (path, {}, ins, outs)
         path, ins, outs = trivial_native(OUT, a, b)
         runs[f"{label} native"] = (path, {}, ins, outs)
+    runs = {
+        name: (path, st, ins, [o for o in outs if o != "regime"],
+               trivial if name.startswith(("trivial", "null")) else table)
+        for name, (path, st, ins, outs) in runs.items()
+    }  # fmt: skip
+    return _interleaved(runs, steps, repeats, scene.step)
+
+
+def _interleaved(runs: dict, steps: int, repeats: int, h: float) -> dict[str, float]:
+    """runs: name -> (FMU, start values, inputs, outputs, input table); the mean over the
+    steps of each step's fastest of ``repeats`` interleaved runs (s)."""
     times = {k: np.empty((repeats, steps)) for k in runs}
     for r in range(repeats):
-        for name, (path, st, ins, outs) in runs.items():
-            tab = trivial if name.startswith(("trivial", "null")) else table
-            s = Stepper(path, name.replace(" ", "_"), st, ins, [o for o in outs if o != "regime"],
-                        tab, scene.step)  # fmt: skip
+        for name, (path, st, ins, outs, table) in runs.items():
+            s = Stepper(path, name.replace(" ", "_"), st, ins, outs, table, h)
             try:
                 for k in range(steps):
                     times[name][r, k] = s.step(k)
             finally:
                 s.close()
     return {k: float(np.mean(np.min(v, axis=0))) for k, v in times.items()}
+
+
+def spin_costs(steps: int, repeats: int) -> dict[str, float]:
+    """The full contact FMU, every step new kinematics with spin (rolling at Rx/T_c,
+    creepages and spin creepage phi a1/Vx uniform within +-0.6 of the onset of full slip:
+    partial slip), the load held: native; pythonfmu with its compiled march; the same
+    pythonfmu FMU built without the library (numpy's march)."""
+    from contact_fmu import examples as ex
+
+    cfg = ModelConfig.full("contact")
+    law, V = ex.contact(), ex.speed_unit()
+    rng = np.random.default_rng(1)
+    xi = rng.uniform(-0.6, 0.6, (3, steps + 1)) * law.creep_full_slip
+    table = {"P": np.full(steps + 1, ex.P), "Vx": np.full(steps + 1, V), "Vy": xi[1] * V,
+             "Omega_y": (V - xi[0] * V) / ex.Rx, "Omega_z": xi[2] * V / law.a1}  # fmt: skip
+    outs = [n for n in cfg.outputs if n != "regime"]
+    compiles = fmu_build.compiles
+    fmu_build.compiles = lambda c: False  # the FMU as built before it carried the library
+    try:
+        numpy_path = fmu_build.build(cfg, OUT / "numpy_march").path
+    finally:
+        fmu_build.compiles = compiles
+    io = ({}, tuple(table), outs, table)
+    runs = {
+        "native": (native_fmu.build(cfg, OUT).path, *io),
+        "pythonfmu, compiled march": (fmu_build.build(cfg, OUT).path, *io),
+        "pythonfmu, numpy march": (numpy_path, *io),
+    }
+    return _interleaved(runs, steps, repeats, 1e-3)
+
+
+def spin_report(cost: dict[str, float], args) -> str:
+    us = {k: 1e6 * v for k, v in cost.items()}
+    lines = [
+        f"Made by `benchmarks/bench_native.py --spin --steps {args.steps} --repeats "
+        f"{args.repeats} --write` on {datetime.date.today()} ({platform.machine()}, Python "
+        f"{platform.python_version()}; a shared 2-core machine: the ratios are the result).",
+        "",
+        "The full contact FMU (`python -m fmu_build --full contact`, and `--native`) with "
+        "new kinematics and spin every step (partial slip, the load held), through fmpy's "
+        "FMU2Slave (setReal of the 5 inputs, doStep, getReal of the 12 Real outputs; mean "
+        f"of each step's fastest of {args.repeats} interleaved runs of {args.steps} steps). "
+        "The pythonfmu FMU carries the compiled strip march (fmu_build.compiles); built "
+        "without it, it marches in numpy:",
+        "",
+        "| FMU | us per step | / native |",
+        "|---|---|---|",
+    ]
+    for k, v in us.items():
+        lines.append(f"| {k} | {v:.1f} | {v / us['native']:.2f} |")
+    c, n = us["pythonfmu, compiled march"], us["pythonfmu, numpy march"]
+    lines += ["", f"The compiled march makes the pythonfmu FMU's step {n / c:.1f} times faster."]
+    return "\n".join(lines) + "\n"
 
 
 def importer_rates(n: int) -> dict[str, float]:
@@ -221,7 +291,14 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--importer-steps", type=int, default=200_000)
     ap.add_argument("--write", action="store_true")
+    ap.add_argument("--spin", action="store_true", help="the contact FMU with spin only")
     args = ap.parse_args()
+    if args.spin:
+        text = spin_report(spin_costs(args.steps, args.repeats), args)
+        print(text)
+        if args.write:
+            replace_section(DOC, SECTION_SPIN, text)
+        return 0
     text = report(step_costs(args.steps, args.repeats), importer_rates(args.importer_steps),
                   sizes(), args)  # fmt: skip
     print(text)

@@ -86,12 +86,20 @@ def test_full_contact_fmu_with_spin_gives_the_pythonfmu_outputs(fmus):
         assert math.hypot(a["Tx"], a["Ty"]) <= u["mu"] * u["P"] * (1 + 1e-12)
 
 
-def test_spin_forces_are_the_compiled_laws_doubles(fmus):
+@pytest.mark.parametrize("target", ["native", "pythonfmu"])
+def test_spin_forces_are_the_compiled_laws_doubles(fmus, target, monkeypatch):
     """Where the same C runs: LayerContact.forces in this process marches its spin grid
-    (numpy's layer._Grid) with the compiled library (cf_layer_forces); the native FMU
-    marches the grid it built in C (cf_grid_build) for each load. Rolling inputs with
-    spin, a new load each time: the same doubles, so the two grids are equal bit for
-    bit. The FMU is fmpy-valid and declares its directional derivatives."""
+    (numpy's layer._Grid) with the compiled library (cf_layer_forces). The native FMU
+    marches the grid it built in C (cf_grid_build) for each load; the pythonfmu FMU
+    carries the library (fmu_build.compiles) and its law calls it, loaded from the FMU's
+    own resources. Rolling inputs with spin, a new load each time: the same doubles (so
+    the native FMU's grids are numpy's bit for bit), and numpy's march (what the
+    pythonfmu FMU ran without the library) within the bounds of
+    test_strip_march_of_the_spin_law_agrees_to_rounding (7e-13 of mu P, of mu P
+    max(a1, a2) for Mz). The native FMU is fmpy-valid and declares its directional
+    derivatives."""
+    import sys
+
     import fmpy
     from fmpy.validation import validate_fmu
 
@@ -100,13 +108,14 @@ def test_spin_forces_are_the_compiled_laws_doubles(fmus):
 
     if native.library() is None:
         pytest.skip("no compiled library")
-    assert validate_fmu(str(fmus["native"])) == []
-    md = fmpy.read_model_description(str(fmus["native"]))
-    assert md.coSimulation.providesDirectionalDerivative
+    if target == "native":
+        assert validate_fmu(str(fmus["native"])) == []
+        md = fmpy.read_model_description(str(fmus["native"]))
+        assert md.coSimulation.providesDirectionalDerivative
     rng = np.random.default_rng(4)
-    with Instance(fmus["native"], "c") as c:
+    rows = []
+    with Instance(fmus[target], "c") as c:
         par = {n: c.get(n) for n in ("P", "Rx", "Ry", "k1", "k2", "kb", "ks", "mu")}
-        checked = 0
         for k in range(40):
             u = _inputs(rng, k)
             if u["Vx"] == 0.0 or u["Omega_z"] == 0.0:
@@ -115,10 +124,21 @@ def test_spin_forces_are_the_compiled_laws_doubles(fmus):
                 c.set(name, value)
             law = LayerContact(**(par | {"P": u["P"]}))
             vx, vy = u["Vx"] - u["Omega_y"] * par["Rx"], u["Vy"]
-            want = law.forces(vx, vy, u["Omega_z"], u["Vx"])
-            assert (c.get("Tx"), c.get("Ty"), c.get("Mz")) == want
-            checked += 1
-        assert checked >= 20
+            got = (c.get("Tx"), c.get("Ty"), c.get("Mz"))
+            assert got == law.forces(vx, vy, u["Omega_z"], u["Vx"])
+            rows.append((law, (vx, vy, u["Omega_z"], u["Vx"]), got))
+        if target == "pythonfmu":  # the library the FMU's law called: its own copy
+            package = fmu_build.build(ModelConfig.full("contact"), OUT).package
+            lib = sys.modules[f"{package}.native"]._LOADED["stepper"]
+            lib = None if lib is None else Path(lib._name)  # not the user's cache's
+            assert lib is not None and lib.parts[-3:-1] == (package, "native"), lib
+    assert len(rows) >= 20
+    monkeypatch.setattr(native, "_LOADED", {"stepper": None})  # numpy's march
+    for law, v, got in rows:
+        F = law.mu * law.P
+        scale = (F, F, F * max(law.a1, law.a2))
+        for a, b, s in zip(got, law.forces(*v), scale, strict=True):
+            assert abs(a - b) <= 7e-13 * s
 
 
 @pytest.mark.parametrize("target", ["native", "pythonfmu"])
