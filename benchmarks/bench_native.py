@@ -22,6 +22,13 @@ machine):
 
 ``--write`` replaces the sections SECTION (1-3) and FULL_SECTION (4) of
 docs/performance.md; ``--full-body-only`` measures and writes FULL_SECTION alone.
+
+    .venv/bin/python benchmarks/bench_native.py --spin [--steps 300] [--repeats 5] [--write]
+
+measures instead the full contact FMU with a spin input (the law marching its spin grid
+in every evaluation) as in 1.: the native FMU, the pythonfmu FMU with the compiled
+library it carries (fmu_build.compiles) and the same pythonfmu FMU built without it
+(numpy's march), in one run; ``--write`` replaces SECTION_SPIN.
 """
 
 from __future__ import annotations
@@ -51,6 +58,7 @@ OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
 SECTION = "## Native FMU: step cost, C importer rate, size"
 FULL_SECTION = "## Native full body FMU: Lobatto IIIC and SDIRK2"
+SECTION_SPIN = "## Contact FMU with spin: step cost"
 TRIVIAL_C = Path(__file__).with_name("trivial_fmu.c")
 IMPORTER = ROOT / "tests" / "native_importer.c"
 
@@ -192,6 +200,58 @@ def full_report(full: dict[str, float], args) -> str:
         "(integrator._sdirk_vector, mirrored in C: the same iteration), Lobatto IIIC's "
         "coupled pair keeps its matrix from step to step (simplified Newton).",
     ]
+
+
+def spin_costs(steps: int, repeats: int) -> dict[str, float]:
+    """The full contact FMU, every step new kinematics with spin (rolling at Rx/T_c,
+    creepages and spin creepage phi a1/Vx uniform within +-0.6 of the onset of full slip:
+    partial slip), the load held: native; pythonfmu with its compiled march; the same
+    pythonfmu FMU built without the library (numpy's march)."""
+    from contact_fmu import examples as ex
+
+    cfg = ModelConfig.full("contact")
+    law, V = ex.contact(), ex.speed_unit()
+    rng = np.random.default_rng(1)
+    xi = rng.uniform(-0.6, 0.6, (3, steps + 1)) * law.creep_full_slip
+    table = {"P": np.full(steps + 1, ex.P), "Vx": np.full(steps + 1, V), "Vy": xi[1] * V,
+             "Omega_y": (V - xi[0] * V) / ex.Rx, "Omega_z": xi[2] * V / law.a1}  # fmt: skip
+    outs = [n for n in cfg.outputs if n != "regime"]
+    compiles = fmu_build.compiles
+    fmu_build.compiles = lambda c: False  # the FMU as built before it carried the library
+    try:
+        numpy_path = fmu_build.build(cfg, OUT / "numpy_march").path
+    finally:
+        fmu_build.compiles = compiles
+    io = ({}, tuple(table), outs, table, 1e-3)
+    runs = {
+        "native": (native_fmu.build(cfg, OUT).path, *io),
+        "pythonfmu, compiled march": (fmu_build.build(cfg, OUT).path, *io),
+        "pythonfmu, numpy march": (numpy_path, *io),
+    }
+    return interleaved(runs, steps, repeats)
+
+
+def spin_report(cost: dict[str, float], args) -> str:
+    us = {k: 1e6 * v for k, v in cost.items()}
+    lines = [
+        f"Made by `benchmarks/bench_native.py --spin --steps {args.steps} --repeats "
+        f"{args.repeats} --write` on {datetime.date.today()} ({platform.machine()}, Python "
+        f"{platform.python_version()}; a shared 2-core machine: the ratios are the result).",
+        "",
+        "The full contact FMU (`python -m fmu_build --full contact`, and `--native`) with "
+        "new kinematics and spin every step (partial slip, the load held), through fmpy's "
+        "FMU2Slave (setReal of the 5 inputs, doStep, getReal of the 12 Real outputs; mean "
+        f"of each step's fastest of {args.repeats} interleaved runs of {args.steps} steps). "
+        "The pythonfmu FMU carries the compiled strip march (fmu_build.compiles); built "
+        "without it, it marches in numpy:",
+        "",
+        "| FMU | us per step | / native |",
+        "|---|---|---|",
+    ]
+    for k, v in us.items():
+        lines.append(f"| {k} | {v:.1f} | {v / us['native']:.2f} |")
+    c, n = us["pythonfmu, compiled march"], us["pythonfmu, numpy march"]
+    lines += ["", f"The compiled march makes the pythonfmu FMU's step {n / c:.1f} times faster."]
     return "\n".join(lines) + "\n"
 
 
@@ -283,7 +343,14 @@ def main() -> int:
     ap.add_argument("--importer-steps", type=int, default=200_000)
     ap.add_argument("--write", action="store_true")
     ap.add_argument("--full-body-only", action="store_true")
+    ap.add_argument("--spin", action="store_true", help="the contact FMU with spin only")
     args = ap.parse_args()
+    if args.spin:
+        text = spin_report(spin_costs(args.steps, args.repeats), args)
+        print(text)
+        if args.write:
+            replace_section(DOC, SECTION_SPIN, text)
+        return 0
     if not args.full_body_only:
         text = report(step_costs(args.steps, args.repeats),
                       importer_rates(args.importer_steps), sizes(), args)  # fmt: skip

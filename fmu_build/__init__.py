@@ -142,21 +142,26 @@ def guid(key: str) -> str:
 
 def compiles(cfg: ModelConfig) -> bool:
     """Whether the FMU carries the compiled code of contact_fmu/native (and its C
-    sources): body FMUs, whose stepper and FMI calls run in it. The other modes import
-    native only through the thin-layer law, whose compiled parts serve arrays of inputs
-    and spin; a contact FMU evaluates it for one float input without spin (spin is a
-    body-mode input, ModelConfig), in math, so it carries the loader's Python only."""
-    return cfg.mode == "body"
+    sources): body FMUs, whose stepper and FMI calls run in it, and contact FMUs of the
+    thin-layer law with a spin input Omega_z, whose law marches its spin grid in it
+    (LayerContact.forces: cf_layer_forces; its cost: docs/performance.md).
+    A contact FMU without spin evaluates the law's closed forms for one float input in
+    math (the loader's Python only), the half-space law's table runs in Python, and the
+    rigid-body FMU has no law."""
+    if cfg.mode == "body":
+        return True
+    return cfg.mode == "contact" and cfg.contact_law == "layer" and "Omega_z" in cfg.inputs
 
 
-def _compile_native(dest: Path) -> None:
-    """The compiled stepper and the FMI calls' extension (for this interpreter), next to
-    their vendored sources (contact_fmu/native); what cannot be compiled (no C compiler,
-    no Python headers) is left out and that part runs in Python (same results)."""
-    for what, name, compile_fn in (
-        ("compiled stepper", native.library_name(), native.compile_to),
-        ("FMI calls' extension", native.fmi_name(), native.compile_fmi_to),
-    ):
+def _compile_native(dest: Path, fmi: bool) -> None:
+    """The compiled stepper and, with ``fmi`` (a body FMU's calls), the FMI calls'
+    extension (for this interpreter), next to their vendored sources (contact_fmu/native);
+    what cannot be compiled (no C compiler, no Python headers) is left out and that part
+    runs in Python (same results)."""
+    parts = [("compiled stepper", native.library_name(), native.compile_to)]
+    if fmi:
+        parts.append(("FMI calls' extension", native.fmi_name(), native.compile_fmi_to))
+    for what, name, compile_fn in parts:
         try:
             compile_fn(dest / name)
         except (OSError, subprocess.CalledProcessError) as e:
@@ -189,7 +194,7 @@ def build(
         stage = work / "stage"
         sources.vendor(modules, stage / package, cfg.data_files, compiles(cfg))
         if "native" in modules and compiles(cfg):
-            _compile_native(stage / package / "native")
+            _compile_native(stage / package / "native", fmi=cfg.mode == "body")
         for rel in cfg.generated_files:
             shutil.copyfile(tables.ensure(cfg, table_cache), stage / package / rel)
         script_file = stage / f"{module}.py"

@@ -171,7 +171,7 @@ def header(cfg: ModelConfig, guid: str) -> str:
     types = {"Real": "T_REAL", "Integer": "T_INTEGER", "String": "T_STRING"}
     rows = []
     for v in cfg.variables:
-        lo, hi = v.min, v.max  # Var.check's range; a fixed value is checked after it
+        lo, hi = v.bounds(cfg.mode)  # Var.check's range; a fixed value is checked after it
         fix, fix_req = 0.0, "NULL"
         if v.name in cfg.fixed:
             fix = cfg.fixed[v.name]

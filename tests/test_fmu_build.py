@@ -123,13 +123,17 @@ def test_fmu_carries_only_the_model_parts_it_imports(built):
 def test_body_fmu_carries_the_compiled_stepper_and_loads_it(built, tmp_path):
     """The build compiles contact_fmu/native into the body FMU next to its sources (the
     stepper, and the FMI calls' extension for this interpreter); the vendored loader
-    finds both (and would compile nothing on the target); a contact FMU, which runs no
-    compiled code (its law has no spin), carries the loader's Python alone, no library
-    and no C source, and the rigid-body FMU no native part at all."""
-    names = {f"native/{native.library_name()}", f"native/{native.fmi_name()}"}
-    assert {"native/stepper.c", "native/fmi.c", "native/cf_core.h", *names} <= _vendored(
+    finds both (and would compile nothing on the target); the full contact FMU, whose law
+    marches its spin input's grid in the stepper's library, carries the library but not
+    the extension (its FMI calls stay in Python); a contact FMU without spin, which runs
+    no compiled code, carries the loader's Python alone, no library and no C source, and
+    the rigid-body FMU no native part at all."""
+    lib, ext = f"native/{native.library_name()}", f"native/{native.fmi_name()}"
+    assert {"native/stepper.c", "native/fmi.c", "native/cf_core.h", lib, ext} <= _vendored(
         built["fig13"]
     )
+    contact = _vendored(built["full_contact"])
+    assert {"native/stepper.c", lib} <= contact and ext not in contact
     assert {f for f in _vendored(built["sweep"]) if f.startswith("native/")} == {
         "native/__init__.py"
     }

@@ -813,3 +813,52 @@ def test_compiled_sdirk2_damps_the_fast_mode_at_any_step(monkeypatch, lateral, r
         assert dev[k + 1] <= 1.2 * abs(R) * dev[k] + 8 * np.finfo(float).eps, (k, dev)
     assert counts["python"] == counts_v["python"] == 0
     assert counts["kernel"] + counts_v["kernel"] == 12
+
+
+def test_physical_ranges_in_c_are_the_declared_ones():
+    """stepper.c refuses a body step beyond the physical ranges (within_range) and loads
+    beyond LOAD_LIMIT mu P with constants of its own (the library is compiled without
+    the FMU's generated header): they are the Python declarations' numbers, which the
+    model descriptions and both FMUs' input checks take from variables.py."""
+    import re
+
+    from contact_fmu.fmu.variables import RATE_MAX, SPEED_MAX
+    from contact_fmu.integrator import LOAD_LIMIT
+
+    text = native.SOURCE.read_text()
+    found = dict(re.findall(r"^#define CF_(SPEED_MAX|RATE_MAX|LOAD_LIMIT) (\S+)", text, re.M))
+    assert {k: float(v) for k, v in found.items()} == {
+        "SPEED_MAX": SPEED_MAX, "RATE_MAX": RATE_MAX, "LOAD_LIMIT": LOAD_LIMIT
+    }  # fmt: skip
+
+
+def test_c_sources_compile_without_warnings(tmp_path):
+    """stepper.c, fmi.c and fmu2.c (with the generated headers of the body FMU with Eqs.
+    10-11, of the half-space table's and of the full contact FMU: the model parts the
+    header switches on) under -Wall -Wextra -Werror and the flags they ship with: a
+    warning there is a defect left for a user's compiler to find."""
+    import subprocess
+
+    from contact_fmu.fmu.config import ModelConfig
+    from contact_fmu.scenario import load
+    from fmu_build import native_fmu
+
+    strict = ("-Wall", "-Wextra", "-Werror")
+    cc = os.environ.get("CC", "cc")
+    runs = [[*native.CFLAGS, *strict, "-o", str(tmp_path / "s.so"), str(native.SOURCE)]]
+    if Path(sysconfig.get_paths()["include"], "Python.h").is_file():
+        runs.append([*native._fmi_flags(), *strict, "-o", str(tmp_path / "f.so"),
+                     str(native.SOURCE_FMI)])  # fmt: skip
+    scenes = Path(__file__).resolve().parents[1] / "scenarios"
+    cfgs = {s: load(scenes / f"{s}.toml").config for s in ("cornering", "rail_traction")}
+    for name, cfg in (cfgs | {"contact": ModelConfig.full("contact")}).items():
+        src = tmp_path / name
+        src.mkdir()
+        for source in native_fmu.SOURCES:
+            shutil.copyfile(native_fmu.NATIVE_DIR / source, src / source)
+        (src / native_fmu.HEADER).write_text(native_fmu.header(cfg, "{}"))
+        runs.append([*native_fmu.CFLAGS, *strict, f"-I{src}", f"-I{native_fmu.fmi_headers()}",
+                     "-o", str(src / "m.so"), str(src / native_fmu.SOURCES[0])])  # fmt: skip
+    for args in runs:
+        proc = subprocess.run([cc, *args, "-lm"], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr[-3000:]

@@ -16,6 +16,7 @@ from test_native_fmu import central_differences
 import fmu_build
 from contact_fmu import examples as ex
 from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.fmu.variables import RATE_MAX, SPEED_MAX
 from contact_fmu.scenario.instance import DISCARD, ERROR, OK, Instance
 from fmu_build import native_fmu
 
@@ -85,12 +86,20 @@ def test_full_contact_fmu_with_spin_gives_the_pythonfmu_outputs(fmus):
         assert math.hypot(a["Tx"], a["Ty"]) <= u["mu"] * u["P"] * (1 + 1e-12)
 
 
-def test_spin_forces_are_the_compiled_laws_doubles(fmus):
+@pytest.mark.parametrize("target", ["native", "pythonfmu"])
+def test_spin_forces_are_the_compiled_laws_doubles(fmus, target, monkeypatch):
     """Where the same C runs: LayerContact.forces in this process marches its spin grid
-    (numpy's layer._Grid) with the compiled library (cf_layer_forces); the native FMU
-    marches the grid it built in C (cf_grid_build) for each load. Rolling inputs with
-    spin, a new load each time: the same doubles, so the two grids are equal bit for
-    bit. The FMU is fmpy-valid and declares its directional derivatives."""
+    (numpy's layer._Grid) with the compiled library (cf_layer_forces). The native FMU
+    marches the grid it built in C (cf_grid_build) for each load; the pythonfmu FMU
+    carries the library (fmu_build.compiles) and its law calls it, loaded from the FMU's
+    own resources. Rolling inputs with spin, a new load each time: the same doubles (so
+    the native FMU's grids are numpy's bit for bit), and numpy's march (what the
+    pythonfmu FMU ran without the library) within the bounds of
+    test_strip_march_of_the_spin_law_agrees_to_rounding (7e-13 of mu P, of mu P
+    max(a1, a2) for Mz). The native FMU is fmpy-valid and declares its directional
+    derivatives."""
+    import sys
+
     import fmpy
     from fmpy.validation import validate_fmu
 
@@ -99,13 +108,14 @@ def test_spin_forces_are_the_compiled_laws_doubles(fmus):
 
     if native.library() is None:
         pytest.skip("no compiled library")
-    assert validate_fmu(str(fmus["native"])) == []
-    md = fmpy.read_model_description(str(fmus["native"]))
-    assert md.coSimulation.providesDirectionalDerivative
+    if target == "native":
+        assert validate_fmu(str(fmus["native"])) == []
+        md = fmpy.read_model_description(str(fmus["native"]))
+        assert md.coSimulation.providesDirectionalDerivative
     rng = np.random.default_rng(4)
-    with Instance(fmus["native"], "c") as c:
+    rows = []
+    with Instance(fmus[target], "c") as c:
         par = {n: c.get(n) for n in ("P", "Rx", "Ry", "k1", "k2", "kb", "ks", "mu")}
-        checked = 0
         for k in range(40):
             u = _inputs(rng, k)
             if u["Vx"] == 0.0 or u["Omega_z"] == 0.0:
@@ -114,22 +124,31 @@ def test_spin_forces_are_the_compiled_laws_doubles(fmus):
                 c.set(name, value)
             law = LayerContact(**(par | {"P": u["P"]}))
             vx, vy = u["Vx"] - u["Omega_y"] * par["Rx"], u["Vy"]
-            want = law.forces(vx, vy, u["Omega_z"], u["Vx"])
-            assert (c.get("Tx"), c.get("Ty"), c.get("Mz")) == want
-            checked += 1
-        assert checked >= 20
+            got = (c.get("Tx"), c.get("Ty"), c.get("Mz"))
+            assert got == law.forces(vx, vy, u["Omega_z"], u["Vx"])
+            rows.append((law, (vx, vy, u["Omega_z"], u["Vx"]), got))
+        if target == "pythonfmu":  # the library the FMU's law called: its own copy
+            package = fmu_build.build(ModelConfig.full("contact"), OUT).package
+            lib = sys.modules[f"{package}.native"]._LOADED["stepper"]
+            lib = None if lib is None else Path(lib._name)  # not the user's cache's
+            assert lib is not None and lib.parts[-3:-1] == (package, "native"), lib
+    assert len(rows) >= 20
+    monkeypatch.setattr(native, "_LOADED", {"stepper": None})  # numpy's march
+    for law, v, got in rows:
+        F = law.mu * law.P
+        scale = (F, F, F * max(law.a1, law.a2))
+        for a, b, s in zip(got, law.forces(*v), scale, strict=True):
+            assert abs(a - b) <= 7e-13 * s
 
 
-# the pythonfmu FMU's numpy march warns where Omega_z = 1e308 overflows it (the case tested)
-@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
-@pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")
 @pytest.mark.parametrize("target", ["native", "pythonfmu"])
 def test_bad_spin_input_is_refused_naming_it_and_the_instance_recovers(fmus, target):
-    """Omega_z = NaN or inf: fmi2Error at setReal and at getReal of the outputs,
-    fmi2Discard at doStep, each naming Omega_z and the value; 1e308 overflows the march's
-    increments: no outputs (fmi2Error naming the output that is not finite; doStep
-    fmi2Discard, state unchanged); 1e300 is the saturated sliding field of a pure spin
-    (|T| <= mu P). Corrected, the instance gives a fresh instance's doubles."""
+    """Omega_z = NaN, inf or a huge finite 1e308 (beyond its physical range RATE_MAX =
+    1e7 rad/s; there the march's increments Omega_z a1 dx/(|Vx| k) overflow into an
+    output NaN): fmi2Error at setReal and at getReal of the outputs, fmi2Discard at
+    doStep, each naming Omega_z and the value. At the bound itself, the saturated
+    sliding field of a pure spin (|T| <= mu P, every node slides). Corrected, the
+    instance gives a fresh instance's doubles."""
     from fmpy.fmi1 import FMICallException
 
     u = {"Vx": 5.0, "Vy": 0.002, "Omega_y": (5.0 - 0.003) / ex.Rx, "Omega_z": 0.8}
@@ -140,21 +159,21 @@ def test_bad_spin_input_is_refused_naming_it_and_the_instance_recovers(fmus, tar
     with Instance(fmus[target], "bad") as c:
         for name, value in u.items():
             c.set(name, value)
-        for value, text in ((math.nan, "nan"), (-math.inf, "-inf")):
+        for value, text, must in (
+            (math.nan, "nan", "finite"),
+            (-math.inf, "-inf", "finite"),
+            (1e308, "1e+308", "<= 1e+07"),
+            (-1e308, "-1e+308", ">= -1e+07"),
+        ):
             with pytest.raises(FMICallException) as e:
                 c.set("Omega_z", value)
-            assert e.value.status == ERROR
-            assert f"Omega_z = {text} is invalid: must be finite" in c.messages[-1][1]
+            said = f"Omega_z = {text} is invalid: must be {must}"
+            assert e.value.status == ERROR and said in c.messages[-1][1]
             with pytest.raises(FMICallException) as e:
                 c.get("Tx")
-            assert e.value.status == ERROR and f"Omega_z = {text}" in c.messages[-1][1]
-            assert c.step(1e-3) == DISCARD and f"Omega_z = {text}" in c.messages[-1][1]
-        c.set("Omega_z", 1e308)
-        with pytest.raises(FMICallException) as e:
-            c.get("Tx")
-        assert e.value.status == ERROR and "is not finite" in c.messages[-1][1]
-        assert c.step(1e-3) == DISCARD and "is not finite" in c.messages[-1][1]
-        c.set("Omega_z", 1e300)
+            assert e.value.status == ERROR and said in c.messages[-1][1]
+            assert c.step(1e-3) == DISCARD and said in c.messages[-1][1]
+        c.set("Omega_z", RATE_MAX)
         out = c.outputs()
         assert all(math.isfinite(v) for v in out.values())
         assert math.hypot(out["Tx"], out["Ty"]) <= MU_P * (1 + 1e-12)
@@ -162,6 +181,49 @@ def test_bad_spin_input_is_refused_naming_it_and_the_instance_recovers(fmus, tar
         c.set("Omega_z", u["Omega_z"])
         assert c.outputs() == want
         assert c.step(1e-3) == OK and c.outputs() == want
+
+
+@pytest.mark.parametrize("target", ["native", "pythonfmu"])
+def test_kinematic_inputs_are_refused_beyond_their_physical_range(fmus, target):
+    """Vx, Vy (|.| <= SPEED_MAX = 1e4 m/s), Omega_y, Omega_z (|.| <= RATE_MAX = 1e7 rad/s:
+    the body mode's bounds, body_model.within_range): the model description declares the
+    range, a value one ulp beyond answers fmi2Error naming the input and the value and
+    doStep fmi2Discard, the bound itself is taken. Every corner of that box (each input
+    at +- its bound, Vx also at 1 m/s and at standstill) gives finite forces within
+    Coulomb's bound |T| <= mu P (Eq. 35 over the contact) and |Mz| <= mu P max(a1, a2)
+    (|x tau_y - y tau_x| <= |r| |tau| within the ellipse)."""
+    import fmpy
+    from fmpy.fmi1 import FMICallException
+
+    bound = {"Vx": SPEED_MAX, "Vy": SPEED_MAX, "Omega_y": RATE_MAX, "Omega_z": RATE_MAX}
+    nominal = {"Vx": 5.0, "Vy": 0.0, "Omega_y": 5.0 / ex.Rx, "Omega_z": 0.0}
+    md = {v.name: v for v in fmpy.read_model_description(str(fmus[target])).modelVariables}
+    with Instance(fmus[target], "range") as c:
+        for name, b in bound.items():
+            assert (float(md[name].min), float(md[name].max)) == (-b, b), name
+            for sign in (1.0, -1.0):
+                beyond = sign * math.nextafter(b, math.inf)
+                with pytest.raises(FMICallException) as e:
+                    c.set(name, beyond)
+                said = f"{name} = {beyond!r} is invalid: must be "
+                assert e.value.status == ERROR and said in c.messages[-1][1], c.messages[-1]
+                assert c.step(1e-3) == DISCARD and said in c.messages[-1][1]
+                c.set(name, sign * b)
+                assert c.step(1e-3) == OK
+            c.set(name, nominal[name])
+        corners = 0
+        for Vx in (SPEED_MAX, -SPEED_MAX, 1.0, 0.0):
+            for sy, so, sz in np.ndindex(2, 2, 2):
+                u = {"Vx": Vx, "Vy": (-1) ** sy * SPEED_MAX, "Omega_y": (-1) ** so * RATE_MAX,
+                     "Omega_z": (-1) ** sz * RATE_MAX}  # fmt: skip
+                for name, value in u.items():
+                    c.set(name, value)
+                out = c.outputs()
+                assert all(math.isfinite(v) for v in out.values()), (u, out)
+                assert math.hypot(out["Tx"], out["Ty"]) <= MU_P * (1 + 1e-12), (u, out)
+                assert abs(out["Mz"]) <= MU_P * max(out["a1"], out["a2"]), (u, out)
+                corners += 1
+        assert corners == 32
 
 
 def test_directional_derivatives_with_spin_are_central_differences_of_the_outputs(fmus):

@@ -244,10 +244,11 @@ class ModelConfig:
         return problem
 
     def bounds(self, var: fv.Var) -> tuple[float | None, float | None]:
-        """(min, max) of ``var`` in the model description: min = max for fixed values."""
+        """(min, max) of ``var`` in the model description: min = max for fixed values,
+        none for an output (``Var.bounds``)."""
         if var.name in self.fixed:
             return self.fixed[var.name], self.fixed[var.name]
-        return var.min, var.max
+        return var.bounds(self.mode)
 
     @property
     def model_module(self) -> str:

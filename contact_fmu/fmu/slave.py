@@ -501,9 +501,13 @@ class ContactSlave(Fmi2Slave):
         answers fmi2Error (with the reasons logged) so that the importer stops."""
         self._init_problem = None
         built = self._build()
-        # the compiled parts the model tried to load (native, where the model imports it:
-        # not imported here, so that FMUs without compiled parts do not carry it)
+        # the compiled parts of the model (native, where the model imports it: not
+        # imported here, so that FMUs without compiled parts do not carry it), loaded now
+        # (a contact law loads its library at its first evaluation with spin) so that
+        # what cannot load is reported here
         native = sys.modules.get(f"{_PACKAGE}.native")
+        if native is not None:
+            native.library()
         for problem in getattr(native, "PROBLEMS", ()):
             self.log(problem, Fmi2Status.warning)
         if not built:

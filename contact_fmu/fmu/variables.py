@@ -38,9 +38,13 @@ UNITS: dict[str, dict[str, int]] = {
     "m/Pa": {"kg": -1, "m": 2, "s": 2},
 }
 
-# Physical ranges of the initial speeds and rates: beyond them the body's state (Vx and
-# the slip vx, Eq. 20) no longer resolves Omega_y = (Vx - vx)/Rx to the changes one
-# step makes (eps |Vx| / Rx against h Rx mu P / Iy; docs/reliability.md)
+# Physical ranges of the speeds and rates (the initial values, the body's state, the
+# force element's kinematic inputs): beyond them the body's state (Vx and the slip vx,
+# Eq. 20) no longer resolves Omega_y = (Vx - vx)/Rx to the changes one step makes
+# (eps |Vx| / Rx against h Rx mu P / Iy; docs/reliability.md), and the strip march of
+# the law with spin overflows (its increments grow as Omega_z a1 dx/(|Vx| k)). Far
+# beyond any wheel, bearing or vehicle. stepper.c's CF_SPEED_MAX, CF_RATE_MAX: the same
+# numbers (tests/test_native.py keeps them equal).
 SPEED_MAX = 1e4  # m/s
 RATE_MAX = 1e7  # rad/s
 
@@ -104,6 +108,15 @@ class Var:
     feedthrough: tuple[str, ...] = field(default=())
     laws: tuple[str, ...] | None = None
     tunable: bool = False
+
+    def bounds(self, mode: str) -> tuple[float | None, float | None]:
+        """(min, max) of the model description in ``mode``: the declared range where the
+        importer sets the variable (a parameter or an input), none where the model
+        computes it (an output: a range there would be a promise on the model's results;
+        the rigid_body mode's Vx, for one, has no bound of its own)."""
+        if self.causality[mode] == OUTPUT:
+            return None, None
+        return self.min, self.max
 
     def check(self, value: object) -> str | None:
         """None if ``value`` is admissible, else the requirement it violates."""
@@ -395,30 +408,38 @@ VARIABLES: tuple[Var, ...] = (
     Var(
         "Vx",
         "m/s",
-        "Speed of the centre of mass along the rolling direction",
+        "Speed of the centre of mass along the rolling direction (as an input: abs <= 1e4 m/s)",
         {"body": OUTPUT, "contact": INPUT, "rigid_body": OUTPUT},
         5.6418958354775635,
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
     ),
     Var(
         "Vy",
         "m/s",
-        "Lateral speed of the centre of mass",
+        "Lateral speed of the centre of mass (as an input: abs <= 1e4 m/s)",
         {"body": OUTPUT, "contact": INPUT},
         needs="vy",
+        min=-SPEED_MAX,
+        max=SPEED_MAX,
     ),
     Var(
         "Omega_y",
         "rad/s",
-        "Angular velocity about the axle",
+        "Angular velocity about the axle (as an input: abs <= 1e7 rad/s)",
         {"body": OUTPUT, "contact": INPUT, "rigid_body": OUTPUT},
         112.83791670955127,
+        min=-RATE_MAX,
+        max=RATE_MAX,
     ),
     Var(
         "Omega_z",
         "rad/s",
-        "Angular velocity about the vertical axis (spin)",
+        "Angular velocity about the vertical axis (spin; as an input: abs <= 1e7 rad/s)",
         {"body": OUTPUT, "contact": INPUT},
         needs="spin",
+        min=-RATE_MAX,
+        max=RATE_MAX,
     ),
     # ---- contact outputs (the force is an input of the rigid body) -------------------------
     Var(

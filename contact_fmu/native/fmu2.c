@@ -1219,12 +1219,11 @@ static void law_jacobian(const cf_params *p, double vx, double vy, double V, dou
         return;
     }
     const double ex = vx / s, ey = vy / s, beta = s * c / aV;
-    double h = 1.0, dh = 0.0, g = 0.0, dg = 0.0;
+    double h = 1.0, dh = 0.0, dg = 0.0; /* g = beta (h - 1)/2 enters as g/|v| (g_s) */
     if (beta < p->beta_full_slip) {
         const double m = m_of(beta);
         h = py_min((2.0 / M_PI) * H_m(beta, m), 1.0);
         dh = slope_m(beta, m);
-        g = 0.5 * beta * (h - 1.0);
         dg = 0.5 * (h - 1.0) + 0.5 * beta * dh;
     }
     const double per_beta = beta < p->beta_series
