@@ -574,6 +574,66 @@ def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(
         assert all(s < FATAL for s, _ in b.messages)
 
 
+NOT_A_STATE = "is not an FMU state of this instance (never given, or freed)"
+
+
+def test_a_pointer_that_is_not_a_live_state_of_the_instance_is_refused(fig13, tmp_path):
+    """FMI 2.0 forbids passing back a freed state (set, or freed twice), a state of
+    another instance of the same binary (one alive, one freed with its instance) or any
+    other pointer (here one into a valid buffer). Both FMUs keep the states they handed
+    out and answer each state call with such a pointer with fmi2Error and the same
+    message, instead of reading it (freed memory: the sanitized importer below shows
+    the native FMU's guard at work); the instance's outputs are unchanged, it steps on,
+    and the other instance's state still restores there."""
+    from ctypes import addressof, byref, c_size_t, c_void_p, create_string_buffer
+
+    import fmpy
+
+    fmpy.extract(str(fig13), str(tmp_path))  # one binary for the three instances
+    with Instance(fig13, "b", unzip_dir=tmp_path) as b:
+        steps(b, 1)
+        foreign = b.fmu.getFMUstate()
+        pointers = {"foreign": foreign.value}
+        with Instance(fig13, "c", unzip_dir=tmp_path) as c:
+            pointers["of a freed instance"] = c.fmu.getFMUstate().value
+        # the last instance made: fmpy's logger proxy reports to its callback alone
+        with Instance(fig13, "a", unzip_dir=tmp_path) as a:
+            steps(a, 2)
+            good = a.serialize_state(a.get_state())
+            freed = a.fmu.getFMUstate()
+            pointers["freed"] = freed.value
+            a.fmu.freeFMUstate(freed)
+            buffer = create_string_buffer(good, len(good))  # a state's bytes, no state
+            pointers["into a buffer"] = addressof(buffer) + 64
+            before = a.outputs()
+            dll, comp, size, out = a.fmu.dll, a.fmu.component, c_size_t(0), create_string_buffer(9)
+            for case, value in pointers.items():
+                p = c_void_p(value)
+                calls = {
+                    "fmi2SetFMUstate": lambda: dll.fmi2SetFMUstate(comp, p),  # noqa: B023
+                    "fmi2FreeFMUstate": lambda: dll.fmi2FreeFMUstate(comp, byref(p)),  # noqa: B023
+                    "fmi2SerializedFMUstateSize": (
+                        lambda: dll.fmi2SerializedFMUstateSize(comp, p, byref(size))  # noqa: B023
+                    ),
+                    "fmi2SerializeFMUstate": lambda: dll.fmi2SerializeFMUstate(comp, p, out, 9),  # noqa: B023
+                    "fmi2GetFMUstate": lambda: dll.fmi2GetFMUstate(comp, byref(p)),  # noqa: B023
+                    "fmi2DeSerializeFMUstate": (
+                        lambda: dll.fmi2DeSerializeFMUstate(comp, buffer, len(good), byref(p))  # noqa: B023
+                    ),
+                }
+                for call, answer in calls.items():
+                    assert answer() == ERROR, (case, call)
+                    assert a.messages[-1] == (ERROR, f"{call}: {hex(value)} {NOT_A_STATE}"), case
+                    assert p.value == value, (case, call)  # the caller's pointer as it was
+            nothing = c_void_p(None)
+            assert dll.fmi2FreeFMUstate(comp, byref(nothing)) == OK  # FMI 2.0: a no-op
+            assert a.outputs() == before
+            steps(a, 1)
+        b.set_state((foreign, b.time))
+        steps(b, 1)
+        b.free_state((foreign, b.time))
+
+
 def test_instances_are_independent_also_on_threads(native_fmus):
     """Two instances stepped at once on two threads with different loads give each the
     doubles of a lone run: no shared mutable state."""
