@@ -847,8 +847,12 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     and UBSan (float-to-int overflow included, no recovery): Fig. 13 to the same doubles,
     then 2 x 2500 random calls (extreme and non-finite values of every variable, zero,
     negative, non-finite and huge steps, steps at the wrong time, states got, set,
-    serialized, damaged and refused, resets) with no sanitizer report, no fmi2Fatal, no
-    non-finite output served with fmi2OK and no damaged bytes accepted."""
+    serialized, damaged and refused, state calls with a freed state, another live or
+    freed instance's or a pointer into a buffer, resets) with no sanitizer report, no
+    fmi2Fatal, no non-finite output served with fmi2OK, no damaged bytes and no pointer
+    that is not a live state of the instance accepted (without fmu2.c's table of live
+    states, ASan reports the use after free). Then 3000 states held at once, set and
+    freed in shuffled orders: each set until freed, each refused after."""
     unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
     try:
         exe = _sanitized(tmp_path, unzip)
@@ -858,7 +862,10 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     short = tmp_path / "params.txt"
     short.write_text(_spec(md, scenes["fig13"], scenes["fig13"].case("eta = 3"), rows=False))
     counts = _fuzz(exe, md, short, 2, 2500)
-    assert counts["ok"] > 1700 and counts["discard"] > 170, counts
+    assert counts["ok"] > 1700 and counts["discard"] > 170 and counts["refused"] > 100, counts
+    args = [str(exe), "-", md.guid, "fuzz", "states", str(short), "3000"]
+    proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0 and "Sanitizer" not in proc.stderr, proc.stderr[-3000:]
 
 
 def _fuzz(exe: Path, md, spec: Path, seeds: int, calls: int, env=None) -> dict[str, int]:
@@ -948,6 +955,7 @@ def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly
     env = {**os.environ, "FMU_RESOURCES": (unzip / "resources").as_uri()}
     counts = _fuzz(exe, md, spec, 1, calls, env)
     assert counts["ok"] > calls // 3 and counts["error"] > calls // 30, counts
+    assert counts["refused"] > calls // 100, counts
 
 
 def test_libcosim_runs_the_native_fmu_to_fmpys_numbers(scenes, native_fmus, fig13_expected):
