@@ -634,15 +634,26 @@ def test_a_pointer_that_is_not_a_live_state_of_the_instance_is_refused(fig13, tm
         b.free_state((foreign, b.time))
 
 
-def test_instances_are_independent_also_on_threads(native_fmus):
-    """Two instances stepped at once on two threads with different loads give each the
-    doubles of a lone run: no shared mutable state."""
+def test_instances_are_independent_also_on_threads(native_fmus, tmp_path):
+    """Two instances of one loaded binary stepped at once on two threads with different
+    loads, each getting and freeing FMU states on the way (its own table of live
+    states; those left are freed with the instance), give each the doubles of a lone
+    run: no shared mutable state."""
+    import fmpy
+
+    fmpy.extract(str(native_fmus["fig13"]), str(tmp_path))
 
     def run(my: float, out: list) -> None:
-        with body(native_fmus["fig13"]) as b:
+        with Instance(native_fmus["fig13"], "body", unzip_dir=tmp_path) as b:
+            b.set("Fx_ex", F)
             b.set("My_ex", my)
-            for _ in range(200):
+            held = []
+            for k in range(200):
+                if k % 5 == 0:
+                    held.append(b.get_state())
                 assert b.step(1.75e-4) == OK
+            for state in held[::2]:
+                b.free_state(state)
             out.append(b.outputs())
 
     alone = ([], [])
