@@ -5,6 +5,11 @@
  *   native_importer LIB GUID IDENT bench SPEC H N     N steps of H, inputs at their
  *                                                   starts: steps per second (the
  *                                                   master's setReal, doStep, getReal)
+ *   native_importer LIB GUID IDENT states SPEC N      N FMU states held at once: got,
+ *                                                   set, sized (the lookup alone) and
+ *                                                   freed in shuffled orders (each
+ *                                                   freed one refused after): ns per
+ *                                                   get, set, size and free
  *
  * LIB is the FMU's shared library, opened with dlopen; built with -DLINKED (the
  * sanitizer build: the FMU's sources compiled into this program) the functions are
@@ -14,8 +19,10 @@
  *   line 3: parameters set before initialisation    "n vr value..." (values as %a)
  *   then, for "run", one row per step: "t h u_1 ... u_n" (hex floats)
  * "run" prints each step's outputs as hex floats, one line per step; "fuzz" prints a
- * count of the statuses. Exit status: 0 fine, 2 usage, 3 an FMI answer not allowed
- * (fmi2Fatal, a non-finite output served with fmi2OK, damaged bytes accepted).
+ * count of the statuses (and of the pointers that are no state of the instance refused,
+ * "refused"). Exit status: 0 fine, 2 usage, 3 an FMI answer not allowed (fmi2Fatal, a
+ * non-finite output served with fmi2OK, damaged bytes or a pointer that is no state of
+ * the instance accepted).
  * FMU_RESOURCES in the environment: the resource location (a file URI) to instantiate
  * with.
  */
@@ -212,6 +219,58 @@ static double extreme(void) {
     }
 }
 
+/* A state call with a pointer that is not a live state of c (FMI 2.0 forbids it): a state
+ * of c freed just before (set, freed twice, ...), a live state of another instance, one
+ * of an instance freed since, or a pointer into a buffer. Each must answer fmi2Error and
+ * leave the pointer given as it was: 1 if so. (A freed state of c is made anew each
+ * time: the allocator may hand its memory to a later state of c.) */
+static int hostile_state(const api *f, fmi2Component c, fmi2Component other,
+                         fmi2FMUstate alien, fmi2FMUstate saved, const char *guid,
+                         const char *ident, const fmi2CallbackFunctions *cb, const spec *s) {
+    static unsigned char junk[4096];
+    fmi2FMUstate p = NULL;
+    switch (rnd() % 4) {
+    case 0:
+        if (f->GetState(c, &p) != fmi2OK) return 1; /* refused: nothing to test */
+        {
+            fmi2FMUstate q = p; /* its address kept */
+            if (f->FreeState(c, &q) != fmi2OK || q != NULL) return 0;
+        }
+        break;
+    case 1: p = other && alien ? alien : junk; break;
+    case 2: {
+        fmi2Component gone = start(f, guid, ident, cb, s);
+        if (gone == NULL || f->GetState(gone, &p) != fmi2OK) p = junk + 8;
+        if (gone) f->FreeInstance(gone); /* and its states */
+        break;
+    }
+    default:
+        for (size_t i = 0; i < sizeof junk; i++) junk[i] = (unsigned char)rnd();
+        p = junk + 8 * (rnd() % (sizeof junk / 8 - 1));
+    }
+    fmi2FMUstate q = p;
+    size_t size = 0;
+    unsigned char bytes[64];
+    fmi2Status st;
+    switch (rnd() % 6) {
+    case 0: st = f->SetState(c, p); break;
+    case 1: st = f->FreeState(c, &q); break;
+    case 2: st = f->StateSize(c, p, &size); break;
+    case 3: st = f->Serialize(c, p, (fmi2Byte *)bytes, sizeof bytes); break;
+    case 4: st = f->GetState(c, &q); break;
+    default: { /* intact bytes of a live state into p */
+        if (saved == NULL || f->StateSize(c, saved, &size) != fmi2OK) return 1;
+        unsigned char *b = malloc(size);
+        if (b == NULL || f->Serialize(c, saved, (fmi2Byte *)b, size) != fmi2OK) return 0;
+        st = f->Deserialize(c, (const fmi2Byte *)b, size, &q);
+        free(b);
+    }
+    }
+    if (st == fmi2Error && q == p) return 1;
+    fprintf(stderr, "a pointer that is no state of the instance answered %d\n", (int)st);
+    return 0;
+}
+
 static int fuzz(const api *f, const char *guid, const char *ident, FILE *in, unsigned long long seed,
                 long n) {
     spec s;
@@ -221,7 +280,10 @@ static int fuzz(const api *f, const char *guid, const char *ident, FILE *in, uns
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c = start(f, guid, ident, &cb, &s);
     if (c == NULL) return 3;
-    long count[5] = {0};
+    fmi2Component other = start(f, guid, ident, &cb, &s); /* its state is foreign to c */
+    fmi2FMUstate alien = NULL;
+    if (other) f->GetState(other, &alien);
+    long count[5] = {0}, refused = 0;
     double t = 0.0;
     fmi2FMUstate saved = NULL;
     /* every variable a random call may name: inputs, parameters, outputs, and one past */
@@ -258,8 +320,12 @@ static int fuzz(const api *f, const char *guid, const char *ident, FILE *in, uns
             }
             break;
         }
-        case 6: /* get or set a state */
-            if (saved == NULL || rnd() % 2) st = f->GetState(c, &saved);
+        case 6: /* get or set a state, or a state call with what is not a state of c */
+            if (rnd() % 3 == 0) {
+                if (!hostile_state(f, c, other, alien, saved, guid, ident, &cb, &s)) return 3;
+                refused++;
+                st = fmi2Error;
+            } else if (saved == NULL || rnd() % 2) st = f->GetState(c, &saved);
             else st = f->SetState(c, saved);
             break;
         case 7: { /* serialize, damage, deserialize: refused; the intact bytes accepted */
@@ -316,8 +382,73 @@ static int fuzz(const api *f, const char *guid, const char *ident, FILE *in, uns
     if (saved) f->FreeState(c, &saved);
     f->Terminate(c);
     f->FreeInstance(c);
-    printf("ok %ld warning %ld discard %ld error %ld messages %lu\n", count[0], count[1],
-           count[2], count[3], messages);
+    if (other) f->FreeInstance(other); /* alien with it */
+    printf("ok %ld warning %ld discard %ld error %ld messages %lu refused %ld\n", count[0],
+           count[1], count[2], count[3], messages, refused);
+    return 0;
+}
+
+/* ---- many states ------------------------------------------------------------------ */
+static double seconds(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void shuffle(fmi2FMUstate *a, long n) {
+    for (long i = n - 1; i > 0; i--) {
+        long j = (long)(rnd() % (unsigned long long)(i + 1));
+        fmi2FMUstate x = a[i];
+        a[i] = a[j], a[j] = x;
+    }
+}
+
+static int states(const api *f, const char *guid, const char *ident, FILE *in, long n) {
+    spec s;
+    if (read_spec(in, &s) || n < 1) return 2;
+    rng_state = 0x9E3779B97F4A7C15ull;
+    quiet = 1;
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = start(f, guid, ident, &cb, &s);
+    fmi2FMUstate *held = calloc((size_t)n, sizeof *held);
+    if (c == NULL || held == NULL) return 3;
+    double t0 = seconds();
+    for (long i = 0; i < n; i++)
+        if (f->GetState(c, &held[i]) != fmi2OK) return 3;
+    double t1 = seconds();
+    shuffle(held, n);
+    for (long i = 0; i < n; i++)
+        if (f->SetState(c, held[i]) != fmi2OK) return 3;
+    double t2 = seconds();
+    shuffle(held, n);
+    size_t size = 0;
+    for (long i = 0; i < n; i++) /* the lookup alone: no state's memory is touched */
+        if (f->StateSize(c, held[i], &size) != fmi2OK) return 3;
+    double t2b = seconds();
+    for (long i = 0; i < n; i++) {
+        fmi2FMUstate q = held[i];
+        if (f->FreeState(c, &q) != fmi2OK || q != NULL) return 3;
+    }
+    double t3 = seconds();
+    /* every freed one refused; then n anew, half freed: the others still set (the
+     * set's deletions keep every live state findable) */
+    for (long i = 0; i < n; i++)
+        if (f->SetState(c, held[i]) != fmi2Error) return 3;
+    for (long i = 0; i < n; i++) {
+        held[i] = NULL;
+        if (f->GetState(c, &held[i]) != fmi2OK) return 3;
+    }
+    for (long i = 0; i < n; i += 2) {
+        fmi2FMUstate q = held[i];
+        if (f->FreeState(c, &q) != fmi2OK) return 3;
+    }
+    for (long i = 0; i < n; i++)
+        if (f->SetState(c, held[i]) != (i % 2 ? fmi2OK : fmi2Error)) return 3;
+    f->FreeInstance(c); /* with the odd ones */
+    free(held);
+    printf("get_ns %.1f set_ns %.1f size_ns %.1f free_ns %.1f\n", 1e9 * (t1 - t0) / (double)n,
+           1e9 * (t2 - t1) / (double)n, 1e9 * (t2b - t2) / (double)n,
+           1e9 * (t3 - t2b) / (double)n);
     return 0;
 }
 
@@ -362,6 +493,8 @@ int main(int argc, char **argv) {
     if (strcmp(argv[4], "run") == 0) rc = run(&f, argv[2], argv[3], in);
     else if (strcmp(argv[4], "bench") == 0 && argc >= 8)
         rc = bench(&f, argv[2], argv[3], in, strtod(argv[6], NULL), strtol(argv[7], NULL, 10));
+    else if (strcmp(argv[4], "states") == 0 && argc >= 7)
+        rc = states(&f, argv[2], argv[3], in, strtol(argv[6], NULL, 10));
     else if (strcmp(argv[4], "fuzz") == 0 && argc >= 8)
         rc = fuzz(&f, argv[2], argv[3], in, strtoull(argv[6], NULL, 10), strtol(argv[7], NULL, 10));
     else rc = 2;

@@ -574,15 +574,86 @@ def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(
         assert all(s < FATAL for s, _ in b.messages)
 
 
-def test_instances_are_independent_also_on_threads(native_fmus):
-    """Two instances stepped at once on two threads with different loads give each the
-    doubles of a lone run: no shared mutable state."""
+NOT_A_STATE = "is not an FMU state of this instance (never given, or freed)"
+
+
+def test_a_pointer_that_is_not_a_live_state_of_the_instance_is_refused(fig13, tmp_path):
+    """FMI 2.0 forbids passing back a freed state (set, or freed twice), a state of
+    another instance of the same binary (one alive, one freed with its instance) or any
+    other pointer (here one into a valid buffer). Both FMUs keep the states they handed
+    out and answer each state call with such a pointer with fmi2Error and the same
+    message, instead of reading it (freed memory: the sanitized importer below shows
+    the native FMU's guard at work); the instance's outputs are unchanged, it steps on,
+    and the other instance's state still restores there."""
+    from ctypes import addressof, byref, c_size_t, c_void_p, create_string_buffer
+
+    import fmpy
+
+    fmpy.extract(str(fig13), str(tmp_path))  # one binary for the three instances
+    with Instance(fig13, "b", unzip_dir=tmp_path) as b:
+        steps(b, 1)
+        foreign = b.fmu.getFMUstate()
+        pointers = {"foreign": foreign.value}
+        with Instance(fig13, "c", unzip_dir=tmp_path) as c:
+            pointers["of a freed instance"] = c.fmu.getFMUstate().value
+        # the last instance made: fmpy's logger proxy reports to its callback alone
+        with Instance(fig13, "a", unzip_dir=tmp_path) as a:
+            steps(a, 2)
+            good = a.serialize_state(a.get_state())
+            freed = a.fmu.getFMUstate()
+            pointers["freed"] = freed.value
+            a.fmu.freeFMUstate(freed)
+            buffer = create_string_buffer(good, len(good))  # a state's bytes, no state
+            pointers["into a buffer"] = addressof(buffer) + 64
+            before = a.outputs()
+            dll, comp, size, out = a.fmu.dll, a.fmu.component, c_size_t(0), create_string_buffer(9)
+            for case, value in pointers.items():
+                p = c_void_p(value)
+                calls = {
+                    "fmi2SetFMUstate": lambda: dll.fmi2SetFMUstate(comp, p),  # noqa: B023
+                    "fmi2FreeFMUstate": lambda: dll.fmi2FreeFMUstate(comp, byref(p)),  # noqa: B023
+                    "fmi2SerializedFMUstateSize": (
+                        lambda: dll.fmi2SerializedFMUstateSize(comp, p, byref(size))  # noqa: B023
+                    ),
+                    "fmi2SerializeFMUstate": lambda: dll.fmi2SerializeFMUstate(comp, p, out, 9),  # noqa: B023
+                    "fmi2GetFMUstate": lambda: dll.fmi2GetFMUstate(comp, byref(p)),  # noqa: B023
+                    "fmi2DeSerializeFMUstate": (
+                        lambda: dll.fmi2DeSerializeFMUstate(comp, buffer, len(good), byref(p))  # noqa: B023
+                    ),
+                }
+                for call, answer in calls.items():
+                    assert answer() == ERROR, (case, call)
+                    assert a.messages[-1] == (ERROR, f"{call}: {hex(value)} {NOT_A_STATE}"), case
+                    assert p.value == value, (case, call)  # the caller's pointer as it was
+            nothing = c_void_p(None)
+            assert dll.fmi2FreeFMUstate(comp, byref(nothing)) == OK  # FMI 2.0: a no-op
+            assert a.outputs() == before
+            steps(a, 1)
+        b.set_state((foreign, b.time))
+        steps(b, 1)
+        b.free_state((foreign, b.time))
+
+
+def test_instances_are_independent_also_on_threads(native_fmus, tmp_path):
+    """Two instances of one loaded binary stepped at once on two threads with different
+    loads, each getting and freeing FMU states on the way (its own table of live
+    states; those left are freed with the instance), give each the doubles of a lone
+    run: no shared mutable state."""
+    import fmpy
+
+    fmpy.extract(str(native_fmus["fig13"]), str(tmp_path))
 
     def run(my: float, out: list) -> None:
-        with body(native_fmus["fig13"]) as b:
+        with Instance(native_fmus["fig13"], "body", unzip_dir=tmp_path) as b:
+            b.set("Fx_ex", F)
             b.set("My_ex", my)
-            for _ in range(200):
+            held = []
+            for k in range(200):
+                if k % 5 == 0:
+                    held.append(b.get_state())
                 assert b.step(1.75e-4) == OK
+            for state in held[::2]:
+                b.free_state(state)
             out.append(b.outputs())
 
     alone = ([], [])
@@ -787,8 +858,12 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     and UBSan (float-to-int overflow included, no recovery): Fig. 13 to the same doubles,
     then 2 x 2500 random calls (extreme and non-finite values of every variable, zero,
     negative, non-finite and huge steps, steps at the wrong time, states got, set,
-    serialized, damaged and refused, resets) with no sanitizer report, no fmi2Fatal, no
-    non-finite output served with fmi2OK and no damaged bytes accepted."""
+    serialized, damaged and refused, state calls with a freed state, another live or
+    freed instance's or a pointer into a buffer, resets) with no sanitizer report, no
+    fmi2Fatal, no non-finite output served with fmi2OK, no damaged bytes and no pointer
+    that is not a live state of the instance accepted (without fmu2.c's table of live
+    states, ASan reports the use after free). Then 3000 states held at once, set and
+    freed in shuffled orders: each set until freed, each refused after."""
     unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
     try:
         exe = _sanitized(tmp_path, unzip)
@@ -798,7 +873,10 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     short = tmp_path / "params.txt"
     short.write_text(_spec(md, scenes["fig13"], scenes["fig13"].case("eta = 3"), rows=False))
     counts = _fuzz(exe, md, short, 2, 2500)
-    assert counts["ok"] > 1700 and counts["discard"] > 170, counts
+    assert counts["ok"] > 1700 and counts["discard"] > 170 and counts["refused"] > 100, counts
+    args = [str(exe), "-", md.guid, "fuzz", "states", str(short), "3000"]
+    proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0 and "Sanitizer" not in proc.stderr, proc.stderr[-3000:]
 
 
 def _fuzz(exe: Path, md, spec: Path, seeds: int, calls: int, env=None) -> dict[str, int]:
@@ -888,6 +966,7 @@ def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly
     env = {**os.environ, "FMU_RESOURCES": (unzip / "resources").as_uri()}
     counts = _fuzz(exe, md, spec, 1, calls, env)
     assert counts["ok"] > calls // 3 and counts["error"] > calls // 30, counts
+    assert counts["refused"] > calls // 100, counts
 
 
 def test_libcosim_runs_the_native_fmu_to_fmpys_numbers(scenes, native_fmus, fig13_expected):

@@ -353,15 +353,20 @@ static int live_or_refuse(shim *s, fmi2FMUstate st, const char *call) {
     return 0;
 }
 
+/* *state given to be overwritten (FMI 2.0: a live state, or NULL for a new one): a
+ * live one is freed, a new one takes its place; any other pointer is refused */
+static fmi2Status release_given(shim *s, fmi2FMUstate *state, const char *call) {
+    if (*state == NULL) return fmi2OK;
+    if (!live_or_refuse(s, *state, call)) return fmi2Error;
+    return fmi2FreeFMUstate(s, state);
+}
+
 FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     shim *s = c;
     fmi2FMUstate st = NULL;
-    fmi2Status status;
+    fmi2Status status, freed;
     if (s == NULL || state == NULL) return fmi2Error;
-    if (*state != NULL && find_state(s, *state) >= 0) { /* update in place: a new one */
-        fmi2Status freed = fmi2FreeFMUstate(c, state);
-        if (freed > fmi2Warning) return freed;
-    }
+    if ((freed = release_given(s, state, "fmi2GetFMUstate")) > fmi2Warning) return freed;
     s->cell = fmi2OK;
     status = worst(s->api.GetFMUstate(s->inner, &st), s->cell);
     return adopt(s, state, st, status);
@@ -486,6 +491,8 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b
                "fmi2DeSerializeFMUstate: the %zu bytes are refused: %s", size, why);
         return fmi2Error;
     }
+    if ((status = release_given(s, state, "fmi2DeSerializeFMUstate")) > fmi2Warning)
+        return status;
     s->cell = fmi2OK;
     status = worst(s->api.DeSerializeFMUstate(s->inner, bytes + head, size - head, &st),
                    s->cell);

@@ -131,6 +131,8 @@ typedef struct {
     spin_grid *grid;              /* CF_GRID only */
     double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
     unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
+    cf_core **states;             /* the live FMU states handed out: an open-addressing */
+    size_t n_states, cap_states;  /* set of pointers (NULL: empty slot), cap a power of 2 */
 } Inst;
 
 /* the creep-force table's arrays into p (after set_constants) */
@@ -913,6 +915,9 @@ void fmi2FreeInstance(fmi2Component c) {
     Inst *I = (Inst *)c;
     if (I == NULL) return;
     fmi2CallbackFreeMemory release = I->cb.freeMemory;
+    for (size_t i = 0; i < I->cap_states; i++) /* the states the importer did not free */
+        if (I->states[i]) release(I->states[i]);
+    if (I->states) release(I->states);
     if (I->grid) release(I->grid);
     if (I->table) release(I->table);
     release(I->name);
@@ -1439,15 +1444,89 @@ static void sanitize(cf_core *c) {
     c->next_bad = top;
 }
 
+/* The live states: FMI 2.0 forbids passing back a freed state or one of another
+ * instance, but a pointer that is not a live state of this instance is refused
+ * (fmi2Error, the pythonfmu FMU's words: pythonfmu_shim.c) instead of being read. The
+ * pointer alone is looked up (a freed or foreign one cannot be dereferenced), in a hash
+ * set: get, set and free stay O(1) with thousands of states held. */
+static size_t slot_of(const Inst *I, const void *st) {
+    uint64_t x = (uint64_t)(uintptr_t)st * 0x9E3779B97F4A7C15ull; /* Fibonacci hashing */
+    return (size_t)(x >> 32) & (I->cap_states - 1);
+}
+
+static int live(const Inst *I, const void *st) {
+    if (st == NULL || I->cap_states == 0) return 0;
+    for (size_t i = slot_of(I, st);; i = (i + 1) & (I->cap_states - 1)) {
+        if (I->states[i] == st) return 1;
+        if (I->states[i] == NULL) return 0;
+    }
+}
+
+static void put(Inst *I, cf_core *st) { /* room known to be there */
+    size_t i = slot_of(I, st);
+    while (I->states[i] != NULL) i = (i + 1) & (I->cap_states - 1);
+    I->states[i] = st;
+    I->n_states++;
+}
+
+/* a new state into the set (at most half full), 0 when out of memory */
+static int keep(Inst *I, cf_core *st) {
+    if (2 * (I->n_states + 1) > I->cap_states) {
+        size_t cap = I->cap_states ? 2 * I->cap_states : 16, old = I->cap_states;
+        cf_core **grown = (cf_core **)I->cb.allocateMemory(cap, sizeof *grown);
+        if (grown == NULL) return 0;
+        memset(grown, 0, cap * sizeof *grown);
+        cf_core **was = I->states;
+        I->states = grown, I->cap_states = cap, I->n_states = 0;
+        for (size_t i = 0; i < old; i++)
+            if (was[i]) put(I, was[i]);
+        if (was) I->cb.freeMemory(was);
+    }
+    put(I, st);
+    return 1;
+}
+
+static void forget(Inst *I, const void *st) { /* linear probing's backward-shift delete */
+    const size_t mask = I->cap_states - 1;
+    size_t i = slot_of(I, st);
+    while (I->states[i] != st) i = (i + 1) & mask;
+    for (size_t j = (i + 1) & mask; I->states[j] != NULL; j = (j + 1) & mask) {
+        const size_t home = slot_of(I, I->states[j]);
+        if (((j - home) & mask) >= ((j - i) & mask)) { /* its probe passes i: move it */
+            I->states[i] = I->states[j];
+            i = j;
+        }
+    }
+    I->states[i] = NULL;
+    I->n_states--;
+}
+
+static int live_or_refuse(const Inst *I, const void *st, const char *call) {
+    if (live(I, st)) return 1;
+    say(I, fmi2Error, "%s: %p is not an FMU state of this instance (never given, or freed)",
+        call, st);
+    return 0;
+}
+
+/* *state: NULL for a new state, else a live one to overwrite (FMI 2.0); NULL if out of
+ * memory or refused (logged) */
+static cf_core *state_to_fill(Inst *I, fmi2FMUstate *state, const char *call) {
+    if (*state != NULL) return live_or_refuse(I, *state, call) ? (cf_core *)*state : NULL;
+    cf_core *s = (cf_core *)I->cb.allocateMemory(1, sizeof(cf_core));
+    if (s != NULL && keep(I, s)) return s;
+    if (s != NULL) I->cb.freeMemory(s);
+    say(I, fmi2Error, "%s: out of memory", call);
+    return NULL;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     INST(fmi2GetFMUstate);
-    if (state == NULL) return fmi2Error;
-    cf_core *s = (cf_core *)*state;
-    if (s == NULL) s = (cf_core *)I->cb.allocateMemory(1, sizeof(cf_core));
-    if (s == NULL) {
-        say(I, fmi2Error, "fmi2GetFMUstate: out of memory");
+    if (state == NULL) {
+        say(I, fmi2Error, "fmi2GetFMUstate: no place for the state given");
         return fmi2Error;
     }
+    cf_core *s = state_to_fill(I, state, "fmi2GetFMUstate");
+    if (s == NULL) return fmi2Error;
     *s = I->c;
     *state = s;
     return fmi2OK;
@@ -1459,6 +1538,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
         say(I, fmi2Error, "fmi2SetFMUstate: no state given");
         return fmi2Error;
     }
+    if (!live_or_refuse(I, state, "fmi2SetFMUstate")) return fmi2Error;
     I->c = *(const cf_core *)state;
     sanitize(&I->c);
     attach_table(I, &I->c.p);
@@ -1468,10 +1548,15 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
     INST(fmi2FreeFMUstate);
-    if (state != NULL && *state != NULL) {
-        I->cb.freeMemory(*state);
-        *state = NULL;
+    if (state == NULL) {
+        say(I, fmi2Error, "fmi2FreeFMUstate: no state given");
+        return fmi2Error;
     }
+    if (*state == NULL) return fmi2OK; /* the standard: nothing to free */
+    if (!live_or_refuse(I, *state, "fmi2FreeFMUstate")) return fmi2Error;
+    forget(I, *state);
+    I->cb.freeMemory(*state);
+    *state = NULL;
     return fmi2OK;
 }
 
@@ -1492,7 +1577,11 @@ static size_t serialized_size(void) {
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
     INST(fmi2SerializedFMUstateSize);
-    if (state == NULL || size == NULL) return fmi2Error;
+    if (size == NULL) {
+        say(I, fmi2Error, "fmi2SerializedFMUstateSize: no place for the size given");
+        return fmi2Error;
+    }
+    if (!live_or_refuse(I, state, "fmi2SerializedFMUstateSize")) return fmi2Error;
     *size = serialized_size();
     return fmi2OK;
 }
@@ -1500,8 +1589,9 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte out[],
                                  size_t size) {
     INST(fmi2SerializeFMUstate);
-    if (state == NULL || out == NULL || size < serialized_size()) {
-        say(I, fmi2Error, "fmi2SerializeFMUstate: no state, or a buffer of %zu bytes (%zu "
+    if (!live_or_refuse(I, state, "fmi2SerializeFMUstate")) return fmi2Error;
+    if (out == NULL || size < serialized_size()) {
+        say(I, fmi2Error, "fmi2SerializeFMUstate: no buffer, or one of %zu bytes (%zu "
             "needed)", size, serialized_size());
         return fmi2Error;
     }
@@ -1551,12 +1641,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte in[], size_t 
         say(I, fmi2Error, "fmi2DeSerializeFMUstate: the bytes are refused: %s", why);
         return fmi2Error;
     }
-    cf_core *s = (cf_core *)*state;
-    if (s == NULL) s = (cf_core *)I->cb.allocateMemory(1, sizeof(cf_core));
-    if (s == NULL) {
-        say(I, fmi2Error, "fmi2DeSerializeFMUstate: out of memory");
-        return fmi2Error;
-    }
+    cf_core *s = state_to_fill(I, state, "fmi2DeSerializeFMUstate");
+    if (s == NULL) return fmi2Error;
     memcpy(s, p + 16 + glen + 8, sizeof(cf_core));
     sanitize(s);
     *state = s;
