@@ -27,11 +27,13 @@ from contact_fmu.report.output import replace_section
 from contact_fmu.scenario import load
 from fmu_build import native_fmu
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_native import compile_importer, importer_rate  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
 SECTION = "## Native FMU: FMU states held at once"
-IMPORTER = ROOT / "tests" / "native_importer.c"
 
 
 def measure(held: list[int], runs: int = 3) -> tuple[dict[int, dict[str, float]], float]:
@@ -46,14 +48,12 @@ def measure(held: list[int], runs: int = 3) -> tuple[dict[int, dict[str, float]]
     case = scene.case("eta = 3")
     with tempfile.TemporaryDirectory() as work:
         work = Path(work)
-        exe = work / "importer"
-        cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe), str(IMPORTER),
-               "-ldl", "-lm"]  # fmt: skip
-        subprocess.run(cmd, check=True, capture_output=True)
+        exe = compile_importer(work)
         fmpy.extract(str(native_fmu.build(scene.config, OUT).path), str(work / "fmu"))
         md = fmpy.read_model_description(str(work / "fmu"))
-        spec = work / "spec.txt"
+        spec, rows = work / "spec.txt", work / "rows.txt"
         spec.write_text(_spec(md, scene, case, rows=False))
+        rows.write_text(_spec(md, scene, case))  # the case's steps, for the bench run
         ident = md.coSimulation.modelIdentifier
         lib = work / "fmu" / "binaries" / "linux64" / f"{ident}.so"
         base = [str(exe), str(lib), md.guid, ident]
@@ -68,7 +68,7 @@ def measure(held: list[int], runs: int = 3) -> tuple[dict[int, dict[str, float]]
                 pairs = zip(words[::2], words[1::2], strict=True)
                 got = {k.removesuffix("_ns"): float(v) for k, v in pairs}
                 costs[n] = {k: min(v, costs.get(n, got)[k]) for k, v in got.items()}
-        step = 1e9 / float(run("bench", str(spec), repr(scene.step), "20000").split()[-1])
+        step = 1e9 / importer_rate([*base, "bench", str(rows), "20000"])
     return costs, step
 
 

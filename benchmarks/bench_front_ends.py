@@ -12,7 +12,8 @@ each in processes of its own (PYTHONPATH set to it):
    of the Fig. 13 scene, each method, called as pythonfmu calls it (set_real of the
    loads, do_step, get_real of the outputs), N times; the fastest of 7 passes;
 2. the native Fig. 13 FMU, each method, from the C importer (tests/native_importer.c):
-   N communication steps at the scene's step, the fastest of its 3 passes.
+   N communication steps of the case eta = 3 repeated from its start state, the fastest
+   of its 3 passes (bench_native.py's importer run).
 
 Each figure is the best of R processes; the ratio is this tree's over REV's.
 """
@@ -27,6 +28,9 @@ import tempfile
 from pathlib import Path
 
 import fmpy
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_native import compile_importer, importer_rate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = ("quasistationary", "full")
@@ -89,14 +93,10 @@ def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple[str
     from test_native_fmu import _spec
 
     from contact_fmu.scenario import load
-    from fmu_build import native_fmu
 
     scene = load(ROOT / "scenarios" / "fig13.toml")
     case = scene.case("eta = 3")
-    exe = work / "importer"
-    cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe),
-           str(ROOT / "tests" / "native_importer.c"), "-ldl", "-lm"]  # fmt: skip
-    subprocess.run(cmd, check=True, capture_output=True)
+    exe = compile_importer(work)
     runs = {}
     for label, tree in trees.items():
         built = _run(tree, "-c", BUILD, str(work / label), *METHODS).splitlines()
@@ -105,11 +105,10 @@ def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple[str
             fmpy.extract(path, str(unzip))
             md = fmpy.read_model_description(str(unzip))
             spec = unzip / "spec.txt"
-            spec.write_text(_spec(md, scene, case, rows=False))
+            spec.write_text(_spec(md, scene, case))
             ident = md.coSimulation.modelIdentifier
             lib = unzip / "binaries" / "linux64" / f"{ident}.so"
-            runs[label, m] = [str(exe), str(lib), md.guid, ident, "bench", str(spec),
-                              repr(scene.step), str(n)]  # fmt: skip
+            runs[label, m] = [str(exe), str(lib), md.guid, ident, "bench", str(spec), str(n)]
     return runs
 
 
@@ -142,8 +141,7 @@ def main() -> int:
             rate = {k: [] for k in trees}
             for _ in range(args.repeats):
                 for k in trees:
-                    out = subprocess.run(runs[k, m], capture_output=True, text=True, check=True)
-                    rate[k].append(float(out.stdout.split()[-1]))
+                    rate[k].append(importer_rate(runs[k, m]))
             b, a = max(rate[args.base]), max(rate["this tree"])
             print(f"native FMU from the C importer, fig13 {m}: {b:.4g} -> {a:.4g} steps/s, "
                   f"time ratio {b / a:.3f}")  # fmt: skip

@@ -13,8 +13,10 @@ machine):
    benchmarks/trivial_fmu.c, built here). Repeats interleaved run by run; the cost is
    the mean over the steps of each step's fastest repeat.
 2. From the C importer (tests/native_importer.c, no Python): communication steps per
-   second of the native Fig. 13 FMU at the scene's step, both methods (the fastest of
-   three runs of N steps).
+   second of the native Fig. 13 FMU at the scene's step, both methods: the case eta = 3
+   (its 320 steps, the scene's inputs) repeated from its start state (fmi2SetFMUstate)
+   for N steps; the fastest of three runs. An importer that stops (any answer but
+   fmi2OK) ends the benchmark with its message and a non-zero exit status.
 3. FMU sizes.
 4. The full body FMU (Eqs. 8-11 with the law's spin; stepper.c's vector step on both
    targets) through fmpy's FMU2Slave, native and pythonfmu, each scheme (the full
@@ -35,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import math
 import platform
 import subprocess
 import sys
@@ -255,8 +258,40 @@ def spin_report(cost: dict[str, float], args) -> str:
     return "\n".join(lines) + "\n"
 
 
+class ImporterError(RuntimeError):
+    """The C importer did not finish its run: no rate to report."""
+
+
+def importer_rate(args: list[str]) -> float:
+    """Steps per second that the C importer's bench run ``args`` prints; ImporterError
+    (with the importer's message: the call, the step, the FMU's last message) if it
+    stops or prints no positive rate."""
+    proc = subprocess.run(args, capture_output=True, text=True)
+    words = proc.stdout.split()
+    try:
+        rate = float(words[-1]) if proc.returncode == 0 and words else math.nan
+    except ValueError:
+        rate = math.nan
+    if not (math.isfinite(rate) and rate > 0.0):
+        raise ImporterError(
+            f"the C importer stopped (exit status {proc.returncode}): "
+            f"{(proc.stderr.strip() or proc.stdout.strip() or 'no output')[-2000:]}"
+        )
+    return rate
+
+
+def compile_importer(work: Path) -> Path:
+    """tests/native_importer.c compiled into ``work`` (it dlopens the FMU's binary)."""
+    exe = work / "importer"
+    cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe), str(IMPORTER),
+           "-ldl", "-lm"]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    return exe
+
+
 def importer_rates(n: int) -> dict[str, float]:
-    """Steps per second of the native Fig. 13 FMU from the C importer, per method."""
+    """Steps per second of the native Fig. 13 FMU from the C importer, per method: the
+    case eta = 3 repeated from its start state for n steps."""
     import fmpy
 
     sys.path.insert(0, str(ROOT / "tests"))
@@ -267,23 +302,27 @@ def importer_rates(n: int) -> dict[str, float]:
     rates = {}
     with tempfile.TemporaryDirectory() as work:
         work = Path(work)
-        exe = work / "importer"
-        cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe), str(IMPORTER),
-               "-ldl", "-lm"]  # fmt: skip
-        subprocess.run(cmd, check=True, capture_output=True)
+        exe = compile_importer(work)
         for m, cfg in cfgs.items():
             unzip = work / m
             fmpy.extract(str(native_fmu.build(cfg, OUT).path), str(unzip))
             md = fmpy.read_model_description(str(unzip))
             spec = work / f"{m}.txt"
-            spec.write_text(_spec(md, scene, case, rows=False))
+            spec.write_text(_spec(md, scene, case))
             ident = md.coSimulation.modelIdentifier
             lib = unzip / "binaries" / "linux64" / f"{ident}.so"
-            args = [str(exe), str(lib), md.guid, ident, "bench", str(spec)]
-            args += [repr(scene.step), str(n)]
-            proc = subprocess.run(args, capture_output=True, text=True, check=True)
-            rates[m] = float(proc.stdout.split()[-1])
+            try:
+                rates[m] = importer_rate([str(exe), str(lib), md.guid, ident, "bench",
+                                          str(spec), str(n)])  # fmt: skip
+            except ImporterError as e:
+                raise ImporterError(f"native Fig. 13 FMU, {m} method: {e}") from None
     return rates
+
+
+def scene_steps() -> int:
+    """Communication steps of one run of the Fig. 13 scene."""
+    scene, _ = fig13_configs()
+    return scene.grid.size - 1
 
 
 def sizes() -> dict[str, int]:
@@ -324,8 +363,9 @@ def report(cost: dict[str, float], rates: dict[str, float], size: dict[str, int]
         f"Fig. 13 step costs {q / us[null]:.2f} of it; the rest is fmpy's cost per value. "
         "The C importer below measures the FMU without a Python master.",
         "",
-        f"From the C importer (tests/native_importer.c, no Python; fastest of three runs of "
-        f"{args.importer_steps} steps at 1.75e-4 s): "
+        f"From the C importer (tests/native_importer.c, no Python; the case eta = 3, its "
+        f"{scene_steps()} steps of 1.75e-4 s with the scene's inputs, repeated from its start "
+        f"state for {args.importer_steps} steps; fastest of three runs): "
         + ", ".join(f"{m} {r:.3g} steps/s" for m, r in rates.items())
         + " (target >= 2e5).",
         "",
@@ -352,8 +392,12 @@ def main() -> int:
             replace_section(DOC, SECTION_SPIN, text)
         return 0
     if not args.full_body_only:
-        text = report(step_costs(args.steps, args.repeats),
-                      importer_rates(args.importer_steps), sizes(), args)  # fmt: skip
+        try:
+            rates = importer_rates(args.importer_steps)
+        except ImporterError as e:
+            print(f"bench_native: {e}", file=sys.stderr)
+            return 1
+        text = report(step_costs(args.steps, args.repeats), rates, sizes(), args)
         print(text)
         if args.write:
             replace_section(DOC, SECTION, text)

@@ -2,9 +2,10 @@
  *
  *   native_importer LIB GUID IDENT run  SPEC   run a case: outputs of every step (hex)
  *   native_importer LIB GUID IDENT fuzz SPEC SEED N   N random calls with extreme values
- *   native_importer LIB GUID IDENT bench SPEC H N     N steps of H, inputs at their
- *                                                   starts: steps per second (the
- *                                                   master's setReal, doStep, getReal)
+ *   native_importer LIB GUID IDENT bench SPEC N       N steps of SPEC's rows, the case
+ *                                                   repeated from its start state:
+ *                                                   steps per second (the master's
+ *                                                   setReal, doStep, getReal)
  *   native_importer LIB GUID IDENT states SPEC N      N FMU states held at once: got,
  *                                                   set, sized (the lookup alone) and
  *                                                   freed in shuffled orders (each
@@ -17,12 +18,13 @@
  *   line 1: the Real inputs' value references       "n vr..."
  *   line 2: the Real outputs' value references      "n vr..."
  *   line 3: parameters set before initialisation    "n vr value..." (values as %a)
- *   then, for "run", one row per step: "t h u_1 ... u_n" (hex floats)
+ *   then, for "run" and "bench", one row per step: "t h u_1 ... u_n" (hex floats)
  * "run" prints each step's outputs as hex floats, one line per step; "fuzz" prints a
  * count of the statuses (and of the pointers that are no state of the instance refused,
- * "refused"). Exit status: 0 fine, 2 usage, 3 an FMI answer not allowed (fmi2Fatal, a
- * non-finite output served with fmi2OK, damaged bytes or a pointer that is no state of
- * the instance accepted).
+ * "refused"); "bench" the steps per second. Exit status: 0 fine, 2 usage, 3 an FMI
+ * answer not allowed (fmi2Fatal, a non-finite output served with fmi2OK, damaged bytes
+ * or a pointer that is no state of the instance accepted; for "bench" any answer but
+ * fmi2OK, with the call, the step and the FMU's last message on stderr).
  * FMU_RESOURCES in the environment: the resource location (a file URI) to instantiate
  * with.
  */
@@ -114,6 +116,8 @@ static int load(api *f, const char *lib) {
 
 static unsigned long messages;
 static int quiet;
+static char last_message[4096]; /* kept when quiet, for a failure's report */
+static int last_status;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                    fmi2String category, fmi2String fmt, ...) {
@@ -124,6 +128,8 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
     messages++;
+    memcpy(last_message, buf, sizeof buf);
+    last_status = (int)status;
     if (!quiet) fprintf(stderr, "[%s %d] %s\n", name, (int)status, buf);
 }
 
@@ -452,37 +458,99 @@ static int states(const api *f, const char *guid, const char *ident, FILE *in, l
     return 0;
 }
 
-static int bench(const api *f, const char *guid, const char *ident, FILE *in, double h, long n) {
+/* ---- bench ------------------------------------------------------------------------ */
+static int bench_failed(const char *call, long k, double t, fmi2Status st) {
+    fprintf(stderr, "bench: %s at step %ld (t = %.17g s) answered %d; the FMU's last message "
+            "(status %d): %s\n", call, k, t, (int)st, last_status,
+            last_message[0] ? last_message : "(none)");
+    return 3;
+}
+static int bench(const api *f, const char *guid, const char *ident, FILE *in, long n) {
     spec s;
-    if (read_spec(in, &s)) return 2;
+    if (read_spec(in, &s) || n <= 0) return 2;
+    /* the case: its rows "t h u_1 ... u_n", run in turn from its start state again and
+     * again (a master repeating a scene), so that any N steps stay within the case */
+    const size_t width = 2 + (size_t)s.n_in;
+    size_t rows = 0, cap = 256;
+    double *tab = malloc(cap * width * sizeof *tab);
+    char tok[64];
+    while (tab != NULL && fscanf(in, "%63s", tok) == 1) {
+        if (rows == cap) {
+            double *more = realloc(tab, 2 * cap * width * sizeof *tab);
+            if (more == NULL) break;
+            tab = more, cap *= 2;
+        }
+        double *row = tab + rows * width;
+        row[0] = strtod(tok, NULL);
+        for (size_t i = 1; i < width; i++) {
+            if (fscanf(in, "%63s", tok) != 1) {
+                free(tab);
+                return 2;
+            }
+            row[i] = strtod(tok, NULL);
+        }
+        rows++;
+    }
+    if (tab == NULL || rows == 0 || !feof(in)) {
+        fprintf(stderr, "bench: SPEC has no rows of \"t h u...\" (or no memory)\n");
+        free(tab);
+        return 2;
+    }
     quiet = 1;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c = start(f, guid, ident, &cb, &s);
-    if (c == NULL) return 3;
-    double u[16], y[32], best = INFINITY;
-    if (f->GetReal(c, s.in, (size_t)s.n_in, u) != fmi2OK) return 3; /* the start inputs */
-    double t = 0.0;
+    if (c == NULL) return bench_failed("fmi2Instantiate", 0, 0.0, fmi2Error);
+    fmi2FMUstate start_state = NULL;
+    fmi2Status st = f->GetState(c, &start_state);
+    if (st != fmi2OK) return bench_failed("fmi2GetFMUstate", 0, 0.0, st);
+    /* the outputs at the end of the case: every repeat must end with the same doubles
+     * (the start state set back is the start), else the run measured something else */
+    double y[32] = {0}, end[32], best = INFINITY;
+    int have_end = 0;
     for (int rep = 0; rep < 3; rep++) {
         struct timespec a, b;
+        size_t r = 0;
         clock_gettime(CLOCK_MONOTONIC, &a);
         for (long k = 0; k < n; k++) {
-            if (f->SetReal(c, s.in, (size_t)s.n_in, u) != fmi2OK) return 3;
-            if (f->DoStep(c, t, h, fmi2True) != fmi2OK) return 3;
-            t += h;
-            if (f->GetReal(c, s.out, (size_t)s.n_out, y) != fmi2OK) return 3;
+            const double *row = tab + r * width;
+            if (r == 0 && (st = f->SetState(c, start_state)) != fmi2OK)
+                return bench_failed("fmi2SetFMUstate", k, row[0], st);
+            if ((st = f->SetReal(c, s.in, (size_t)s.n_in, row + 2)) != fmi2OK)
+                return bench_failed("fmi2SetReal", k, row[0], st);
+            if ((st = f->DoStep(c, row[0], row[1], fmi2True)) != fmi2OK)
+                return bench_failed("fmi2DoStep", k, row[0], st);
+            if ((st = f->GetReal(c, s.out, (size_t)s.n_out, y)) != fmi2OK)
+                return bench_failed("fmi2GetReal", k, row[0], st);
+            if (++r == rows) { /* the end of the case: once per repeat, not timed apart */
+                r = 0;
+                if (!have_end) memcpy(end, y, sizeof y), have_end = 1;
+                else if (memcmp(end, y, (size_t)s.n_out * sizeof y[0]) != 0) {
+                    fprintf(stderr, "bench: the case repeated from its start state ended with "
+                            "other outputs at step %ld\n", k);
+                    return 3;
+                }
+            }
         }
         clock_gettime(CLOCK_MONOTONIC, &b);
         double dt = (double)(b.tv_sec - a.tv_sec) + 1e-9 * (double)(b.tv_nsec - a.tv_nsec);
         best = dt < best ? dt : best;
     }
+    for (int i = 0; i < s.n_out; i++)
+        if (!isfinite(y[i])) {
+            fprintf(stderr, "bench: a non-finite output served with fmi2OK\n");
+            return 3;
+        }
     printf("%.6g\n", (double)n / best);
+    f->FreeState(c, &start_state);
+    f->Terminate(c);
     f->FreeInstance(c);
+    free(tab);
     return 0;
 }
 
 int main(int argc, char **argv) {
     if (argc < 6) {
-        fprintf(stderr, "usage: %s LIB GUID IDENT run|fuzz SPEC [SEED N]\n", argv[0]);
+        fprintf(stderr, "usage: %s LIB GUID IDENT run|fuzz|bench SPEC [SEED N | N]\n", argv[0]);
         return 2;
     }
     api f;
@@ -491,8 +559,8 @@ int main(int argc, char **argv) {
     if (in == NULL) return 2;
     int rc;
     if (strcmp(argv[4], "run") == 0) rc = run(&f, argv[2], argv[3], in);
-    else if (strcmp(argv[4], "bench") == 0 && argc >= 8)
-        rc = bench(&f, argv[2], argv[3], in, strtod(argv[6], NULL), strtol(argv[7], NULL, 10));
+    else if (strcmp(argv[4], "bench") == 0 && argc >= 7)
+        rc = bench(&f, argv[2], argv[3], in, strtol(argv[6], NULL, 10));
     else if (strcmp(argv[4], "states") == 0 && argc >= 7)
         rc = states(&f, argv[2], argv[3], in, strtol(argv[6], NULL, 10));
     else if (strcmp(argv[4], "fuzz") == 0 && argc >= 8)

@@ -819,6 +819,35 @@ def test_a_c_importer_without_python_runs_fig13_to_fmpys_numbers(
     assert got.shape == expected.shape and np.array_equal(got, expected)
 
 
+def test_importer_bench_repeats_the_case_and_stops_loudly(
+    scenes, native_fmus, fig13_expected, tmp_path
+):
+    """The importer's bench run (benchmarks/bench_native.py): the Fig. 13 case eta = 3
+    repeated from its start state, so any number of steps stays within the case (held at
+    its start inputs, Fx_ex = F drove the body at (1 - A2) F / M = 143 m/s^2 past the
+    declared |Vx| <= 1e4 m/s after 3.99e5 steps, and the importer stopped without a
+    word); each repeat ends with the same doubles. A call that the FMU refuses (P = -1 in
+    row 10) ends the run with exit status 3 and no rate, naming the call, the step and the
+    FMU's message."""
+    unzip, md, spec, _ = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
+    exe = _compile(tmp_path / "importer", str(IMPORTER), "-ldl")
+    lib = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+    args = [str(exe), str(lib), md.guid, md.coSimulation.modelIdentifier, "bench"]
+    rows = scenes["fig13"].grid.size - 1
+    proc = subprocess.run([*args, str(spec), str(3 * rows + 7)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert float(proc.stdout) > 0.0
+    lines = spec.read_text().splitlines()
+    row = lines[3 + 10].split()
+    row[2] = (-1.0).hex()  # P, the first input (scene.inputs)
+    lines[3 + 10] = " ".join(row)
+    bad = tmp_path / "bad.txt"
+    bad.write_text("\n".join(lines) + "\n")
+    proc = subprocess.run([*args, str(bad), str(rows)], capture_output=True, text=True)
+    assert proc.returncode == 3 and proc.stdout == ""
+    assert "fmi2SetReal at step 10 " in proc.stderr and "P = -1" in proc.stderr, proc.stderr
+
+
 @pytest.mark.skipif(shutil.which("cmake") is None, reason="no cmake")
 def test_source_fmu_built_by_fmpy_from_sources_alone_gives_the_same_numbers(
     scenes, native_fmus, fig13_expected, tmp_path

@@ -101,6 +101,7 @@ class ContactSlave(Fmi2Slave):
         # the shim's status cell (set through CELL_VR); None under pythonfmu's binary alone
         self._cell: Any = None
         super().__init__(**kwargs)
+        _load_package(self.resources)
         cfg = ModelConfig.from_dict(self.CONFIG)
         self.cfg = cfg
         self.description = cfg.description or f"Spector & Batra (1995) contact, {cfg.mode} mode"
@@ -722,6 +723,53 @@ class ContactSlave(Fmi2Slave):
     @staticmethod
     def _fmu_state_from_bytes(data: bytes) -> dict[str, Any] | state_bytes.Unreadable:
         return state_bytes.loads(data, _PACKAGE)
+
+
+def _load_package(resources: str | Path | None) -> None:
+    """Everything this FMU's vendored package holds, imported and loaded now, from this
+    instance's own copy (``resources``/cfmu_<key>).
+
+    The package's modules are shared by all instances of the FMU in a process and stay in
+    sys.modules, but the folder they were first imported from belongs to one instance:
+    fmpy (or any importer) deletes it when that instance is freed. A module imported
+    later (the model at exitInitializationMode) or a compiled library looked for later
+    (next to native/__init__.py) would be sought in a folder that may be gone. So at every
+    instantiation the package's ``__path__`` points at the copy of the instance being
+    made, which exists now, and every module of it is imported and the compiled libraries
+    loaded: after that nothing is read from the package's folders but the instance's own
+    data (``_data_dir``). An import that fails here (a host without scipy) is left to
+    exitInitializationMode, which repeats it and answers fmi2Error with its message.
+    Nothing to do outside an FMU (the source tree's contact_fmu)."""
+    if not resources:
+        return
+    root = Path(resources) / _PACKAGE
+    if _PACKAGE == "contact_fmu" or not root.is_dir():
+        return
+    prefix = _PACKAGE + "."
+    for name, module in list(sys.modules.items()):
+        if (name == _PACKAGE or name.startswith(prefix)) and hasattr(module, "__path__"):
+            module.__path__[:] = [str(root.joinpath(*name.split(".")[1:]))]
+    if _LOADED_FROM:
+        return
+    complete = True
+    for file in sorted(root.rglob("*.py")):
+        parts = file.relative_to(root).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        try:
+            importlib.import_module(".".join((_PACKAGE, *parts)))
+            if parts == ("native",):  # looked for next to its file: in this copy, now
+                native = sys.modules[prefix + "native"]
+                native.library()
+                native.fmi_module()
+        except Exception:  # repeated, and reported, at exitInitializationMode
+            complete = False
+    if complete:
+        _LOADED_FROM.append(str(root))
+
+
+# the copy of this package from which all of it was imported and loaded (_load_package)
+_LOADED_FROM: list[str] = []
 
 
 def _coulomb_excess(out: dict[str, float], mu: Any, P: Any) -> str | None:
