@@ -280,6 +280,9 @@ def summary_rows(reports: list[SceneReport]) -> list[list[str]]:
                     span,
                     f"{rs[0].Tx_max:.1e} .. {rs[-1].Tx_max:.1e}",
                     f"{rs[0].vx_max:.1e} .. {rs[-1].vx_max:.1e}",
+                    f"{rs[0].Ty_max:.1e} .. {rs[-1].Ty_max:.1e}"
+                    if math.isfinite(rs[0].Ty_max)
+                    else "-",
                     _fmt(pT, ".2f"),
                     _fmt(pv, ".2f"),
                     wall,
@@ -291,7 +294,8 @@ def summary_rows(reports: list[SceneReport]) -> list[list[str]]:
 def summary_markdown(reports: list[SceneReport], only_substeps: int | None = None) -> str:
     head = (
         "| scene | family | h (s) or refined | Tx max error / (mu P) | vx max error / v_s "
-        "| order Tx | order vx | wall (s) |\n|---|---|---|---|---|---|---|---|"
+        "| Ty max error / (mu P) | order Tx | order vx | wall (s) |\n"
+        "|---|---|---|---|---|---|---|---|---|"
     )
     body = []
     for row, rep_row in zip(summary_rows(reports), _families_of(reports), strict=True):

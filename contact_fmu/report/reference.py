@@ -194,10 +194,10 @@ def _integrate(
     v_scale = base.law.creep_full_slip * max(abs(p["Vx0"]), 1e-3)
     atol = np.full(base.size, ATOL_FRACTION * v_scale)
     atol[0] = ATOL_FRACTION * max(abs(p["Vx0"]), 1e-3)
-    out = np.empty((times.size, 4))  # Vx, vx, Tx, t
+    out = np.empty((times.size, 4))  # Vx, vx, Tx, Ty
     k = 0
     while k < times.size and times[k] <= 0.0:
-        out[k] = (y[0], y[1], base.forces(0.0, y)[0], times[k])
+        out[k] = (y[0], y[1], *base.forces(0.0, y)[:2])
         k += 1
     for a, b, loads in segments:
         eq = RollingEquations(base.law, base.body, base.lateral, loads)
@@ -215,10 +215,10 @@ def _integrate(
             )
         for j, t in enumerate(t_eval):
             yj = sol.y[:, j]
-            out[k + j] = (yj[0], yj[1], eq.forces(t, yj)[0], t)
+            out[k + j] = (yj[0], yj[1], *eq.forces(t, yj)[:2])
         k = stop
         y = sol.y[:, -1]
-    return Solution(times.copy(), out[:, 2], out[:, 1], out[:, 0])
+    return Solution(times.copy(), out[:, 2], out[:, 1], out[:, 0], out[:, 3])
 
 
 def full_continuous(scene: Scene, case: Case, times: FloatArray) -> Solution:
