@@ -185,6 +185,63 @@ def test_rigid_body_fmu_steps_eqs_8_9_to_the_pythonfmu_doubles(tmp_path):
     assert validate_fmu(str(paths[0])) == []
 
 
+@pytest.fixture(scope="module")
+def full_rigid() -> dict[str, Path]:
+    """The full rigid_body FMU (Eqs. 8-9 alone) of both targets."""
+    cfg = ModelConfig.full("rigid_body")
+    return {"native": native_fmu.build(cfg, OUT).path, "pythonfmu": fmu_build.build(cfg, OUT).path}
+
+
+@pytest.mark.parametrize("target", ["pythonfmu", "native"])
+def test_rigid_body_step_beyond_the_physical_range_is_discarded_naming_it(full_rigid, target):
+    """Eq. (8) under a held Tx drives Vx by h (Fx_ex - Tx)/M: a Tx of -2e7 N (or a huge
+    finite 1e300, or loads whose difference overflows) would take Vx beyond SPEED_MAX =
+    1e4 m/s, a moment of 1e300 N m Omega_y beyond RATE_MAX = 1e7 rad/s. Each step
+    answers fmi2Discard with the body mode's words (body_model.within_range) naming the
+    variable and the value Eq. (8) or (9) gives it, the same message on both targets;
+    the outputs stay the last accepted step's; NaN/inf are refused at the setter; once
+    corrected, the instance steps on by Eq. (8) exactly."""
+    from fmpy.fmi1 import FMICallException
+
+    from contact_fmu.fmu.variables import RATE_MAX, SPEED_MAX
+
+    h, Fx, M, Rx, Iy = 1e-3, 10.0, 1.0, 0.05, 2e-4
+    with Instance(full_rigid[target], "rb", {"M": M, "Rx": Rx, "Iy": Iy}) as b:
+        b.set("Fx_ex", Fx)
+        b.set("Tx", 0.0)
+        assert b.step(h) == OK and b.step(h) == OK
+        before = b.outputs()
+        V, W = before["Vx"], before["Omega_y"]
+        # (inputs, the variable named, the value Eq. (8) or (9) gives it, its bound)
+        cases = [
+            ({"Tx": -2e7}, "Vx", V + h * (Fx + 2e7) / M, SPEED_MAX),
+            ({"Tx": 1e300}, "Vx", V + h * (Fx - 1e300) / M, SPEED_MAX),
+            ({"Fx_ex": 1e308, "Tx": -1e308}, "Vx", math.inf, SPEED_MAX),  # overflows
+            ({"Fx_ex": Fx, "Tx": 0.0, "My_ex": 1e300}, "Omega_y", W + h * 1e300 / Iy, RATE_MAX),
+        ]
+        for inputs, name, value, bound in cases:
+            for k, x in inputs.items():
+                b.set(k, x)
+            assert b.step(h) == DISCARD
+            assert abs(value) > bound
+            assert b.messages[-1] == (
+                DISCARD,
+                f"doStep at t = {b.time!r} with h = {h!r} discarded, state unchanged: "
+                f"{name} = {value!r} is invalid: must be within abs <= {bound:g} (the loads "
+                "drive the body beyond it)",
+            )
+            assert b.outputs() == before
+        with pytest.raises(FMICallException) as e:  # not finite: refused at the setter
+            b.set("Tx", math.inf)
+        assert e.value.status == ERROR
+        assert b.step(h) == DISCARD and "Tx = inf is invalid" in b.messages[-1][1]
+        assert b.outputs() == before
+        b.set("Tx", 0.0)
+        b.set("My_ex", 0.0)
+        assert b.step(h) == OK
+        assert b.outputs() == {"Vx": V + h * Fx / M, "Omega_y": W}
+
+
 @pytest.mark.parametrize(
     ("scene", "feature"),
     [

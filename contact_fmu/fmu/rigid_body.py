@@ -7,6 +7,10 @@ With the inputs held over a communication step the right-hand sides are constant
 the update Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx Tx)/Iy is exact. Coupled
 to a contact-mode FMU through a master, the creep force is exchanged explicitly; that
 is stable only for steps below the slip relaxation time (see tests/test_cosim*.py).
+
+A step that would take Vx beyond SPEED_MAX or Omega_y beyond RATE_MAX (a huge Tx, Fx_ex
+or My_ex, or one held too long) is refused with the body mode's check
+(body_model.within_range), before the state changes: the adapter discards the step.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from typing import Any
 
 from .._validate import finite, positive
 from ..kinematics import spin_for_slip
+from .body_model import within_range
 from .config import ModelConfig
 
 
@@ -31,8 +36,10 @@ class RigidBody:
 
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
         Tx = inputs["Tx"]
-        self.Vx += h * (inputs.get("Fx_ex", 0.0) - Tx) / self.M
-        self.Omega_y += h * (inputs.get("My_ex", 0.0) + self.Rx * Tx) / self.Iy
+        Vx = self.Vx + h * (inputs.get("Fx_ex", 0.0) - Tx) / self.M
+        Omega_y = self.Omega_y + h * (inputs.get("My_ex", 0.0) + self.Rx * Tx) / self.Iy
+        within_range({"Vx": Vx, "Omega_y": Omega_y})  # inf (overflow) is beyond too
+        self.Vx, self.Omega_y = Vx, Omega_y
         return None
 
     def evaluate(self, inputs: Mapping[str, float]) -> None:  # no feedthrough

@@ -576,19 +576,38 @@ static int build(Inst *I) {
     return 1;
 }
 
+/* The words of a failed check of a step's outputs (cf_body_out_check's CF_STEP_RANGE,
+ * which: the row of CF_RANGED, or CF_STEP_NONFINITE, which: the index into out), those
+ * of body_model.within_range and slave._collect */
+static void out_check_text(int why, int which, const double *out, char *t, size_t n) {
+    char rv[40];
+    if (why == CF_STEP_RANGE) {
+        const cf_ranged *q = &CF_RANGED[which];
+        py_repr(out[q->i], rv, sizeof rv);
+        snprintf(t, n, "%s = %s is invalid: must be within abs <= %g (the loads drive the "
+                 "body beyond it)", q->name, rv, q->bound);
+    } else {
+        py_repr(out[which], rv, sizeof rv);
+        snprintf(t, n, "FloatingPointError: output %s = %s is not finite", out_name(which), rv);
+    }
+}
+
 /* a step of the contact mode (the outputs at the inputs held) or of the rigid body
  * (Eqs. 8-9 under held inputs, exact: Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx
- * Tx)/Iy), committed only when its outputs are finite */
+ * Tx)/Iy), committed only when its outputs pass the checks of the body mode's
+ * (cf_body_out_check: Vx, Omega_y within their ranges, then finite) */
 static fmi2Status other_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
-    char r[40];
-    const char *bad;
+    char r[40], why_text[512] = "";
     if (CF_MODE == MODE_CONTACT) {
         cf_params p = c->p;
         cf_body b = c->b;
         double out[N_OUT];
-        bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
-        if (!bad) {
+        const char *bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
+        if (bad) {
+            snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
+                     "finite", bad, r);
+        } else {
             c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
             memcpy(c->b.out, out, sizeof out);
         }
@@ -599,18 +618,21 @@ static fmi2Status other_step(Inst *I, double t, double h) {
         const double Oy = c->rb_Omega_y + h * (v[R_MY_EX] + v[R_RX] * Tx) / v[R_IY];
         double out[N_OUT] = {0.0};
         out[O_VX] = Vx, out[O_OMEGA_Y] = Oy;
-        bad = nonfinite(out, r, sizeof r);
-        if (!bad) {
+        int which = 0;
+        const int why = cf_body_out_check(out, I->served, &which);
+        if (why != CF_OK) {
+            out_check_text(why, which, out, why_text, sizeof why_text);
+        } else {
             c->rb_Vx = Vx, c->rb_Omega_y = Oy;
             c->b.out[O_VX] = Vx, c->b.out[O_OMEGA_Y] = Oy;
         }
     }
-    if (bad) {
+    if (why_text[0]) {
         char rt[40], rh[40];
         py_repr(t, rt, sizeof rt);
         py_repr(h, rh, sizeof rh);
-        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: "
-            "FloatingPointError: output %s = %s is not finite", rt, rh, bad, r);
+        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
+            rh, why_text);
         return fmi2Discard;
     }
     publish(c);
@@ -716,15 +738,8 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
             snprintf(why_text, sizeof why_text, "%s = %s is invalid: must be <= %g mu P%s = "
                      "%.6g %s in magnitude", fx ? "Fx_ex" : "My_ex", rv, CF_LOAD_LIMIT,
                      fx ? "" : " Rx", fx ? cap : cap * p.Rx, fx ? "N" : "N m");
-        } else if (why == CF_STEP_RANGE) { /* body_model.within_range */
-            const cf_ranged *q = &CF_RANGED[which];
-            py_repr(b.out[q->i], rv, sizeof rv);
-            snprintf(why_text, sizeof why_text, "%s = %s is invalid: must be within abs <= %g "
-                     "(the loads drive the body beyond it)", q->name, rv, q->bound);
-        } else if (why == CF_STEP_NONFINITE) { /* slave._collect */
-            py_repr(b.out[which], rv, sizeof rv);
-            snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
-                     "finite", out_name(which), rv);
+        } else if (why == CF_STEP_RANGE || why == CF_STEP_NONFINITE) {
+            out_check_text(why, which, b.out, why_text, sizeof why_text);
         } else if (why == CF_STEP_NO_SLIDING) {
             snprintf(why_text, sizeof why_text, "StageSolveError: eta = inf (Iy = 0) admits no "
                      "gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = %.6g N reaches mu P = %.6g N",
