@@ -37,6 +37,8 @@ FloatArray = NDArray[np.float64]
 BETA_FULL_SLIP = 2.0
 # Smallest positive magnitude in the projection of the strip march (guards 0/0).
 TINY = 1e-300
+# Bound on the strip march's gain L vb/(|Vx| k) (_Grid.gain): increments stay finite.
+INC_MAX = 1e300
 # Default strip grid for the spin (Omega_z != 0) resultant, see LayerContact.forces.
 SPIN_GRID = (64, 48)
 
@@ -267,7 +269,7 @@ class LayerContact:
         """beta = alpha/a1 (Eqs. 39, 43) = a1 |v| / (mu p0 (kb+ks) |Vx|); inf if Vx = 0 < |v|."""
         speed = np.hypot(vx, vy)
         aVx = np.abs(np.asarray(Vx, float))
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # inf: sliding
             b = speed * self._beta_per_creep / aVx
         return np.where(speed > 0.0, b, 0.0)
 
@@ -526,6 +528,25 @@ class _Grid:
             return tau, slip & self.inside
         return self._march_numpy(c, vx, vy, Vx, phi)
 
+    def gain(self, c: LayerContact, vx, vy, Vx, phi) -> FloatArray:
+        """The march's gain 1/(|Vx| k), bounded so that its increments stay finite.
+
+        With L = 2|x0| + |y0| (>= every |y|, |mid| and dist of the grid, nx >= 2) and
+        vb = max(|vx|, |vy|, |phi| L), an increment gain dist (slip of Eq. 3) is below
+        4 gain L vb. Where gain L vb would pass INC_MAX (or is NaN: gain inf without
+        slip), the gain is INC_MAX/(L vb) (0 without slip): the min of the two, so the
+        march stays continuous in Vx, and every node with slip |v| > 1e-280 vb then
+        slides along it (mu p/|inc| < 1e-280): the |Vx| -> 0+ limit (docs/model.md).
+        stepper.c's march_gain, the same doubles.
+        """
+        L = 2.0 * abs(float(self.x[0])) + abs(float(self.y[0]))
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            g = 1.0 / (np.abs(Vx) * c.k)
+            vb = np.maximum(np.maximum(np.abs(vx), np.abs(vy)), np.abs(phi) * L)
+            free = g * L * vb <= INC_MAX
+            bounded = np.where(vb > 0.0, INC_MAX / (L * vb), 0.0)
+        return np.where(free, g, bounded)
+
     def _march_numpy(self, c: LayerContact, vx, vy, Vx, phi) -> tuple[NDArray, NDArray]:
         """``march`` in numpy, for every input (standstill included)."""
         vx, vy, Vx, phi = (np.asarray(a, float)[:, None, None] for a in (vx, vy, Vx, phi))
@@ -534,8 +555,7 @@ class _Grid:
         Y = self.y[:, None]
         cap = c.mu * self.p
         rolling = s != 0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            gain = np.where(rolling, 1.0 / (np.abs(Vx) * c.k), 0.0)
+        gain = np.where(rolling, self.gain(c, vx, vy, Vx, phi), 0.0)
         # slip of Eq. (3) at the midpoints, times the distance marched
         inc = gain * self.dist * ((vx - phi * Y) + 1j * (vy - s * phi * self.mid))
         n, ny, nx = inc.shape[0], self.y.size, self.x.size

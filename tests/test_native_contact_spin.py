@@ -305,3 +305,42 @@ def test_a_tuned_mu_rebuilds_the_spin_grid_of_the_body_path():
     a, b = got
     assert abs(a.pop("adhesion") - b.pop("adhesion")) <= 1e-12
     assert a == b and a["Ty"] != 0.0
+
+
+def test_a_vanishing_rolling_speed_with_spin_gives_finite_forces_on_both_fmus(fmus):
+    """Vx = +-1e-300, +-5e-324 (subnormal), 1e-200 with spin and lateral slip (the strip
+    march's gain 1/(|Vx| k) bounded, docs/model.md; it overflowed into "Tx = nan is not
+    finite"): both FMUs answer OK with finite outputs, |T| <= mu P (Eq. 35 over the
+    contact), the native FMU's outputs the pythonfmu FMU's within 1e-12 of each output's
+    scale (as the random inputs above), and the native FMU's directional derivatives of
+    (Tx, Ty, Mz) finite with a rigid slip (cf_march_jacobian with the bounded gain: not
+    Vx's, the slip's; at v = 0 the closed form's creep slope mu P h'(0) c/|Vx| itself
+    passes DBL_MAX for a subnormal Vx, and the FMU says so, fmi2Error)."""
+    outs = ("Tx", "Ty", "Mz")
+    runs = {}
+    for target, path in fmus.items():
+        rows = []
+        with Instance(path, target) as c:
+            vr = {n: v.valueReference for n, v in c.vars.items()}
+            for Vx in (1e-300, -1e-300, 5e-324, -5e-324, 1e-200):
+                for Vy, Oz, slip in ((0.0, 1.0, 0.0), (2e-3, 1.0, 1e-3), (-1e-3, -3.0, 0.0)):
+                    u = {"Vx": Vx, "Vy": Vy, "Omega_y": (Vx - slip) / ex.Rx, "Omega_z": Oz}
+                    for name, value in u.items():
+                        c.set(name, value)
+                    out = c.outputs()
+                    assert all(math.isfinite(v) for v in out.values()), (u, out)
+                    assert math.hypot(out["Tx"], out["Ty"]) <= MU_P * (1 + 1e-12), (u, out)
+                    assert c.step(1e-3) == OK, c.messages[-1:]
+                    if target == "native" and (Vy, slip) != (0.0, 0.0):
+                        zr = [vr[o] for o in outs]
+                        for name in u:
+                            d = c.fmu.getDirectionalDerivative(zr, [vr[name]], [1.0])
+                            assert all(math.isfinite(x) for x in d), (u, name, d)
+                    rows.append(out)
+        runs[target] = rows
+    for name in runs["pythonfmu"][0]:
+        if name == "regime":
+            continue
+        x = np.array([o[name] for o in runs["native"]])
+        y = np.array([o[name] for o in runs["pythonfmu"]])
+        assert np.max(np.abs(x - y)) <= 1e-12 * np.max(np.abs(y)), name

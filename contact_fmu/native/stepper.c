@@ -902,6 +902,28 @@ typedef struct {
  * rounding, not bit for bit (tests/test_native.py). */
 #define MARCH_LANES 8 /* strips marched together: their chains are independent */
 
+/* The march's gain 1/(|Vx| k), bounded (layer._Grid.gain, docs/model.md): with L =
+ * 2|x0| + |y0| >= every |y|, |mid| and dist of the grid (nx >= 2) and vb = max(|vx|,
+ * |vy|, |phi| L), every increment gain dist (slip) is below 4 gain L vb; where gain L vb
+ * would pass CF_INC_MAX (or is NaN: gain inf, no slip) the gain is CF_INC_MAX/(L vb) (0
+ * without slip): continuous in Vx, and every node with a slip then slides (cap/|inc| <
+ * 1e-280). *capped (may be NULL): 0 for 1/(|Vx| k), else 1 + the index (vx, vy, -, phi)
+ * of vb's argument, for cf_march_jacobian; *vbp: vb. */
+#define CF_INC_MAX 1e300
+static double march_gain(const cf_strips *g, double vx, double vy, double Vx, double phi,
+                         int *capped, double *vbp) {
+    const double L = 2.0 * fabs(g->x[0]) + fabs(g->y[0]);
+    const double gain = 1.0 / (fabs(Vx) * g->k);
+    const double vb = fmax(fmax(fabs(vx), fabs(vy)), fabs(phi) * L);
+    if (vbp) *vbp = vb;
+    if (gain * L * vb <= CF_INC_MAX) {
+        if (capped) *capped = 0;
+        return gain;
+    }
+    if (capped) *capped = vb == fabs(vx) ? 1 : vb == fabs(vy) ? 2 : 4;
+    return vb > 0.0 ? CF_INC_MAX / (L * vb) : 0.0;
+}
+
 /* march_one without spin, the resultants alone: the increments keep the direction
  * e = (vx, vy)/|v| on every strip, so tau = m e with the magnitude marched by itself,
  * m <- min(m + gain dist |v|, cap) (m (min(1, cap/tiny)) below tiny), and R = (e_x S,
@@ -913,7 +935,7 @@ static void march_straight(const cf_strips *g, double vx, double vy, double Vx, 
     const double s = Vx > 0.0 ? 1.0 : -1.0, speed = hypot(vx, vy);
     R[0] = R[1] = R[2] = 0.0;
     if (!(speed > 0.0)) return; /* no slip: no increment, no traction */
-    const double gain = speed / (fabs(Vx) * g->k);
+    const double gain = speed * march_gain(g, vx, vy, Vx, 0.0, NULL, NULL); /* < 2 inc max/L */
     double S = 0.0, Sx = 0.0, Sy = 0.0;
     for (int i = 0; i < ny; i++) {
         double m = 0.0, si = 0.0, sx = 0.0;
@@ -945,7 +967,7 @@ static void march_one(const cf_strips *g, double vx, double vy, double Vx, doubl
     }
     const int ny = g->ny, nx = g->nx;
     const double s = Vx > 0.0 ? 1.0 : -1.0;
-    const double gain = 1.0 / (fabs(Vx) * g->k);
+    const double gain = march_gain(g, vx, vy, Vx, phi, NULL, NULL);
     const double sphi = s * phi;
     double Tr = 0.0, Ti = 0.0, M = 0.0;
     /* Each strip's march is one chain of dependent operations (a square root and a
@@ -1072,7 +1094,18 @@ void cf_march_jacobian(const cf_strips *g, double vx, double vy, double Vx, doub
                        double D[12]) {
     const int ny = g->ny, nx = g->nx;
     const double s = Vx > 0.0 ? 1.0 : -1.0;
-    const double gain = 1.0 / (fabs(Vx) * g->k);
+    int capped;
+    double vb;
+    const double gain = march_gain(g, vx, vy, Vx, phi, &capped, &vb);
+    const double L = 2.0 * fabs(g->x[0]) + fabs(g->y[0]);
+    /* a bounded gain, CF_INC_MAX/(L vb), varies with vb's argument v_c and not with Vx:
+     * d gain = -gain sign(v_c) (L for phi) dv_c/vb */
+    const int kc = capped ? capped - 1 : 2;
+    const double dlog = !capped || !(vb > 0.0) ? 0.0
+                        : kc == 3 ? -(phi > 0.0 ? L : -L) / vb
+                                  : -((kc == 0 ? vx : vy) > 0.0 ? 1.0 : -1.0) / vb;
+    const int kg = capped ? kc : 2;                  /* the column the gain varies with */
+    const double lam = capped ? dlog : -1.0 / Vx;    /* d gain/gain in that column */
     const double sphi = s * phi;
     for (int k = 0; k < 12; k++) D[k] = 0.0;
     for (int i = 0; i < ny; i++) {
@@ -1085,9 +1118,9 @@ void cf_march_jacobian(const cf_strips *g, double vx, double vy, double Vx, doub
             double mag = sqrt(a * a + b * b);
             if (!(mag <= DBL_MAX)) mag = hypot(a, b);
             const double q = c / (g->tiny > mag ? g->tiny : mag);
-            /* the increment's derivative, added to the carried one: dtrial */
+            /* the increment's derivative, added to the carried one: dtrial (the gain's
+             * part, lam inc in column kg, below: it depends on the branch) */
             dr[0] += gd, di[1] += gd;
-            dr[2] -= gd * re / Vx, di[2] -= gd * im / Vx;
             dr[3] -= gd * yi, di[3] -= gd * s * g->mid[e];
             if (q < 1.0 && !(g->tiny > mag)) { /* slip: the projection on |tau| = cap */
                 const double ea = a / mag, eb = b / mag;
@@ -1096,8 +1129,18 @@ void cf_march_jacobian(const cf_strips *g, double vx, double vy, double Vx, doub
                     dr[k] = q * (dr[k] - ea * along);
                     di[k] = q * (di[k] - eb * along);
                 }
-            } else if (q < 1.0) { /* below tiny: the constant factor cap/tiny */
-                for (int k = 0; k < 4; k++) dr[k] *= q, di[k] *= q;
+                /* lam inc = lam (trial - t_prev): across e it is -lam t_prev's part
+                 * across e, exactly; taken so, not as lam |inc| (up to 1e300/|Vx|) less
+                 * its part along e, which cancels to nothing but rounding */
+                const double along = ea * tr + eb * ti, pa = tr - ea * along, pb = ti - eb * along;
+                dr[kg] -= (q * pa) * lam, di[kg] -= (q * pb) * lam;
+            } else {
+                if (!capped)
+                    dr[2] -= gd * re / Vx, di[2] -= gd * im / Vx;
+                else
+                    dr[kc] += gd * re * dlog, di[kc] += gd * im * dlog;
+                if (q < 1.0) /* below tiny: the constant factor cap/tiny */
+                    for (int k = 0; k < 4; k++) dr[k] *= q, di[k] *= q;
             }
             const double f = q < 1.0 ? q : 1.0;
             tr = a * f;
