@@ -212,3 +212,29 @@ def test_bad_input_and_unwritable_field_file_give_discard_and_keep_the_state(fmu
         assert b.step(H) == DISCARD  # the step that reaches 1e-4 s must write the file
         assert any(f"field_file = '{folder}' is invalid" in m for _, m in b.messages)
         assert b.outputs() == before and all(math.isfinite(x) for x in before.values())
+
+
+def test_a_start_spinning_beyond_rate_max_is_refused_naming_omega_y0(fmu):
+    """Omega_y0 = (Vx0 - vx0)/Rx (Eq. 3 solved): Vx0 = 10 m/s on Rx = 1e-7 m gives 1e8
+    rad/s, beyond RATE_MAX = 1e7 rad/s, from which every step would be discarded:
+    fmi2Error at exitInitializationMode naming Omega_y0 and its value (1e8 to a few
+    roundings: the state holds vx, whence Omega_y is read back), as the steady body;
+    with Rx = 1e-6 (Omega_y0 = 1e7, on the bound) the instance starts and steps."""
+    params = {**SCENE.cases[0].parameters, **SMALL, "Rx": 1e-7, "Vx0": 10.0, "vx0": 0.0}
+    with Instance(fmu, "transient", params, initialise=False) as b:
+        with pytest.raises(FMICallException) as e:
+            b.initialise()
+        assert e.value.status == ERROR
+        found = [m for s, m in b.messages if "Omega_y0 = " in m]
+        assert len(found) == 1, b.messages
+        value = float(found[0].split("Omega_y0 = ")[1].split()[0])
+        assert value == pytest.approx(1e8, rel=1e-12)
+        assert found[0].endswith(
+            "is invalid: must be within abs <= 1e+07 "
+            "(Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there)"
+        )
+        assert b.step(H) == ERROR
+        b.set("Rx", 1e-6)
+        b.initialise()  # on the bound: starts; held there without loads (pure rolling)
+        b.set("Fx_ex", 0.0)
+        assert b.step(H) == OK, b.messages[-1]

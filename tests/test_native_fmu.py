@@ -534,17 +534,96 @@ def test_both_targets_answer_a_bad_call_in_the_same_words(native_fmus, python_fm
     assert answers[0][1], answers  # each case is answered with a message
 
 
-@pytest.mark.parametrize("params", [{"mu": -0.3}, {"M": math.inf, "h_max": 0.0}])
-def test_both_targets_refuse_a_bad_start_in_the_same_words(native_fmus, python_fmus, params):
-    """Bad parameters: the same fmi2Error at setReal, at exitInitializationMode and at
-    the doStep that follows, with the same messages, from both targets."""
+# a start whose Omega_y0 = (Vx0 - vx0)/Rx = 1e8 rad/s is beyond RATE_MAX: each value
+# in its declared range, Rx small
+SPIN_START = {"Rx": 1e-7, "Vx0": 10.0, "vx0": 0.0}
+
+
+@pytest.mark.parametrize(
+    ("params", "set_status"),
+    [({"mu": -0.3}, ERROR), ({"M": math.inf, "h_max": 0.0}, ERROR), (SPIN_START, OK)],
+)
+def test_both_targets_refuse_a_bad_start_in_the_same_words(
+    native_fmus, python_fmus, params, set_status
+):
+    """Bad parameters (or good ones giving an initial state beyond its range): the same
+    statuses at setReal, fmi2Error at exitInitializationMode and at the doStep that
+    follows, with the same messages, from both targets."""
     calls = [("set", *kv) for kv in params.items()] + [("initialise",), ("step", H)]
     answers = []
     for path in (python_fmus["fig13"], native_fmus["fig13"]):
         with Instance(path, "start", initialise=False) as b:
             answers.append(_answer(b, calls))
     assert answers[0] == answers[1]
-    assert answers[0][0] == [ERROR] * len(calls), answers
+    assert answers[0][0] == [set_status] * len(params) + [ERROR, ERROR], answers
+
+
+@pytest.fixture(scope="module")
+def start_fmus(native_fmus, python_fmus) -> dict[tuple[str, str], Path]:
+    """(target, kind): the Fig. 13 body FMU (scalar stepper), the full body FMU (Eqs.
+    10-11: the vector stepper) and the full rigid_body FMU, of both targets."""
+    fmus = {
+        (t, "fig13"): f["fig13"] for t, f in (("native", native_fmus), ("pythonfmu", python_fmus))
+    }
+    for kind, mode in (("full body", "body"), ("rigid_body", "rigid_body")):
+        cfg = ModelConfig.full(mode)
+        fmus["native", kind] = native_fmu.build(cfg, OUT).path
+        fmus["pythonfmu", kind] = fmu_build.build(cfg, OUT).path
+    return fmus
+
+
+START_KINDS = ("fig13", "full body", "rigid_body")
+START_REFUSED = re.compile(
+    r"cannot initialise the model: Omega_y0 = (\S+) is invalid: must be within abs <= 1e\+07 "
+    r"\(Omega_y0 = \(Vx0 - vx0\)/Rx: the model cannot start there\)"
+)
+
+
+@pytest.mark.parametrize("kind", START_KINDS)
+@pytest.mark.parametrize("target", ["pythonfmu", "native"])
+def test_a_start_spinning_beyond_rate_max_is_refused_naming_omega_y0(start_fmus, target, kind):
+    """Eq. (3) solved for the start, Omega_y0 = (Vx0 - vx0)/Rx: Vx0 = 10 m/s on Rx = 1e-7
+    m gives 1e8 rad/s, beyond RATE_MAX = 1e7 rad/s, from which every step would be
+    discarded. exitInitializationMode answers fmi2Error naming Omega_y0 and its value
+    (1e8 to a few roundings: the state holds vx = Vx0 - Omega_y0 Rx, whence Omega_y is
+    read back); doStep is refused. Rx = 1e-6 puts Omega_y0 on the bound (1e7): the same
+    instance then starts and steps; so does a new instance at the default Rx."""
+    from fmpy.fmi1 import FMICallException
+
+    path = start_fmus[target, kind]
+    with Instance(path, "spin", SPIN_START, initialise=False) as b:
+        with pytest.raises(FMICallException) as e:
+            b.initialise()
+        assert e.value.status == ERROR
+        found = [m for s, m in b.messages if s == ERROR and START_REFUSED.fullmatch(m)]
+        assert len(found) == 1, b.messages
+        assert float(START_REFUSED.fullmatch(found[0])[1]) == pytest.approx(1e8, rel=1e-12)
+        assert b.messages[-1] == (
+            ERROR,
+            "exitInitializationMode: the model cannot start: see the messages above",
+        )
+        assert b.step(1e-5) == ERROR
+        b.set("Rx", 1e-6)  # Omega_y0 = 10 / 1e-6 = 1e7: on the bound, within it
+        b.initialise()
+        assert abs(b.get("Omega_y")) <= 1e7
+        assert b.get("Omega_y") == pytest.approx(1e7, rel=1e-12)
+        assert b.step(1e-5) == OK
+    with Instance(path, "sane", {"Vx0": 10.0, "vx0": 0.0}) as b:
+        assert b.get("Omega_y") == pytest.approx(10.0 / b.get("Rx"), rel=1e-12)
+        assert b.step(1e-5) == OK
+
+
+@pytest.mark.parametrize("kind", START_KINDS)
+def test_both_targets_refuse_a_start_beyond_rate_max_in_the_same_words(start_fmus, kind):
+    """The refused start of the test above, scalar and vector body and rigid body: the
+    same statuses and messages word for word from the pythonfmu and the native FMU."""
+    calls = [("set", *kv) for kv in SPIN_START.items()] + [("initialise",), ("step", H)]
+    answers = []
+    for target in ("pythonfmu", "native"):
+        with Instance(start_fmus[target, kind], "start", initialise=False) as b:
+            answers.append(_answer(b, calls))
+    assert answers[0] == answers[1]
+    assert answers[0][0] == [OK] * len(SPIN_START) + [ERROR, ERROR], answers
 
 
 def test_fmu_state_get_step_set_step_is_bit_identical(fig13):

@@ -38,16 +38,24 @@ def substeps(h: float, h_max: float) -> int:
     return min(max(n, 1), MAX_SUBSTEPS)
 
 
-def within_range(out: Mapping[str, float]) -> None:
+# why the initial state can be beyond its range: Rx, not range-checked against the
+# speeds, is free to be small (fmu2.c: START_RANGE_WHY, the same words)
+START_RANGE_WHY = "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
+
+
+def within_range(out: Mapping[str, float], start: bool = False) -> None:
     """InputError where a step took a speed or rate beyond its physical range (the
     declared range of its initial value): there the (Vx, vx) state no longer resolves
-    Omega_y to one step's change (docs/reliability.md); the adapter discards the step."""
+    Omega_y to one step's change (docs/reliability.md); the adapter discards the step.
+    ``start``: ``out`` is the initial state, named Vx0, Omega_y0, ...: every step from it
+    would be discarded, so the model refuses to start (exitInitializationMode)."""
     for name, bound in (("Vx", SPEED_MAX), ("Vy", SPEED_MAX), ("Omega_y", RATE_MAX),
                         ("Omega_z", RATE_MAX)):  # fmt: skip
         value = out.get(name, 0.0)
         if not abs(value) <= bound:
+            why = START_RANGE_WHY if start else "the loads drive the body beyond it"
             raise InputError(
-                name, value, f"within abs <= {bound:g} (the loads drive the body beyond it)"
+                name + "0" if start else name, value, f"within abs <= {bound:g} ({why})"
             )
 
 
@@ -147,4 +155,6 @@ def build(
 ) -> BodyModel:
     """The body model from the FMU's parameters and inputs at the start time t0 (s)."""
     P = inputs["P"]
-    return BodyModel(make_stepper(cfg, params, P, t0, data_dir), params["h_max"], P)
+    stepper = make_stepper(cfg, params, P, t0, data_dir)
+    within_range(stepper.outputs(), start=True)
+    return BodyModel(stepper, params["h_max"], P)

@@ -35,7 +35,7 @@ from .._validate import InputError
 from ..dynamics import Body, Lateral
 from ..kinematics import spin_for_slip
 from ..transient import TransientRollingBody
-from .body_model import MAX_SUBSTEPS, BodyModel, substeps
+from .body_model import MAX_SUBSTEPS, BodyModel, substeps, within_range
 from .config import ModelConfig
 from .laws import make_law
 
@@ -203,8 +203,9 @@ def build(
 ) -> TransientBodyModel:
     """The transient body model from the FMU's parameters and inputs at t0 (s)."""
     P = inputs["P"]
-    recorder = FieldRecorder(str(params["field_file"]), parse_times(params["field_times"]))
     stepper = make_stepper(cfg, params, P, t0, data_dir)
+    within_range(stepper.outputs(), start=True)
+    recorder = FieldRecorder(str(params["field_file"]), parse_times(params["field_times"]))
     model = TransientBodyModel(stepper, params["h_max"], P, params["cells_per_step"], recorder)
     recorder.capture_due(t0, stepper.field_arrays)
     return model

@@ -31,6 +31,7 @@ class RigidBody:
         self.M = positive("M", M)
         self.Rx = positive("Rx", Rx)
         self.Iy = positive("Iy", Iy)
+        within_range({"Vx": Vx0, "Omega_y": Omega_y0}, start=True)  # Rx may be tiny
         self.Vx = finite("Vx0", Vx0)
         self.Omega_y = finite("Omega_y0", Omega_y0)
 

@@ -431,6 +431,22 @@ static const char *contact_outputs(const cf_core *c, spin_grid *g, cf_params *p,
     return nonfinite(out, r, n);
 }
 
+/* The initial state within the ranges of the body mode's steps (cf_body_out_check's
+ * table, body_model.within_range(start=True)): beyond, every step would be discarded,
+ * so the model cannot start; 0 with the reason logged, in within_range's words. Rx is
+ * free to be small, so Omega_y0 = (Vx0 - vx0)/Rx can be beyond RATE_MAX. */
+#define START_RANGE_WHY "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
+static int start_in_range(Inst *I, const double *out) {
+    int which;
+    if (cf_body_out_check(out, 0ul, &which) != CF_STEP_RANGE) return 1; /* 0: no finite check */
+    const cf_ranged *q = &CF_RANGED[which];
+    char rv[40];
+    py_repr(out[q->i], rv, sizeof rv);
+    say(I, fmi2Error, "cannot initialise the model: %s0 = %s is invalid: must be within abs "
+        "<= %g (" START_RANGE_WHY ")", q->name, rv, q->bound);
+    return 0;
+}
+
 /* RigidBody (rigid_body.py): M, Rx, Iy > 0, the initial state */
 static int build_rigid(Inst *I) {
     cf_core *c = &I->c;
@@ -445,8 +461,12 @@ static int build_rigid(Inst *I) {
                 names[k], r);
             return 0;
         }
-    c->rb_Vx = v[R_VX0];
-    c->rb_Omega_y = (v[R_VX0] - v[R_SLIP0]) / v[R_RX]; /* kinematics.spin_for_slip */
+    double out[N_OUT] = {0};
+    out[O_VX] = v[R_VX0];
+    out[O_OMEGA_Y] = (v[R_VX0] - v[R_SLIP0]) / v[R_RX]; /* kinematics.spin_for_slip */
+    if (!start_in_range(I, out)) return 0;
+    c->rb_Vx = out[O_VX];
+    c->rb_Omega_y = out[O_OMEGA_Y];
     c->b.out[O_VX] = c->rb_Vx;
     c->b.out[O_OMEGA_Y] = c->rb_Omega_y;
     c->built = 1;
@@ -545,6 +565,7 @@ static int build(Inst *I) {
         y.t = c->time;
         cf_initial_vforces(&p, &y);
         cf_vbody_outputs(&p, &y, &b, I->grid->tau, I->grid->slip, I->grid->inside);
+        if (!start_in_range(I, b.out)) return 0;
         const char *bad = nonfinite(b.out, r, sizeof r);
         if (bad) {
             say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
@@ -563,6 +584,7 @@ static int build(Inst *I) {
     s.t = c->time;
     cf_initial_forces(&p, &s);
     cf_body_outputs(&p, &s, &b);
+    if (!start_in_range(I, b.out)) return 0;
     const char *bad = nonfinite(b.out, r, sizeof r);
     if (bad) {
         say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
