@@ -186,7 +186,7 @@ def test_bad_spin_input_is_refused_naming_it_and_the_instance_recovers(fmus, tar
 @pytest.mark.parametrize("target", ["native", "pythonfmu"])
 def test_kinematic_inputs_are_refused_beyond_their_physical_range(fmus, target):
     """Vx, Vy (|.| <= SPEED_MAX = 1e4 m/s), Omega_y, Omega_z (|.| <= RATE_MAX = 1e7 rad/s:
-    the body mode's bounds, body_model.within_range): the model description declares the
+    the body mode's bounds, ranges.within_range): the model description declares the
     range, a value one ulp beyond answers fmi2Error naming the input and the value and
     doStep fmi2Discard, the bound itself is taken. Every corner of that box (each input
     at +- its bound, Vx also at 1 m/s and at standstill) gives finite forces within

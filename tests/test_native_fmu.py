@@ -197,7 +197,7 @@ def test_rigid_body_step_beyond_the_physical_range_is_discarded_naming_it(full_r
     """Eq. (8) under a held Tx drives Vx by h (Fx_ex - Tx)/M: a Tx of -2e7 N (or a huge
     finite 1e300, or loads whose difference overflows) would take Vx beyond SPEED_MAX =
     1e4 m/s, a moment of 1e300 N m Omega_y beyond RATE_MAX = 1e7 rad/s. Each step
-    answers fmi2Discard with the body mode's words (body_model.within_range) naming the
+    answers fmi2Discard with the body mode's words (ranges.within_range) naming the
     variable and the value Eq. (8) or (9) gives it, the same message on both targets;
     the outputs stay the last accepted step's; NaN/inf are refused at the setter; once
     corrected, the instance steps on by Eq. (8) exactly."""

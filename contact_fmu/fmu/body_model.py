@@ -22,7 +22,7 @@ from ..integrator import RollingBody
 from ..kinematics import V_CREEP_FLOOR, spin_for_slip
 from .config import ModelConfig
 from .laws import make_law
-from .variables import RATE_MAX, SPEED_MAX
+from .ranges import within_range
 
 # Most stepper steps per communication step: beyond, h_max is enlarged for that step
 # (the scheme stays stable; only the accuracy of the slow dynamics drops) so that one
@@ -36,27 +36,6 @@ def substeps(h: float, h_max: float) -> int:
     """ceil(h / h_max), at least 1, at most MAX_SUBSTEPS."""
     n = math.ceil(h / h_max * (1.0 - SUBSTEP_SLACK))
     return min(max(n, 1), MAX_SUBSTEPS)
-
-
-# why the initial state can be beyond its range: Rx, not range-checked against the
-# speeds, is free to be small (fmu2.c: START_RANGE_WHY, the same words)
-START_RANGE_WHY = "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
-
-
-def within_range(out: Mapping[str, float], start: bool = False) -> None:
-    """InputError where a step took a speed or rate beyond its physical range (the
-    declared range of its initial value): there the (Vx, vx) state no longer resolves
-    Omega_y to one step's change (docs/reliability.md); the adapter discards the step.
-    ``start``: ``out`` is the initial state, named Vx0, Omega_y0, ...: every step from it
-    would be discarded, so the model refuses to start (exitInitializationMode)."""
-    for name, bound in (("Vx", SPEED_MAX), ("Vy", SPEED_MAX), ("Omega_y", RATE_MAX),
-                        ("Omega_z", RATE_MAX)):  # fmt: skip
-        value = out.get(name, 0.0)
-        if not abs(value) <= bound:
-            why = START_RANGE_WHY if start else "the loads drive the body beyond it"
-            raise InputError(
-                name + "0" if start else name, value, f"within abs <= {bound:g} ({why})"
-            )
 
 
 def make_stepper(

@@ -35,9 +35,10 @@ from .._validate import InputError
 from ..dynamics import Body, Lateral
 from ..kinematics import spin_for_slip
 from ..transient import TransientRollingBody
-from .body_model import MAX_SUBSTEPS, BodyModel, substeps, within_range
+from .body_model import MAX_SUBSTEPS, BodyModel, substeps
 from .config import ModelConfig
 from .laws import make_law
+from .ranges import within_range
 
 # CSV columns of the field file, in order.
 FIELD_COLUMNS = (

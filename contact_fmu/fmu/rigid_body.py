@@ -10,7 +10,7 @@ is stable only for steps below the slip relaxation time (see tests/test_cosim*.p
 
 A step that would take Vx beyond SPEED_MAX or Omega_y beyond RATE_MAX (a huge Tx, Fx_ex
 or My_ex, or one held too long) is refused with the body mode's check
-(body_model.within_range), before the state changes: the adapter discards the step.
+(ranges.within_range), before the state changes: the adapter discards the step.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from typing import Any
 
 from .._validate import finite, positive
 from ..kinematics import spin_for_slip
-from .body_model import within_range
 from .config import ModelConfig
+from .ranges import within_range
 
 
 class RigidBody:

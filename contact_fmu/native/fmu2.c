@@ -432,7 +432,7 @@ static const char *contact_outputs(const cf_core *c, spin_grid *g, cf_params *p,
 }
 
 /* The initial state within the ranges of the body mode's steps (cf_body_out_check's
- * table, body_model.within_range(start=True)): beyond, every step would be discarded,
+ * table, ranges.within_range(start=True)): beyond, every step would be discarded,
  * so the model cannot start; 0 with the reason logged, in within_range's words. Rx is
  * free to be small, so Omega_y0 = (Vx0 - vx0)/Rx can be beyond RATE_MAX. */
 #define START_RANGE_WHY "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
@@ -600,7 +600,7 @@ static int build(Inst *I) {
 
 /* The words of a failed check of a step's outputs (cf_body_out_check's CF_STEP_RANGE,
  * which: the row of CF_RANGED, or CF_STEP_NONFINITE, which: the index into out), those
- * of body_model.within_range and slave._collect */
+ * of ranges.within_range and slave._collect */
 static void out_check_text(int why, int which, const double *out, char *t, size_t n) {
     char rv[40];
     if (why == CF_STEP_RANGE) {

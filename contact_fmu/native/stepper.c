@@ -809,7 +809,7 @@ void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
 }
 
 #define CF_LOAD_LIMIT 1e9 /* integrator.LOAD_LIMIT */
-#define CF_SPEED_MAX 1e4 /* fmu/variables.SPEED_MAX (m/s), RATE_MAX (rad/s): body_model.within_range */
+#define CF_SPEED_MAX 1e4 /* fmu/variables.SPEED_MAX (m/s), RATE_MAX (rad/s): ranges.within_range */
 #define CF_RATE_MAX 1e7
 
 /* Why a communication step of the body is not served (else CF_OK): the checks of
@@ -824,7 +824,7 @@ enum {
     CF_STEP_CAPPED,    /* more internal steps than max_substeps (n is that cap) */
     CF_STEP_NO_SLIDING, /* loads beyond mu P on an eta = inf body (Iy = 0), full method */
     CF_STEP_NO_ROOT,   /* the stepper declined: no stage root, a non-finite state */
-    CF_STEP_RANGE,     /* a speed or rate beyond its range: body_model.within_range */
+    CF_STEP_RANGE,     /* a speed or rate beyond its range: ranges.within_range */
     CF_STEP_NONFINITE, /* an output served is not finite: slave._collect */
 };
 
@@ -847,7 +847,7 @@ static int cf_body_admit(const cf_params *p, const cf_body *b, double h, int *n)
     return q < b->max_substeps ? CF_OK : CF_STEP_CAPPED; /* NaN q: capped */
 }
 
-/* body_model.within_range's table: the output, its name, its bound */
+/* ranges.within_range's table: the output, its name, its bound */
 typedef struct {
     int i;
     const char *name;
@@ -869,7 +869,7 @@ static int cf_first_nonfinite(const double *out, unsigned long served) {
 }
 
 /* The outputs of a step, checked as the Python adapter does: the body's speeds and
- * rates within their ranges (body_model.within_range, NaN beyond), then each output
+ * rates within their ranges (ranges.within_range, NaN beyond), then each output
  * served finite (slave._collect; served: a bit per index of out, whose order is the
  * variables'). CF_OK; CF_STEP_RANGE with *which the row of CF_RANGED; or
  * CF_STEP_NONFINITE with *which the index into out; the first that fails. */

@@ -1,0 +1,32 @@
+"""The physical ranges of the body's speeds and rates (the declared ranges of their
+initial values, variables.SPEED_MAX and RATE_MAX), checked on a state: every step of the
+body and rigid_body modes, and their initial state. Kept apart from body_model so that a
+rigid_body FMU carries no law or integrator for it; stepper.c's range table (CF_SPEED_MAX,
+CF_RATE_MAX) and fmu2.c's messages are the C side, in the same words."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from .._validate import InputError
+from .variables import RATE_MAX, SPEED_MAX
+
+# why the initial state can be beyond its range: Rx, not range-checked against the
+# speeds, is free to be small (fmu2.c: START_RANGE_WHY, the same words)
+START_RANGE_WHY = "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
+
+
+def within_range(out: Mapping[str, float], start: bool = False) -> None:
+    """InputError where a step took a speed or rate beyond its physical range (the
+    declared range of its initial value): there the (Vx, vx) state no longer resolves
+    Omega_y to one step's change (docs/reliability.md); the adapter discards the step.
+    ``start``: ``out`` is the initial state, named Vx0, Omega_y0, ...: every step from it
+    would be discarded, so the model refuses to start (exitInitializationMode)."""
+    for name, bound in (("Vx", SPEED_MAX), ("Vy", SPEED_MAX), ("Omega_y", RATE_MAX),
+                        ("Omega_z", RATE_MAX)):  # fmt: skip
+        value = out.get(name, 0.0)
+        if not abs(value) <= bound:
+            why = START_RANGE_WHY if start else "the loads drive the body beyond it"
+            raise InputError(
+                name + "0" if start else name, value, f"within abs <= {bound:g} ({why})"
+            )
