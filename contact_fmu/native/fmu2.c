@@ -447,6 +447,20 @@ static int start_in_range(Inst *I, const double *out) {
     return 0;
 }
 
+/* the body's initial outputs: within range (start_in_range), then finite; 0 with the
+ * reason logged */
+static int start_ok(Inst *I, const double *out) {
+    char r[40];
+    if (!start_in_range(I, out)) return 0;
+    const char *bad = nonfinite(out, r, sizeof r);
+    if (bad) {
+        say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+            "is not finite", bad, r);
+        return 0;
+    }
+    return 1;
+}
+
 /* RigidBody (rigid_body.py): M, Rx, Iy > 0, the initial state */
 static int build_rigid(Inst *I) {
     cf_core *c = &I->c;
@@ -565,13 +579,7 @@ static int build(Inst *I) {
         y.t = c->time;
         cf_initial_vforces(&p, &y);
         cf_vbody_outputs(&p, &y, &b, I->grid->tau, I->grid->slip, I->grid->inside);
-        if (!start_in_range(I, b.out)) return 0;
-        const char *bad = nonfinite(b.out, r, sizeof r);
-        if (bad) {
-            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
-                "is not finite", bad, r);
-            return 0;
-        }
+        if (!start_ok(I, b.out)) return 0;
         c->p = p, c->b = b, c->vs = y;
         c->P_law = P;
         c->built = 1;
@@ -584,13 +592,7 @@ static int build(Inst *I) {
     s.t = c->time;
     cf_initial_forces(&p, &s);
     cf_body_outputs(&p, &s, &b);
-    if (!start_in_range(I, b.out)) return 0;
-    const char *bad = nonfinite(b.out, r, sizeof r);
-    if (bad) {
-        say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
-            "is not finite", bad, r);
-        return 0;
-    }
+    if (!start_ok(I, b.out)) return 0;
     c->p = p, c->b = b, c->s = s;
     c->P_law = P;
     c->built = 1;
