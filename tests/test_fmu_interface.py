@@ -31,13 +31,18 @@ OUT = ROOT / "out" / "fmu"
 MU_P = ex.mu * ex.P
 
 
+def _models(build) -> dict[str, Path]:
+    """fig13, sweep and the full rigid_body model built by ``build`` (a target's build)."""
+    return {
+        "fig13": build(load(ROOT / "scenarios" / "fig13.toml").config, OUT).path,
+        "sweep": build(load(ROOT / "scenarios" / "sweep.toml").config, OUT).path,
+        "rigid": build(ModelConfig.full("rigid_body"), OUT).path,
+    }
+
+
 @pytest.fixture(scope="module")
 def fmus() -> dict[str, Path]:
-    return {
-        "fig13": fmu_build.build(load(ROOT / "scenarios" / "fig13.toml").config, OUT).path,
-        "sweep": fmu_build.build(load(ROOT / "scenarios" / "sweep.toml").config, OUT).path,
-        "rigid": fmu_build.build(ModelConfig.full("rigid_body"), OUT).path,
-    }
+    return _models(fmu_build.build)
 
 
 @pytest.fixture(scope="module")
@@ -45,11 +50,7 @@ def native_fmus() -> dict[str, Path]:
     """The same models as native C FMUs (fmu_build.native_fmu), from the same declarations."""
     from fmu_build import native_fmu
 
-    return {
-        "fig13": native_fmu.build(load(ROOT / "scenarios" / "fig13.toml").config, OUT).path,
-        "sweep": native_fmu.build(load(ROOT / "scenarios" / "sweep.toml").config, OUT).path,
-        "rigid": native_fmu.build(ModelConfig.full("rigid_body"), OUT).path,
-    }
+    return _models(native_fmu.build)
 
 
 @pytest.fixture(params=["pythonfmu", "native"])

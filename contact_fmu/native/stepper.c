@@ -778,26 +778,35 @@ static double adhesion_fraction(const cf_params *p, double vx, double vy, double
 }
 
 /* RollingBody.outputs() (kinematics and kinematics.contact_quantities) into b->out */
-void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
-    double Vx = y->Vx, vx = y->vx;
-    double Vy = p->ry * Vx, Omega_z = 0.0 * Vx; /* _apply_ratios, spin ratio 0 */
+/* the kinematics, forces (Tx, Ty, Mz) and kinematics.contact_quantities of
+ * RollingBody.outputs() into b->out, from the state (Vx, vx, Vy, Omega_z), for both paths
+ * (the adhesion and the regime are each path's) */
+static void kinematic_outputs(const cf_params *p, cf_body *b, double Vx, double vx, double Vy,
+                              double Oz, double Tx, double Ty, double Mz) {
     double *o = b->out;
     o[O_VX] = Vx;
     o[O_VY] = Vy;
     o[O_OMEGA_Y] = (Vx - vx) / p->Rx;
-    o[O_OMEGA_Z] = Omega_z;
-    o[O_TX] = y->Tx;
-    o[O_TY] = y->Ty;
-    o[O_MZ] = y->Mz;
+    o[O_OMEGA_Z] = Oz;
+    o[O_TX] = Tx;
+    o[O_TY] = Ty;
+    o[O_MZ] = Mz;
     o[O_VX_SLIP] = vx;
     o[O_VY_SLIP] = Vy;
-    double V = py_max(fabs(Vx), b->v_creep_floor);
+    const double V = py_max(fabs(Vx), b->v_creep_floor);
     o[O_XI_X] = vx / V;
     o[O_XI_Y] = Vy / V;
-    o[O_XI_SP] = Omega_z / V;
+    o[O_XI_SP] = Oz / V;
     o[O_A1] = p->a1;
     o[O_A2] = b->a2;
     o[O_P0] = b->p0;
+}
+
+void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
+    double Vx = y->Vx, vx = y->vx;
+    double Vy = p->ry * Vx, Omega_z = 0.0 * Vx; /* _apply_ratios, spin ratio 0 */
+    double *o = b->out;
+    kinematic_outputs(p, b, Vx, vx, Vy, Omega_z, y->Tx, y->Ty, y->Mz);
     if (p->law == LAW_TABLE) {
         double t[4];
         table_scalar(p, vx, Vy, Omega_z, Vx, t);
@@ -1734,22 +1743,7 @@ void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double
                       unsigned char *slip, const unsigned char *inside) {
     const double Vx = y->Vx, vx = y->vx, Vy = y->Vy, Oz = y->Oz;
     double *o = b->out;
-    o[O_VX] = Vx;
-    o[O_VY] = Vy;
-    o[O_OMEGA_Y] = (Vx - vx) / p->Rx;
-    o[O_OMEGA_Z] = Oz;
-    o[O_TX] = y->Tx;
-    o[O_TY] = y->Ty;
-    o[O_MZ] = y->Mz;
-    o[O_VX_SLIP] = vx;
-    o[O_VY_SLIP] = Vy;
-    const double V = py_max(fabs(Vx), b->v_creep_floor);
-    o[O_XI_X] = vx / V;
-    o[O_XI_Y] = Vy / V;
-    o[O_XI_SP] = Oz / V;
-    o[O_A1] = p->a1;
-    o[O_A2] = b->a2;
-    o[O_P0] = b->p0;
+    kinematic_outputs(p, b, Vx, vx, Vy, Oz, y->Tx, y->Ty, y->Mz);
     if (p->law == LAW_TABLE) {
         double t[4];
         table_scalar(p, vx, Vy, Oz, Vx, t);
