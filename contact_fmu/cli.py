@@ -8,7 +8,7 @@ contact-fmu run --native scenarios/x.toml  the same through the native FMU (C on
                                          a scene it does not cover is an error)
 contact-fmu references scenarios/x.toml  rewrite a scene's stored references from
                                          their independent source (no FMU involved)
-contact-fmu system scenarios/fig13.toml --case "eta = 3" --set My_ex=-0.95
+contact-fmu system scenarios/fig13.toml --case "eta = 3" --set My_ex=-0.95 [--native]
                                          the scene's body as a contact-mode and a
                                          rigid_body-mode FMU coupled: SSP 1.0 file and
                                          libcosim's OspSystemStructure.xml (out/system/)
@@ -164,18 +164,26 @@ def _system(args: argparse.Namespace) -> int:
         if args.case is not None and args.case not in names:
             raise InputError("--case", args.case, f"one of {names}")
         case = scene.case(args.case) if args.case else scene.cases[0]
-        folder = args.out / scene.name
-        made = system.write(scene, case, folder, args.step, overrides, args.fmu_out)
-    except (ScenarioError, InputError, OSError, RuntimeError) as e:
+        folder = args.out / (scene.name + ("_native" if args.native else ""))
+        made = system.write(
+            scene, case, folder, args.step, overrides, args.fmu_out, native=args.native
+        )
+    except (ScenarioError, InputError, OSError, RuntimeError, ValueError) as e:
         print(f"{args.scene}: ERROR: {e}", file=sys.stderr)
         return 1
-    print(f"{scene.name}, case {case.name!r}: contact-mode and rigid_body-mode FMUs coupled")
+    kind = "native " if args.native else ""
+    print(f"{scene.name}, case {case.name!r}: {kind}contact-mode and rigid_body-mode FMUs coupled")
     print(
         f"  step {made.step:g} s (slip relaxation time tau = {made.tau:.3g} s; explicit "
         f"coupling needs step < tau), stop time {made.stop_time:g} s"
     )
     for path in (*made.fmus.values(), made.ssp, made.osp):
         print(f"  wrote {path}")
+    print("  libcosim takes the step from either file (from_ssp_file, from_osp_config_file);")
+    print(
+        "  fmpy reads no step or stop time from the .ssp: "
+        f"simulate_ssp('{made.ssp}', stop_time={made.stop_time!r}, step_size={made.step!r})"
+    )
     return 0
 
 
@@ -342,6 +350,9 @@ def parser() -> argparse.ArgumentParser:
     )
     sys_.add_argument(
         "--step", type=float, help="communication step (s; default: the power of ten <= tau/5)"
+    )
+    sys_.add_argument(
+        "--native", action="store_true", help="the native (C) contact and rigid_body FMUs"
     )
     sys_.add_argument("--out", type=Path, default=DEFAULT_OUT / "system", help="out/system")
     sys_.add_argument("--fmu-out", type=Path, default=DEFAULT_OUT / "fmu", help="FMU cache")
