@@ -6,8 +6,10 @@ contact-fmu run scenarios/fig13.toml     build the scene's FMU (cached), simulat
 contact-fmu run --all                    every scene of scenarios/
 contact-fmu run --native scenarios/x.toml  the same through the native FMU (C only;
                                          a scene it does not cover is an error)
-contact-fmu references scenarios/x.toml  rewrite a scene's stored references from
-                                         their independent source (no FMU involved)
+contact-fmu references scenarios/x.toml  a scene's references from their independent
+                                         source (no FMU involved), under
+                                         out/references/; --overwrite rewrites the
+                                         stored ones (maintainers)
 contact-fmu system scenarios/fig13.toml --case "eta = 3" --set My_ex=-0.95 [--native]
                                          the scene's body as a contact-mode and a
                                          rigid_body-mode FMU coupled: SSP 1.0 file and
@@ -140,8 +142,11 @@ def _references(args: argparse.Namespace) -> int:
                         )
                     )
             continue
-        for written in regenerate(scene):
+        where = None if args.overwrite else args.out / "references" / scene.name
+        for written in regenerate(scene, where):
             print(written)
+        if where is not None:
+            print(f"  (written under {where}; --overwrite rewrites the scene's own files)")
     return 0
 
 
@@ -205,6 +210,7 @@ def _report(args: argparse.Namespace) -> int:
     fmu_dir = args.fmu_out
     try:
         engine = Engine(None if args.scheduler else args.workers, args.scheduler)
+        engine.__enter__()  # connected here: a wrong --scheduler is one line, not a traceback
     except InputError as e:
         raise SystemExit(f"contact-fmu report: {e}") from None
     with engine:
@@ -268,6 +274,7 @@ def _sweep(args: argparse.Namespace) -> int:
             )
         variation.check(scene, [v.name for v in vary])
         engine = Engine(args.workers, args.scheduler, progress=not args.no_progress)
+        engine.__enter__()  # connected here: a wrong --scheduler is one line, not a traceback
     except (ScenarioError, InputError) as e:
         raise SystemExit(f"contact-fmu sweep: {e}") from None
     out = args.out or DEFAULT_OUT / "sweeps" / scene.name
@@ -326,13 +333,23 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--native", action="store_true", help="through the native FMU (C only)")
     run.set_defaults(func=_run)
 
-    refs = sub.add_parser("references", help="rewrite stored references from their source")
+    refs = sub.add_parser(
+        "references", help="a scene's references from their source (--overwrite: the stored)"
+    )
     scenes_args(refs)
     refs.add_argument(
         "--estimate",
         action="store_true",
         help="print the Richardson error estimates that justify the "
         "tolerances ('simulate', 'traction') instead of writing",
+    )
+    refs.add_argument(
+        "--out", type=Path, default=DEFAULT_OUT, help="written under OUT/references/<scene>/"
+    )
+    refs.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="rewrite the scene's stored reference files (tracked; for maintainers)",
     )
     refs.set_defaults(func=_references)
 
