@@ -124,3 +124,24 @@ def test_documented_command_exits_zero(command, page, skip):
         done.stdout[-1500:] + done.stderr[-1500:]
     )
     assert tracked_state() == before, f"{page}: `{command}` changed tracked files"
+
+
+def test_the_studies_page_reads_the_sweep_with_pyarrow(capsys):
+    """docs/studies.md's python block (pyarrow only: pandas is not installed) on the
+    sweep its sh block writes: the first rows are mu = 0.2 exactly as typed, the first
+    case (eta = 1.5), adhesion 0.834 (measured; it rises with mu, see the page)."""
+    page = ROOT / "docs" / "studies.md"
+    (code,) = re.findall(r"```python\n(.*?)```", page.read_text(), flags=re.S)
+    if not (ROOT / "out" / "sweeps" / "mu" / "results.parquet").is_file():
+        sweep = [c for c, p, _ in DOCUMENTED if p == "docs/studies.md" and "--out" in c]
+        assert len(sweep) == 1
+        test_documented_command_exits_zero(sweep[0] + " --workers 0", "docs/studies.md", "")
+    capsys.readouterr()
+    cwd = Path.cwd()
+    try:
+        os.chdir(ROOT)
+        exec(compile(code, str(page), "exec"), {})
+    finally:
+        os.chdir(cwd)
+    out = capsys.readouterr().out
+    assert out.startswith("[(0.2, 'eta = 1.5', 0.834)"), out
