@@ -6,9 +6,11 @@ contact-fmu run scenarios/fig13.toml     build the scene's FMU (cached), simulat
 contact-fmu run --all                    every scene of scenarios/
 contact-fmu run --native scenarios/x.toml  the same through the native FMU (C only;
                                          a scene it does not cover is an error)
-contact-fmu references scenarios/x.toml  rewrite a scene's stored references from
-                                         their independent source (no FMU involved)
-contact-fmu system scenarios/fig13.toml --case "eta = 3" --set My_ex=-0.95
+contact-fmu references scenarios/x.toml  a scene's references from their independent
+                                         source (no FMU involved), under
+                                         out/references/; --overwrite rewrites the
+                                         stored ones (maintainers)
+contact-fmu system scenarios/fig13.toml --case "eta = 3" --set My_ex=-0.95 [--native]
                                          the scene's body as a contact-mode and a
                                          rigid_body-mode FMU coupled: SSP 1.0 file and
                                          libcosim's OspSystemStructure.xml (out/system/)
@@ -140,8 +142,11 @@ def _references(args: argparse.Namespace) -> int:
                         )
                     )
             continue
-        for written in regenerate(scene):
+        where = None if args.overwrite else args.out / "references" / scene.name
+        for written in regenerate(scene, where):
             print(written)
+        if where is not None:
+            print(f"  (written under {where}; --overwrite rewrites the scene's own files)")
     return 0
 
 
@@ -164,18 +169,26 @@ def _system(args: argparse.Namespace) -> int:
         if args.case is not None and args.case not in names:
             raise InputError("--case", args.case, f"one of {names}")
         case = scene.case(args.case) if args.case else scene.cases[0]
-        folder = args.out / scene.name
-        made = system.write(scene, case, folder, args.step, overrides, args.fmu_out)
-    except (ScenarioError, InputError, OSError, RuntimeError) as e:
+        folder = args.out / (scene.name + ("_native" if args.native else ""))
+        made = system.write(
+            scene, case, folder, args.step, overrides, args.fmu_out, native=args.native
+        )
+    except (ScenarioError, InputError, OSError, RuntimeError, ValueError) as e:
         print(f"{args.scene}: ERROR: {e}", file=sys.stderr)
         return 1
-    print(f"{scene.name}, case {case.name!r}: contact-mode and rigid_body-mode FMUs coupled")
+    kind = "native " if args.native else ""
+    print(f"{scene.name}, case {case.name!r}: {kind}contact-mode and rigid_body-mode FMUs coupled")
     print(
         f"  step {made.step:g} s (slip relaxation time tau = {made.tau:.3g} s; explicit "
         f"coupling needs step < tau), stop time {made.stop_time:g} s"
     )
     for path in (*made.fmus.values(), made.ssp, made.osp):
         print(f"  wrote {path}")
+    print("  libcosim takes the step from either file (from_ssp_file, from_osp_config_file);")
+    print(
+        "  fmpy reads no step or stop time from the .ssp: "
+        f"simulate_ssp('{made.ssp}', stop_time={made.stop_time!r}, step_size={made.step!r})"
+    )
     return 0
 
 
@@ -197,6 +210,7 @@ def _report(args: argparse.Namespace) -> int:
     fmu_dir = args.fmu_out
     try:
         engine = Engine(None if args.scheduler else args.workers, args.scheduler)
+        engine.__enter__()  # connected here: a wrong --scheduler is one line, not a traceback
     except InputError as e:
         raise SystemExit(f"contact-fmu report: {e}") from None
     with engine:
@@ -260,6 +274,7 @@ def _sweep(args: argparse.Namespace) -> int:
             )
         variation.check(scene, [v.name for v in vary])
         engine = Engine(args.workers, args.scheduler, progress=not args.no_progress)
+        engine.__enter__()  # connected here: a wrong --scheduler is one line, not a traceback
     except (ScenarioError, InputError) as e:
         raise SystemExit(f"contact-fmu sweep: {e}") from None
     out = args.out or DEFAULT_OUT / "sweeps" / scene.name
@@ -318,13 +333,23 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--native", action="store_true", help="through the native FMU (C only)")
     run.set_defaults(func=_run)
 
-    refs = sub.add_parser("references", help="rewrite stored references from their source")
+    refs = sub.add_parser(
+        "references", help="a scene's references from their source (--overwrite: the stored)"
+    )
     scenes_args(refs)
     refs.add_argument(
         "--estimate",
         action="store_true",
         help="print the Richardson error estimates that justify the "
         "tolerances ('simulate', 'traction') instead of writing",
+    )
+    refs.add_argument(
+        "--out", type=Path, default=DEFAULT_OUT, help="written under OUT/references/<scene>/"
+    )
+    refs.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="rewrite the scene's stored reference files (tracked; for maintainers)",
     )
     refs.set_defaults(func=_references)
 
@@ -342,6 +367,9 @@ def parser() -> argparse.ArgumentParser:
     )
     sys_.add_argument(
         "--step", type=float, help="communication step (s; default: the power of ten <= tau/5)"
+    )
+    sys_.add_argument(
+        "--native", action="store_true", help="the native (C) contact and rigid_body FMUs"
     )
     sys_.add_argument("--out", type=Path, default=DEFAULT_OUT / "system", help="out/system")
     sys_.add_argument("--fmu-out", type=Path, default=DEFAULT_OUT / "fmu", help="FMU cache")

@@ -7,8 +7,12 @@ their start values and writes the system twice:
 
 - ``<name>.ssp``: SSP 1.0 (SystemStructure.ssd with the two components, their
   connectors, the three connections, the parameter values as a ParameterBinding of the
-  system, the default experiment; the FMUs under resources/). fmpy runs it with
-  ``fmpy.ssp.simulation.simulate_ssp``;
+  system, the default experiment with the communication step as OSP's annotation
+  ``<osp:FixedStepAlgorithm baseStepSize=.../>``; the FMUs under resources/). libcosim
+  runs it as written (``CosimExecution.from_ssp_file``; without the annotation it ends
+  the process); fmpy's ``fmpy.ssp.simulation.simulate_ssp`` reads neither the step nor
+  the stop time from the file (it takes stop_time 1 s and step stop_time/100 unless
+  given): pass ``stop_time`` and ``step_size``, which the command prints;
 - ``OspSystemStructure.xml`` with the FMUs beside it: libcosim's format
   (``CosimExecution.from_osp_config_file``), the values as InitialValues.
 
@@ -55,6 +59,9 @@ SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 OSP = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
+# OSP's annotations of an SSD (libcosim's SSP reader matches the prefix "osp:" by name)
+OSP_SSP = "http://opensimulationplatform.com/SSP/OSPAnnotations"
+OSP_ANNOTATION = "com.opensimulationplatform"
 # the components and their connections: (from, variable) -> (to, variable)
 CONTACT, BODY = "contact", "body"
 CONNECTIONS = (
@@ -153,11 +160,14 @@ def _pretty(root: ET.Element) -> bytes:
     return minidom.parseString(ET.tostring(root)).toprettyxml(indent="  ", encoding="UTF-8")
 
 
-def ssd(name: str, cfgs: dict[str, ModelConfig], sources: dict[str, str], stop: float) -> bytes:
-    """SystemStructure.ssd (SSP 1.0)."""
+def ssd(
+    name: str, cfgs: dict[str, ModelConfig], sources: dict[str, str], stop: float, step: float
+) -> bytes:
+    """SystemStructure.ssd (SSP 1.0), fixed-step at ``step`` (s) for OSP's tools."""
     ET.register_namespace("ssd", SSD)
     ET.register_namespace("ssc", SSC)
     ET.register_namespace("ssv", SSV)
+    ET.register_namespace("osp", OSP_SSP)
     d, c, v = (f"{{{ns}}}" for ns in (SSD, SSC, SSV))
     root = ET.Element(f"{d}SystemStructureDescription", version="1.0", name=name)
     system = ET.SubElement(root, f"{d}System", name=name)
@@ -210,7 +220,12 @@ def ssd(name: str, cfgs: dict[str, ModelConfig], sources: dict[str, str], stop: 
     for u in sorted(units):
         unit = ET.SubElement(unit_defs, f"{c}Unit", name=u)
         ET.SubElement(unit, f"{c}BaseUnit", {k: str(e) for k, e in fv.UNITS[u].items()})
-    ET.SubElement(root, f"{d}DefaultExperiment", startTime="0.0", stopTime=repr(stop))
+    experiment = ET.SubElement(root, f"{d}DefaultExperiment", startTime="0.0", stopTime=repr(stop))
+    note = ET.SubElement(
+        ET.SubElement(experiment, f"{d}Annotations"), f"{c}Annotation", type=OSP_ANNOTATION
+    )
+    algorithm = ET.SubElement(note, f"{{{OSP_SSP}}}Algorithm")
+    ET.SubElement(algorithm, f"{{{OSP_SSP}}}FixedStepAlgorithm", baseStepSize=repr(step))
     return _pretty(root)
 
 
@@ -262,8 +277,10 @@ def write(
     step: float | None = None,
     overrides: dict[str, float] | None = None,
     fmu_out: str | Path = DEFAULT_OUT,
+    native: bool = False,
 ) -> System:
-    """Build the two FMUs and write the system files into ``folder``."""
+    """Build the two FMUs (``native``: the native C FMUs, fmu_build.native_fmu) and
+    write the system files into ``folder``."""
     folder = Path(folder)
     cfgs = configs(scene, case, dict(overrides or {}))
     auto, tau = default_step(cfgs)
@@ -273,15 +290,17 @@ def write(
         raise InputError("step", step, "> 0 and a whole number of nanoseconds (libcosim)")
     folder.mkdir(parents=True, exist_ok=True)
     fmus = {}
+    if native:
+        from . import native_fmu
     for comp, cfg in cfgs.items():
-        built = build(cfg, fmu_out)
-        fmus[comp] = folder / f"{cfg.name}.fmu"
+        built = native_fmu.build(cfg, fmu_out) if native else build(cfg, fmu_out)
+        fmus[comp] = folder / f"{cfg.name}{'_native' if native else ''}.fmu"
         shutil.copyfile(built.path, fmus[comp])
     sources = {comp: f"resources/{p.name}" for comp, p in fmus.items()}
     ssp_path = folder / f"{scene.name}.ssp"
     tmp = ssp_path.with_suffix(".ssp.tmp")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
-        z.writestr("SystemStructure.ssd", ssd(scene.name, cfgs, sources, scene.stop_time))
+        z.writestr("SystemStructure.ssd", ssd(scene.name, cfgs, sources, scene.stop_time, step))
         for comp, p in fmus.items():
             z.write(p, sources[comp])
     tmp.replace(ssp_path)

@@ -13,7 +13,12 @@ test's estimate, 1.4e-5 s): the power of ten at or below tau/5, 1e-6 s.
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 import fmpy
@@ -83,6 +88,56 @@ def check_coupling(e: dict[str, float]) -> None:
     against the force and speed scales."""
     assert e["Tx_late"] <= 1e-6, e
     assert e["Tx"] < 0.03 * ex.mu * ex.P and e["Vx"] < 1e-4, e
+
+
+@pytest.fixture(scope="module")
+def made_native(tmp_path_factory) -> system.System:
+    """The same system of native (C) FMUs (``contact-fmu system --native``)."""
+    scene = load(ROOT / "scenarios" / "fig13.toml")
+    folder = tmp_path_factory.mktemp("system_native")
+    return system.write(scene, scene.case("eta = 3"), folder, None, {"My_ex": MY}, OUT, True)
+
+
+# libcosim in a child process: a libcosim that cannot read a system file ends the
+# process (it did on an SSD without a step), which must fail one test, not end pytest
+LIBCOSIM_SSP = """
+import json, sys
+from libcosimpy.CosimEnums import CosimVariableType
+from libcosimpy.CosimExecution import CosimExecution
+from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+from libcosimpy.CosimObserver import CosimObserver
+
+log_output_level(CosimLogLevel.ERROR)
+path, t_end = sys.argv[1], int(sys.argv[2])
+execution = CosimExecution.from_ssp_file(path)  # the step from the file
+c = execution.slave_index_from_instance_name("contact")
+b = execution.slave_index_from_instance_name("body")
+ref = {s: {v.name.decode(): v.reference for v in execution.slave_variables(s)} for s in (c, b)}
+observer = CosimObserver.create_time_series()
+execution.add_observer(observer)
+series = [(c, "Tx"), (b, "Vx"), (b, "Omega_y")]
+for s, name in series:
+    observer.start_time_series(s, ref[s][name], CosimVariableType.REAL)
+ok = execution.simulate_until(target_time=t_end)
+out = {"ok": ok}
+for s, name in series:
+    t, _, values = observer.time_series_real_samples(s, ref[s][name], from_step=1,
+                                                     sample_count=10**6)
+    out["time"], out[name] = [x * 1e-9 for x in t], list(values)
+print(json.dumps(out))
+"""
+
+
+def libcosim_ssp_run(ssp: Path) -> dict[str, np.ndarray]:
+    """libcosim's from_ssp_file on ``ssp`` until T_END, in a child process."""
+    done = subprocess.run(
+        [sys.executable, "-c", LIBCOSIM_SSP, str(ssp), str(round(T_END * 1e9))],
+        capture_output=True, text=True, timeout=600, cwd=ssp.parent,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    assert out.pop("ok")
+    return {k: np.array(v) for k, v in out.items()}
 
 
 def test_step_follows_the_slip_relaxation_time(made):
@@ -184,6 +239,8 @@ def test_system_command(tmp_path, capsys):
     for name in ("fig13_contact.fmu", "fig13_body.fmu", "fig13.ssp", "OspSystemStructure.xml"):
         assert f"wrote {tmp_path / 'fig13' / name}" in out
         assert (tmp_path / "fig13" / name).is_file()
+    # fmpy takes no step from the file: the command says which to pass
+    assert "step_size=1e-06" in out and "stop_time=" in out
     # My_ex of Fig. 13 is a sine: a system file cannot carry it
     assert cli.main(["system", scene, "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err
@@ -191,3 +248,43 @@ def test_system_command(tmp_path, capsys):
     # a scene with lateral parts has no planar coupling
     assert cli.main(["system", str(ROOT / "scenarios" / "cornering.toml")]) == 1
     assert "planar body-mode scene" in capsys.readouterr().err
+
+
+def test_the_ssp_carries_the_step_for_osp_tools(made):
+    """SSP 1.0 has no step of its own: OSP's annotation of the DefaultExperiment holds
+    it (libcosim reads baseStepSize), beside the scene's stop time."""
+    with zipfile.ZipFile(made.ssp) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    ns = {"ssd": system.SSD, "ssc": system.SSC, "osp": system.OSP_SSP}
+    exp = root.find("ssd:DefaultExperiment", ns)
+    assert float(exp.get("stopTime")) == made.stop_time
+    (note,) = exp.findall("ssd:Annotations/ssc:Annotation", ns)
+    assert note.get("type") == "com.opensimulationplatform"
+    (fixed,) = note.findall("osp:Algorithm/osp:FixedStepAlgorithm", ns)
+    assert float(fixed.get("baseStepSize")) == made.step == 1e-6
+
+
+@pytest.mark.parametrize("which", ["pythonfmu", "native"])
+def test_libcosim_runs_the_ssp_as_written(which, made, made_native, body_mode):
+    """libcosim's SSP reader with the step from the file: the coupling's expectations
+    (check_coupling) and, exchanging once per step as fmpy does, fmpy's numbers."""
+    m = made if which == "pythonfmu" else made_native
+    run = libcosim_ssp_run(m.ssp)
+    assert run["time"].size == round(T_END / m.step)
+    assert run["time"][1] - run["time"][0] == pytest.approx(m.step, rel=1e-9)
+    check_coupling(errors(run["time"], run, body_mode))
+    res = simulate_ssp(str(m.ssp), stop_time=T_END, step_size=m.step)
+    assert np.max(np.abs(run["Tx"] - res["contact.Tx"])) <= 1e-9 * ex.mu * ex.P
+
+
+def test_fmpy_runs_the_native_ssp(made_native, body_mode):
+    """The native pair in fmpy, at the step the command prints: the same coupling."""
+    assert made_native.step == 1e-6
+    assert all(p.name.endswith("_native.fmu") for p in made_native.fmus.values())
+    for fmu in made_native.fmus.values():
+        md = fmpy.read_model_description(str(fmu))
+        assert md.coSimulation.modelIdentifier.endswith("_native")
+    res = simulate_ssp(str(made_native.ssp), stop_time=T_END, step_size=made_native.step)
+    t = res["time"] + made_native.step
+    run = {"Tx": res["contact.Tx"], "Vx": res["body.Vx"], "Omega_y": res["body.Omega_y"]}
+    check_coupling(errors(t, run, body_mode))

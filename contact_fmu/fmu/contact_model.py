@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..kinematics import contact_quantities, rigid_slip
+from ..kinematics import ROLLING, SLIDING, contact_quantities, rigid_slip
 from .config import ModelConfig
 from .laws import make_law
 
@@ -37,6 +37,8 @@ class ContactElement:
         Tx, Ty, Mz = law.forces(vx, vy, Omega_z, Vx)
         out = {"vx": vx, "vy": vy, "Tx": float(Tx), "Ty": float(Ty), "Mz": float(Mz)}
         out.update(contact_quantities(law, Vx, vx, vy, Omega_z))
+        if Omega_z != 0.0:  # with spin the creepage alone does not tell gross sliding:
+            out["regime"] = ROLLING if out["adhesion"] > 0.0 else SLIDING  # no area left
         self.law, self._out = law, out
 
     def tune(self, params: Mapping[str, Any]) -> None:

@@ -18,7 +18,13 @@
  *     reaching pythonfmu, which would read freed memory;
  *   - wraps serialized states in an envelope (magic, format version, the FMU's GUID,
  *     payload length, CRC-32 of the payload): bytes of another FMU, another format,
- *     truncated or altered, are refused at fmi2DeSerializeFMUstate with fmi2Error.
+ *     truncated or altered, are refused at fmi2DeSerializeFMUstate with fmi2Error;
+ *   - passes every message of status Warning or worse to the importer's logger whether
+ *     debug logging is on or off (FMI 2.0: debug logging gates the debug messages, not
+ *     the explanation of a call that failed). pythonfmu's logger drops every message
+ *     while its debug logging is off, so pythonfmu's runs with it always on and this
+ *     library's logger (shim_logger) filters: fmi2OK messages pass only in debug
+ *     logging (and, when the importer named categories, only those categories).
  *
  * Linux only (pythonfmu's Windows binary is shipped as it is). No mutable globals: each
  * instance holds its own table of pythonfmu's functions (dlopen counts references).
@@ -72,6 +78,10 @@ typedef struct {
     fmi2Component inner;
     inner_api api;
     fmi2CallbackFunctions cb; /* a copy: the importer's struct need not outlive us */
+    fmi2CallbackFunctions inner_cb; /* pythonfmu's: shim_logger, with this instance */
+    int debug;                      /* the importer's debug logging */
+    char **categories;              /* ... and its categories (none: all) */
+    size_t n_categories;
     char *name;
     char *guid;
     size_t guid_len;
@@ -111,6 +121,58 @@ static void cf_log(const fmi2CallbackFunctions *cb, const char *name, fmi2Status
     va_end(ap);
     cb->logger(cb->componentEnvironment, name != NULL ? name : "", status,
                status >= fmi2Error ? "logStatusError" : "logStatusWarning", "%s", msg);
+}
+
+/* The logger pythonfmu's binary calls (componentEnvironment: this instance). Warnings
+ * and worse always reach the importer; fmi2OK messages only in debug logging, of an
+ * enabled category. The text goes on as an argument, never as the format. */
+static void shim_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                        fmi2String category, fmi2String message, ...) {
+    const shim *s = env;
+    char small[2048], *msg = small;
+    int n;
+    va_list ap;
+    if (s == NULL || s->cb.logger == NULL || message == NULL) return;
+    if (status == fmi2OK) {
+        size_t i;
+        if (!s->debug) return;
+        for (i = 0; i < s->n_categories; i++)
+            if (category != NULL && strcmp(category, s->categories[i]) == 0) break;
+        if (s->n_categories && i == s->n_categories) return;
+    }
+    va_start(ap, message);
+    n = vsnprintf(small, sizeof small, message, ap);
+    va_end(ap);
+    if (n >= (int)sizeof small) { /* a long message (a traceback): whole */
+        char *big = cf_alloc(&s->cb, (size_t)n + 1, 1);
+        if (big != NULL) {
+            va_start(ap, message);
+            vsnprintf(big, (size_t)n + 1, message, ap);
+            va_end(ap);
+            msg = big;
+        }
+    }
+    s->cb.logger(s->cb.componentEnvironment, name != NULL ? name : "", status,
+                 category != NULL ? category : "", "%s", n < 0 ? message : msg);
+    if (msg != small) cf_free(&s->cb, msg);
+}
+
+/* The importer's debug logging and categories, kept for shim_logger. */
+static fmi2Status set_debug(shim *s, fmi2Boolean on, size_t n, const fmi2String categories[]) {
+    for (size_t i = 0; i < s->n_categories; i++) cf_free(&s->cb, s->categories[i]);
+    cf_free(&s->cb, s->categories);
+    s->categories = NULL;
+    s->n_categories = 0;
+    s->debug = on != fmi2False;
+    if (!s->debug || n == 0 || categories == NULL) return fmi2OK;
+    s->categories = cf_alloc(&s->cb, n, sizeof *s->categories);
+    if (s->categories == NULL) return fmi2Error;
+    for (size_t i = 0; i < n; i++) {
+        s->categories[s->n_categories] = cf_strdup(&s->cb, categories[i], NULL);
+        if (s->categories[s->n_categories] == NULL) return fmi2Error;
+        s->n_categories++;
+    }
+    return fmi2OK;
 }
 
 static int hexval(char c) {
@@ -204,6 +266,11 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     s = cf_alloc(functions, 1, sizeof *s);
     if (s == NULL) return NULL;
     s->cb = *functions;
+    s->inner_cb = *functions;
+    s->inner_cb.logger = shim_logger;
+    s->inner_cb.stepFinished = NULL; /* doStep is synchronous */
+    s->inner_cb.componentEnvironment = s;
+    s->debug = loggingOn != fmi2False;
     s->name = cf_strdup(functions, instanceName, NULL);
     s->guid = cf_strdup(functions, fmuGUID, &s->guid_len);
     resources = uri_path(functions, resourceLocation);
@@ -212,7 +279,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
                "resourceLocation %s is not a local file URI", resourceLocation ? resourceLocation : "(null)");
     } else if (load_inner(s, resources)) {
         s->inner = s->api.Instantiate(instanceName, fmuType, fmuGUID, resourceLocation,
-                                      functions, visible, loggingOn);
+                                      &s->inner_cb, visible, fmi2True);
     }
     cf_free(functions, resources);
     if (s->inner == NULL || send_cell(s) > fmi2Warning) {
@@ -232,6 +299,7 @@ FMI2_Export void fmi2FreeInstance(fmi2Component c) {
     cb = s->cb;
     for (size_t i = 0; i < s->n_states; i++) s->api.FreeFMUstate(s->inner, &s->states[i]);
     s->api.FreeInstance(s->inner);
+    set_debug(s, fmi2False, 0, NULL);
     cf_free(&cb, s->states);
     cf_free(&cb, s->name);
     cf_free(&cb, s->guid);
@@ -251,7 +319,12 @@ FMI2_Export void fmi2FreeInstance(fmi2Component c) {
 FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
                                            const fmi2String categories[]) {
     shim *s = c;
-    CALL(s, s->api.SetDebugLogging(s->inner, on, n, categories));
+    if (s == NULL) return fmi2Error;
+    if (set_debug(s, on, n, categories) > fmi2Warning) {
+        cf_log(&s->cb, s->name, fmi2Error, "fmi2SetDebugLogging: out of memory");
+        return fmi2Error;
+    }
+    CALL(s, s->api.SetDebugLogging(s->inner, fmi2True, 0, NULL));
 }
 
 FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDefined,

@@ -530,7 +530,7 @@ VARIABLES: tuple[Var, ...] = (
         "1",
         "Adhesion area over contact area",
         {"body": OUTPUT, "contact": OUTPUT},
-        feedthrough=("P", "Vx", "Vy", "Omega_y"),
+        feedthrough=_KIN,  # spin too: Omega_z shrinks the adhesion area (strip march)
     ),
     Var(
         "regime",
@@ -539,7 +539,7 @@ VARIABLES: tuple[Var, ...] = (
         {"body": OUTPUT, "contact": OUTPUT},
         0,
         type="Integer",
-        feedthrough=("P", "Vx", "Vy", "Omega_y"),
+        feedthrough=_KIN,  # with spin: whether the adhesion area is left
     ),
     Var(
         "slip_centroid_x",

@@ -427,7 +427,10 @@ static const char *contact_outputs(const cf_core *c, spin_grid *g, cf_params *p,
                       : grid ? cf_spin_adhesion(grid, vx, vy, Vx, Omega_z, g->tau, g->slip,
                                                 g->inside)
                              : adhesion_fraction(p, vx, vy, Vx);
-    out[O_REGIME] = full_slip(p, vx, vy, Vx) ? 1.0 : 0.0;
+    /* with spin the creepage alone does not tell gross sliding: no adhesion area left
+     * does (ContactElement.evaluate) */
+    out[O_REGIME] = (Omega_z != 0.0 ? !(out[O_ADHESION] > 0.0) : full_slip(p, vx, vy, Vx))
+                        ? 1.0 : 0.0;
     return nonfinite(out, r, n);
 }
 

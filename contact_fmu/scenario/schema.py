@@ -51,6 +51,7 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from dataclasses import field as _field  # Scene has a field named 'field'
+from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
@@ -458,13 +459,15 @@ def sweep_values(where: str, v: Any) -> tuple[float, ...]:
                 parts = text.split(":")
                 if len(parts) != 3:
                     raise ValueError
-                a, b, n = float(parts[0]), float(parts[1]), parts[2].strip()
+                a, b, n = Decimal(parts[0].strip()), Decimal(parts[1].strip()), parts[2].strip()
                 if not n.isdigit() or int(n) < 2:
                     raise InputError(where, v, '"start:stop:n" with a whole number n >= 2')
-                v = [float(x) for x in np.linspace(a, b, int(n))]
+                # in decimal: 0.2:0.4:5 gives 0.25 and 0.3 as typed (linspace: 0.30000000000000004)
+                m = int(n) - 1
+                v = [float(a + (b - a) * i / m) for i in range(m + 1)]
             else:
                 v = [float(x) for x in text.split(",")]
-        except ValueError:
+        except (ValueError, ArithmeticError):  # decimal.InvalidOperation: not a number
             raise InputError(where, v, 'a list "a,b,c" or a range "start:stop:n"') from None
     if not (isinstance(v, list) and v):
         raise InputError(where, v, 'a non-empty list of numbers or a range "start:stop:n"')

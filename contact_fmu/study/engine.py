@@ -31,6 +31,8 @@ from .._validate import InputError
 # each up (``release``).
 _ONCE: dict[str, Any] = {}
 _CLEANUP: dict[str, Callable[[Any], None]] = {}
+# seconds to wait for a running scheduler to answer (dask's default is 30 s)
+CONNECT_TIMEOUT = 10.0
 
 
 def once(key: str, factory: Callable[[], Any], cleanup: Callable[[Any], None] | None = None) -> Any:
@@ -129,12 +131,23 @@ class Engine:
         return f"LocalCluster of {self.workers} worker processes"
 
     def __enter__(self) -> Engine:
-        if self.serial:
+        """Start (or connect to) the cluster; an unreachable scheduler is an InputError
+        naming its address, after CONNECT_TIMEOUT."""
+        if self.serial or self.client is not None:
             return self
         from dask.distributed import Client, LocalCluster
 
         if self.scheduler is not None:
-            self.client = Client(self.scheduler)
+            try:
+                self.client = Client(self.scheduler, timeout=CONNECT_TIMEOUT)
+            except (OSError, TimeoutError, ValueError) as e:  # refused, unknown host, timeout
+                why = str(e).splitlines()[0] if str(e) else type(e).__name__
+                raise InputError(
+                    "scheduler",
+                    self.scheduler,
+                    f"the address of a running Dask scheduler (tcp://host:8786); no answer "
+                    f"within {CONNECT_TIMEOUT:g} s: {why}",
+                ) from None
         else:
             self._cluster = LocalCluster(
                 n_workers=self.workers,

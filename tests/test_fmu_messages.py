@@ -1,0 +1,67 @@
+"""What a host sees when the FMU refuses a value, with debug logging off.
+
+FMI 2.0 (section 2.1.5): debug logging (fmi2SetDebugLogging, loggingOn) gates the FMU's
+debug messages, not the explanation of a call that answered fmi2Warning, fmi2Discard or
+fmi2Error. A tool user who sets mu = -1 must read why, naming mu and its bound, in the
+importer's logger without switching debug logging on: through fmpy's ``simulate_fmu``
+as a user calls it, for the pythonfmu FMU (whose status shim passes the adapter's
+messages on while pythonfmu's own logger drops them) and for the native FMU.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import fmpy
+import pytest
+
+import fmu_build
+from contact_fmu.fmu import variables as fv
+from contact_fmu.scenario import load
+from fmu_build import native_fmu
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"
+FIG13 = ROOT / "scenarios" / "fig13.toml"
+
+
+@pytest.fixture(scope="module", params=["pythonfmu", "native"])
+def fmu(request) -> Path:
+    build = fmu_build.build if request.param == "pythonfmu" else native_fmu.build
+    return build(load(FIG13).config, OUT).path
+
+
+def run(fmu: Path, **kwargs) -> tuple[list[tuple[int, str]], Exception | None]:
+    """simulate_fmu with a logger of our own and debug logging off (fmpy's default)."""
+    messages: list[tuple[int, str]] = []
+
+    def logger(env, name: bytes, status: int, category: bytes, message: bytes) -> None:
+        messages.append((status, message.decode()))
+
+    try:
+        fmpy.simulate_fmu(str(fmu), stop_time=1e-3, output_interval=1e-4, logger=logger,
+                          debug_logging=False, **kwargs)  # fmt: skip
+    except Exception as e:  # fmpy raises on fmi2Error: the message must be logged too
+        return messages, e
+    return messages, None
+
+
+def test_a_refused_value_is_explained_without_debug_logging(fmu):
+    """mu = -1: mu's range is (0, inf) (variables.py); the call is refused (fmi2Error
+    or fmi2Discard, never OK) and one message of that status names mu, the value and
+    the bound."""
+    decl = fv.BY_NAME["mu"]
+    bound = f"{'>' if decl.open_min else '>='} {decl.min:g}"  # "> 0"
+    messages, error = run(fmu, start_values={"mu": -1.0})
+    assert error is not None  # fmpy stops at the refused start value
+    refused = [m for s, m in messages if s >= 2 and "mu" in m and "-1" in m]
+    assert refused, messages
+    assert any(f"must be {bound}" in m for m in refused), refused
+
+
+def test_no_debug_messages_reach_the_host_without_debug_logging(fmu):
+    """A run that goes well: no messages of status OK, so debug logging still gates the
+    debug output."""
+    messages, error = run(fmu, start_values={"mu": 0.3})
+    assert error is None
+    assert [m for s, m in messages if s == 0] == []
