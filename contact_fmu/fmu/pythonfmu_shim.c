@@ -125,13 +125,12 @@ static void cf_log(const fmi2CallbackFunctions *cb, const char *name, fmi2Status
 
 /* The logger pythonfmu's binary calls (componentEnvironment: this instance). Warnings
  * and worse always reach the importer; fmi2OK messages only in debug logging, of an
- * enabled category. The text goes on as an argument, never as the format. */
+ * enabled category. pythonfmu hands over finished text in the format's place with no
+ * arguments (its Fmi2Logger::debugLog), and the text can quote the user's own strings
+ * (a refused String value): it goes on as the argument of "%s", never as a format. */
 static void shim_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                         fmi2String category, fmi2String message, ...) {
     const shim *s = env;
-    char small[2048], *msg = small;
-    int n;
-    va_list ap;
     if (s == NULL || s->cb.logger == NULL || message == NULL) return;
     if (status == fmi2OK) {
         size_t i;
@@ -140,21 +139,8 @@ static void shim_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Statu
             if (category != NULL && strcmp(category, s->categories[i]) == 0) break;
         if (s->n_categories && i == s->n_categories) return;
     }
-    va_start(ap, message);
-    n = vsnprintf(small, sizeof small, message, ap);
-    va_end(ap);
-    if (n >= (int)sizeof small) { /* a long message (a traceback): whole */
-        char *big = cf_alloc(&s->cb, (size_t)n + 1, 1);
-        if (big != NULL) {
-            va_start(ap, message);
-            vsnprintf(big, (size_t)n + 1, message, ap);
-            va_end(ap);
-            msg = big;
-        }
-    }
     s->cb.logger(s->cb.componentEnvironment, name != NULL ? name : "", status,
-                 category != NULL ? category : "", "%s", n < 0 ? message : msg);
-    if (msg != small) cf_free(&s->cb, msg);
+                 category != NULL ? category : "", "%s", message);
 }
 
 /* The importer's debug logging and categories, kept for shim_logger. */
