@@ -208,8 +208,9 @@ static int load_inner(shim *s, const char *resources) {
         return 0;
     }
     cf_free(&s->cb, path);
+/* POSIX's way to take a function from dlsym's object pointer (ISO C has no cast) */
 #define F(fn)                                                                          \
-    s->api.fn = (fmi2##fn##TYPE *)dlsym(lib, "fmi2" #fn);                          \
+    *(void **)(&s->api.fn) = dlsym(lib, "fmi2" #fn);                               \
     if (s->api.fn == NULL) {                                                           \
         cf_log(&s->cb, s->name, fmi2Error, "pythonfmu's binary lacks fmi2" #fn);       \
         return 0;                                                                        \
