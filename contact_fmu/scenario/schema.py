@@ -39,6 +39,15 @@ grid, the outputs to record, reference results with tolerances and a plot layout
                                         # summary values of each run (``Metric``)
     plot = { metric = "peak", x = "mu", y = "My_ex.sine.amplitude" }
     trajectories = false                # also every run's recorded columns
+    [checks]                            # plausibility warnings (plausibility.py):
+    accept = ["Rx"]                     # keys whose questioned values are meant
+    plausibility = true                 # false: no plausibility checks
+
+Strict: [model] with its mode, [run] with stop_time, step and outputs, and the model's
+physical parameters (``required_parameters``) are required; values have their declared
+type (no string or bool for a number); each name must be a variable of the model in the
+table it is written in. Every error is one line naming the file, the key as a TOML path,
+the value and what is allowed (docs/scenes.md).
 
 The runner uses only what is here; how a reference was produced is recorded in its
 ``source`` and options, and ``references.py`` reproduces it.
