@@ -320,7 +320,7 @@ def _positive(path: Path, where: str, v: Any, unit: str = "") -> float:
 
 def _required(path: Path, d: dict[str, Any], where: str, key: str, what: str) -> Any:
     if key not in d:
-        raise _missing(path, f"{where}.{key}", what)
+        raise _missing(path, f"{where}.{key}" if where else key, what)
     return d[key]
 
 
@@ -552,7 +552,7 @@ def from_data(path: str | Path, raw: dict[str, Any]) -> Scene:
 
 def _scene(path: Path, raw: dict[str, Any]) -> Scene:
     _table(path, "top level", raw, TOP_KEYS)
-    name = _required(path, raw, "top level", "name", "an identifier: names the FMU and files")
+    name = _required(path, raw, "", "name", "an identifier: names the FMU and files")
     if not isinstance(name, str) or not name.isidentifier():
         raise _bad(path, "name", name, "an identifier (letters, digits, _)")
     title = _string(path, "title", raw.get("title", name))
