@@ -365,3 +365,38 @@ def test_every_shipped_scene_plot_axis_has_a_unit():
         labels.append(scene_plot._scaled(scene, scene.plot.x, 1.0)[1])
         for label in labels:
             assert "(" in label or " / " in label, (scene.name, label)
+
+
+def test_sweep_plot_axes_carry_units(tmp_path, monkeypatch):
+    """The study's heat map: varied names with their units, the metric with its own
+    (max |Tx|/(mu P): dimensionless)."""
+    import matplotlib.axes
+
+    from contact_fmu.study.plot import plot as study_plot
+
+    seen: list[str] = []
+    for name in ("set_xlabel", "set_ylabel"):
+        orig = getattr(matplotlib.axes.Axes, name)
+        monkeypatch.setattr(
+            matplotlib.axes.Axes, name,
+            lambda self, label, *a, _o=orig, **k: (seen.append(label), _o(self, label, *a, **k))[1],
+        )  # fmt: skip
+    rows = [{"Iy": iy, "My_ex.sine.amplitude": a, "case": "c", "peak": iy + a}
+            for iy in (1e-4, 5e-4) for a in (0.0, 1.0)]  # fmt: skip
+    metric = Metric("peak", "Tx", "max_abs", ("mu", "P"))
+    varied = ["Iy", "My_ex.sine.amplitude"]
+    study_plot(rows, varied, "peak", "Iy", None, tmp_path / "a.png", metrics=[metric])
+    study_plot(rows, varied, "peak", "Iy", "My_ex.sine.amplitude", tmp_path / "b.png")
+    assert "Iy (kg m^2)" in seen and "My_ex.sine.amplitude (N m)" in seen
+    assert "peak: max_abs of Tx/(mu P) (-)" in seen
+
+
+def test_a_study_varies_an_integer_parameter_with_its_float_values():
+    """Study values are floats ("32:64:3"); a whole one is the integer the schema asks for."""
+    from contact_fmu.scenario import variation
+
+    scene = load(SCENARIOS / "fig12_transient.toml")
+    varied = variation.apply(scene, {"nx": 48.0})
+    assert all(c.parameters["nx"] == 48 and type(c.parameters["nx"]) is int for c in varied.cases)
+    with pytest.raises(ScenarioError, match=r"parameters.nx = 48.5 is invalid: must be an integer"):
+        variation.apply(scene, {"nx": 48.5})
