@@ -48,6 +48,28 @@ def _scene_paths(args: argparse.Namespace) -> list[Path]:
     return paths
 
 
+def _load_warning_once(path: Path):
+    """The scene of ``path``; its plausibility warnings printed once each, one line on
+    stderr (other warnings shown as Python shows them)."""
+    import warnings
+
+    from .scenario import load
+    from .scenario.plausibility import PlausibilityWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlausibilityWarning)
+        scene = load(path)
+    shown = set()
+    for w in caught:
+        if issubclass(w.category, PlausibilityWarning):
+            if str(w.message) not in shown:
+                print(f"warning: {w.message}", file=sys.stderr)
+                shown.add(str(w.message))
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return scene
+
+
 def run_scene(
     path: Path, out: Path, rebuild: bool = False, make_plot: bool = True, native: bool = False
 ) -> bool:
@@ -56,9 +78,9 @@ def run_scene(
     import fmu_build
     from fmu_build import native_fmu
 
-    from .scenario import load, runner
+    from .scenario import runner
 
-    scene = load(path)
+    scene = _load_warning_once(path)
     t0 = time.perf_counter()
     if native:
         built = native_fmu.build(scene.config, out / "fmu", force=rebuild)
@@ -101,6 +123,11 @@ def run_scene(
 
         print(f"  PNG  {plot(scene, results, scene_dir / (scene.name + '.png'))}")
     ok = all(not r.error for r in results) and all(c.ok for c in checks)
+    if not scene.references:  # a run without a comparison is no pass
+        print("  no references: nothing compared")
+        if not ok:
+            print("  FAIL")
+        return ok
     print(f"  {'PASS' if ok else 'FAIL'}")
     return ok
 
@@ -115,7 +142,8 @@ def _run(args: argparse.Namespace) -> int:
                 path, args.out, args.rebuild, make_plot=not args.no_plot, native=args.native
             )
         except (ScenarioError, OSError, RuntimeError, ValueError) as e:
-            print(f"{path}: ERROR: {e}", file=sys.stderr)
+            where = "" if str(path) in str(e) else f"{path}: "  # a scene's errors name it
+            print(f"ERROR: {where}{e}", file=sys.stderr)
             ok = False
         if not ok:
             failed.append(str(path))
@@ -306,9 +334,8 @@ def _sweep(args: argparse.Namespace) -> int:
     names = [v.name for v in vary]
     x = spec.get("x") if spec.get("x") in names else names[0]
     y = spec.get("y") if spec.get("y") in names else next((n for n in names if n != x), None)
-    print(
-        f"  PNG {plot(sweep.strip(rows), names, metric, x, y, out / f'{metric}.png', scene.title)}"
-    )
+    png = plot(sweep.strip(rows), names, metric, x, y, out / f"{metric}.png", scene.title, ms)
+    print(f"  PNG {png}")
     return 0
 
 

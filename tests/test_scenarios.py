@@ -73,6 +73,17 @@ mode = "body"
 stop_time = 1.0e-3
 step = 1.0e-4
 outputs = ["Tx"]
+[parameters]
+mu = 0.3
+Rx = 0.05
+Ry = 0.10
+k1 = 5.0e-13
+k2 = 5.0e-13
+kb = 3.2e-13
+ks = 3.2e-13
+M = 1.0
+Iy = 8.333333333333335e-4
+Vx0 = 5.6418958354775635
 [inputs]
 P = 1000.0
 """
@@ -81,24 +92,29 @@ P = 1000.0
 @pytest.mark.parametrize(
     ("edit", "fragment"),
     [
-        (("", 'colour = "red"\n'), "unknown key(s) ['colour']"),
-        (("step = 1.0e-4", "step = 3.0e-4"), "must be a whole number"),
-        (("step = 1.0e-4", "step = -1.0e-4"), "run.step: -0.0001 must be a finite number > 0"),
-        (('outputs = ["Tx"]', 'outputs = ["Ty"]'), "outputs"),
-        (('mode = "body"', 'mode = "body"\ncontact_law = "halfspace"'), "required keys"),
-        (('mode = "body"', 'mode = "contact"\nphase = "transient"'), "used in body mode"),
+        (("", 'colour = "red"\n'), "inputs.colour = 'red': no FMU variable is called 'colour'"),
+        (('name = "mini"', 'name = "mini"\ncolour = "red"'), "unknown key(s) ['colour']"),
+        (("step = 1.0e-4", "step = 3.0e-4"), "must be stop_time/step whole"),
+        (("step = 1.0e-4", "step = -1.0e-4"), "run.step = -0.0001 is invalid: must be a finite"),
+        (('outputs = ["Tx"]', 'outputs = ["Ty"]'), "run.outputs = ['Ty']: Ty is a variable"),
+        (('mode = "body"', 'mode = "body"\ncontact_law = "halfspace"'),
+         "parameters.Ry = 0.1: Ry is a parameter of the layer law: a halfspace model takes its "
+         "contact from [halfspace]"),
+        (('mode = "body"', 'mode = "body"\nphase = "transient"\nmethod = "quasistationary"'),
+         "model.method = ['quasistationary'] is invalid"),
         (
             ('outputs = ["Tx"]', 'outputs = ["Tx"]\nfield = { times = [0.0], file = "f.csv" }'),
             'needs phase = "transient"',
         ),
-        (('mode = "body"', 'mode = "body"\nmethod = "euler"'), "method = 'euler'"),
+        (('mode = "body"', 'mode = "body"\nmethod = "euler"'), "model.method = 'euler' is invalid"),
         (("P = 1000.0", "P = 1000.0\nFx_ex = { pulse = 1 }"), "unknown piece 'pulse'"),
-        (("P = 1000.0", ""), "to include P"),
-        (('name = "mini"', 'name = "mini"\n[parameters]\nmu = 0.0'), "mu = 0.0 is invalid"),
-        (('name = "mini"', 'name = "mini"\n[parameters]\nIz = 1.0e-3'), "Iz"),
+        (("P = 1000.0", ""), "inputs.P is missing"),
+        (("mu = 0.3", "mu = 0.0"), "parameters.mu = 0.0 is invalid: must be > 0"),
+        (("mu = 0.3", "mu = 0.3\nIz = 1.0e-3"), 'Iz is a variable of this body-mode model only '
+         'with model.spin = "eq11"'),
         (('name = "mini"', 'name = "mini scene"'), "must be an identifier"),
     ],
-)
+)  # fmt: skip
 def test_malformed_scene_is_refused_naming_the_file_and_key(tmp_path, edit, fragment):
     old, new = edit
     text = (GOOD + new) if old == "" else GOOD.replace(old, new)
@@ -106,7 +122,9 @@ def test_malformed_scene_is_refused_naming_the_file_and_key(tmp_path, edit, frag
     path.write_text(text)
     with pytest.raises(ScenarioError) as e:
         load(path)
-    assert str(path) in str(e.value) and fragment in str(e.value)
+    msg = str(e.value)
+    assert msg.startswith(f"{path}: ") and msg.count(str(path)) == 1 and "\n" not in msg
+    assert fragment in msg, msg
 
 
 def test_minimal_scene_loads(tmp_path):

@@ -86,13 +86,21 @@ Piece = tuple[Callable[[FloatArray], FloatArray], tuple[float, ...]]
 def _piece(where: str, spec: Any) -> Piece:
     """A piece as (function of t, its breakpoints)."""
     if isinstance(spec, bool):
-        raise SignalError(f"{where}: {spec!r} is not a number or a piece")
+        raise SignalError(
+            f"{where} = {spec!r} is invalid: must be a number (true/false is none) or a piece"
+        )
     if isinstance(spec, int | float):
         c = _number(where, {"constant": spec}, "constant")
         return (lambda t: np.full_like(t, c)), ()
     if not isinstance(spec, dict) or len(spec) != 1:
         raise SignalError(
-            f"{where}: a piece is one of constant, step, ramp, sine, table; got {spec!r}"
+            f"{where} = {spec!r} is invalid: must be a number, or a piece is one of "
+            "constant, step, ramp, sine, table"
+            + (
+                " (a string is not a number: write it without quotes)"
+                if isinstance(spec, str)
+                else ""
+            )
         )
     ((kind, body),) = spec.items()
     w = f"{where}.{kind}"
@@ -143,13 +151,16 @@ def _piece(where: str, spec: Any) -> Piece:
     raise SignalError(f"{where}: unknown piece '{kind}' (constant, step, ramp, sine, table)")
 
 
-def parse(name: str, spec: Any) -> Signal:
-    """The signal ``name`` from its TOML value (a number, a piece or a list of pieces)."""
-    where = f"inputs.{name}"
-    specs = spec if isinstance(spec, list) else [spec]
-    if not specs:
-        raise SignalError(f"{where}: an empty list is not a signal")
-    pieces = [_piece(f"{where}[{i}]", s) for i, s in enumerate(specs)]
+def parse(name: str, spec: Any, where: str | None = None) -> Signal:
+    """The signal ``name`` from its TOML value (a number, a piece or a list of pieces);
+    ``where``: the scene key it is written at, for errors (default ``inputs.<name>``)."""
+    where = where or f"inputs.{name}"
+    if isinstance(spec, list):
+        if not spec:
+            raise SignalError(f"{where}: an empty list is not a signal")
+        pieces = [_piece(f"{where}[{i}]", s) for i, s in enumerate(spec)]
+    else:
+        pieces = [_piece(where, spec)]
     breaks = tuple(sorted({b for _, bs in pieces for b in bs}))
     return Signal(name, tuple(f for f, _ in pieces), breaks)
 

@@ -16,6 +16,7 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
+from ..fmu import variables as fv
 from .schema import Scene, _piece_specs, check_varied, from_data
 
 
@@ -47,6 +48,9 @@ def apply(scene: Scene, values: Mapping[str, float]) -> Scene:
     raw.pop("sweep", None)
     for name, value in values.items():
         is_input = name.split(".")[0] in scene.config.inputs
+        var = fv.BY_NAME.get(name)
+        if var is not None and var.type == "Integer" and float(value).is_integer():
+            value = int(value)  # a study's values are floats; the scene's type is integer
         section = "inputs" if is_input else "parameters"
         raw.setdefault(section, {})
         if is_input and "." not in name:

@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import math
 import textwrap
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from ..scenario.labels import axis_label, metric_label
+from ..scenario.schema import Metric
 
 MAX_PANELS = 12
 
@@ -37,14 +41,19 @@ def plot(
     y: str | None,
     path: Path,
     title: str = "",
+    metrics: Sequence[Metric] = (),
 ) -> Path:
-    """Write the plot of ``metric`` over ``x`` (and ``y``) to ``path`` (PNG)."""
+    """Write the plot of ``metric`` over ``x`` (and ``y``) to ``path`` (PNG); axes labelled
+    with units (``scenario.labels``), the metric's from its definition among ``metrics``
+    (without it, the metric's name alone)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
+    defined = {m.name: m for m in metrics}
+    zlabel = metric_label(defined[metric]) if metric in defined else metric
     rest = [k for k in varied if k not in (x, y)] + ["case"]
     groups = _groups(rows, rest)
     if y is None:
@@ -53,8 +62,8 @@ def plot(
             rs = sorted(rs, key=lambda r: r[x])
             ax.plot([r[x] for r in rs], [r[metric] for r in rs], "o-", ms=3,
                     label=_label(rest, key))  # fmt: skip
-        ax.set_xlabel(x)
-        ax.set_ylabel(metric)
+        ax.set_xlabel(axis_label(x))
+        ax.set_ylabel(zlabel)
         if len(groups) > 1:
             ax.legend(fontsize="small")
         ax.grid(alpha=0.3)
@@ -72,9 +81,9 @@ def plot(
             for r in rs:
                 z[ys.index(r[y]), xs.index(r[x])] = r[metric]
             m = ax.pcolormesh(_edges(xs), _edges(ys), np.ma.masked_invalid(z), shading="flat")
-            fig.colorbar(m, ax=ax, label=metric)
-            ax.set_xlabel(x)
-            ax.set_ylabel(y)
+            fig.colorbar(m, ax=ax, label=zlabel)
+            ax.set_xlabel(axis_label(x))
+            ax.set_ylabel(axis_label(y))
             ax.xaxis.set_major_locator(MaxNLocator(5))
             if len(groups) > 1:
                 ax.set_title(_label(rest, key), fontsize="small")
