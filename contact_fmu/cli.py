@@ -202,7 +202,8 @@ def _system(args: argparse.Namespace) -> int:
             scene, case, folder, args.step, overrides, args.fmu_out, native=args.native
         )
     except (ScenarioError, InputError, OSError, RuntimeError, ValueError) as e:
-        print(f"{args.scene}: ERROR: {e}", file=sys.stderr)
+        where = "" if str(args.scene) in str(e) else f"{args.scene}: "  # a scene's errors name it
+        print(f"ERROR: {where}{e}", file=sys.stderr)
         return 1
     kind = "native " if args.native else ""
     print(f"{scene.name}, case {case.name!r}: {kind}contact-mode and rigid_body-mode FMUs coupled")
