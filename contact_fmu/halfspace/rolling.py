@@ -141,7 +141,9 @@ class RollingSolution:
     entry repeats the two counts above); empty for a single-level solve. ``error``:
     with ``HalfSpaceContact.solve(richardson=True)``, the estimated discretisation error
     (Tx, Ty, Mz) of this grid's forces, F(n/2) - F(n) for the scheme's first order, and
-    ``extrapolated`` the Richardson values 2 F(n) - F(n/2); None otherwise.
+    ``extrapolated`` the Richardson values 2 F(n) - F(n/2); None otherwise. ``solves``:
+    the steady-rolling solves that produced it (``HalfSpaceContact.creepages_for``: its
+    whole search; 1 otherwise).
     """
 
     grid: Grid
@@ -158,6 +160,7 @@ class RollingSolution:
     levels: tuple[tuple[int, int, int, int], ...] = ()
     error: tuple[float, float, float] | None = None
     extrapolated: tuple[float, float, float] | None = None
+    solves: int = 1
 
     @property
     def adhesion_fraction(self) -> float:
