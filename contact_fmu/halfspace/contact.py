@@ -36,7 +36,16 @@ from .._validate import (
     nonnegative,
     positive,
 )
-from .hertz import CombinedElastic, Hertz, Material, ellipse_curvatures, relative_curvatures
+from .hertz import (
+    SEMI_AXIS_PLAUSIBLE,
+    SPIN_PLAUSIBLE,
+    CombinedElastic,
+    Hertz,
+    Material,
+    ellipse_curvatures,
+    relative_curvatures,
+    unit_warning,
+)
 from .rolling import (
     NEWTON_TOL,
     RollingPatch,
@@ -141,14 +150,20 @@ class HalfSpaceContact:
         mu: float,
         P: float | None = None,
         delta: float | None = None,
+        check_units: bool = True,
         **kw,
     ) -> HalfSpaceContact:
         """The Hertz contact with semi-axes a1 along x (rolling) and a2 along y (m),
         given its normal load P (N) or its approach delta (m) (one of the two): the
         curvatures follow from ``hertz.ellipse_curvatures``, and ``a1``, ``a2`` of the
         result reproduce the given ones (to 1e-12, 1e-9 within 1e-6 of a circle).
-        ``kw``: the other fields (kb, ks, n, coupling)."""
+        ``kw``: the other fields (kb, ks, n, coupling). A semi-axis above
+        SEMI_AXIS_PLAUSIBLE (0.1 m) warns (UnitWarning: it looks like mm) unless
+        ``check_units=False``."""
         _no_radii(kw)
+        for name, a in (("a1", a1), ("a2", a2)):
+            if positive(name, a) > SEMI_AXIS_PLAUSIBLE:
+                unit_warning(name, a, "mm", flag("check_units", check_units))
         Estar = CombinedElastic.of(
             instance("body", body, Material, "a halfspace.Material"),
             instance("substrate", substrate, Material, "a halfspace.Material"),
@@ -229,14 +244,21 @@ class HalfSpaceContact:
         tau0: FloatArray | None = None,
         tol: float = NEWTON_TOL,
         richardson: bool = False,
+        check_units: bool = True,
     ) -> RollingSolution:
         """Steady rolling in +x for creepages xi, eta (-) and spin phi (1/m).
+
+        A spin creepage |phi| c below SPIN_PLAUSIBLE (1e-5) but not zero warns
+        (UnitWarning: phi looks like rad/mm, CONTACT's unit) unless ``check_units=False``.
 
         richardson: also solve on the grid of half the elements per side (same rule,
         same potential contact area) and return, with this grid's solution, the error
         estimate F(n/2) - F(n) of F(n) and the extrapolated forces 2 F(n) - F(n/2) (``error``,
         ``extrapolated`` of RollingSolution; the scheme is first order, docs/
         validation.md). The coarse solve costs about a quarter of the fine one."""
+        phi = finite("phi", phi)
+        if 0.0 < abs(phi) * self.c < SPIN_PLAUSIBLE:
+            unit_warning("phi", phi, "rad/mm (here 1/m)", flag("check_units", check_units))
         sol = solve_rolling(self.patch, xi, eta, phi, tau0=tau0, tol=tol)
         if not flag("richardson", richardson):
             return sol
@@ -244,7 +266,7 @@ class HalfSpaceContact:
         if min(mx, my) // 2 < MIN_N:
             raise InputError("n", self.n, f">= {2 * MIN_N} per side for richardson=True")
         half = (mx // 2, my // 2) if isinstance(self.n, tuple) else mx // 2
-        coarse = replace(self, n=half).solve(xi, eta, phi, tol=tol)
+        coarse = replace(self, n=half).solve(xi, eta, phi, tol=tol, check_units=False)
         fine = np.array([sol.Tx, sol.Ty, sol.Mz])
         err = np.array([coarse.Tx, coarse.Ty, coarse.Mz]) - fine  # F(n) - F for order 1
         return replace(
@@ -261,8 +283,9 @@ class HalfSpaceContact:
             return self._sliding(vx, vy, phi)
         aV = abs(Vx)
         if Vx > 0.0:
-            return self.solve(vx / aV, vy / aV, phi / aV)
-        sol = self.solve(-vx / aV, vy / aV, -phi / aV)
+            # Omega_z of a simulation, not a user's spin: no unit check
+            return self.solve(vx / aV, vy / aV, phi / aV, check_units=False)
+        sol = self.solve(-vx / aV, vy / aV, -phi / aV, check_units=False)
         return _mirror(sol)
 
     def forces(
@@ -328,7 +351,12 @@ class HalfSpaceContact:
         return RollingSolution(patch.grid, tau, S, C, C & ~moving, moving, Tx, Ty, Mz, 0, 0)
 
     def creepages_for(
-        self, Fx: float, Fy: float, phi: float = 0.0, rtol: float = FORCE_RTOL
+        self,
+        Fx: float,
+        Fy: float,
+        phi: float = 0.0,
+        rtol: float = FORCE_RTOL,
+        check_units: bool = True,
     ) -> tuple[float, float, RollingSolution]:
         """The creepages (xi, eta) (-) of steady rolling in +x at spin phi (1/m) whose
         force on the substrate is (Tx, Ty) = (Fx, Fy) (N), and the solution there.
@@ -350,9 +378,12 @@ class HalfSpaceContact:
         counts them (tests/test_halfspace_api.py).
 
         |(Fx, Fy)| must be below mu P; a force the spin leaves out of reach answers
-        InputError naming it, with the closest force reached."""
+        InputError naming it, with the closest force reached. phi: as in ``solve``
+        (``check_units``)."""
         Fx, Fy, phi = finite("Fx", Fx), finite("Fy", Fy), finite("phi", phi)
         rtol = positive("rtol", rtol)
+        if 0.0 < abs(phi) * self.c < SPIN_PLAUSIBLE:
+            unit_warning("phi", phi, "rad/mm (here 1/m)", flag("check_units", check_units))
         muP = self.mu * self.P
         f = math.hypot(Fx, Fy) / muP
         if f >= 1.0:
@@ -373,7 +404,9 @@ class HalfSpaceContact:
         def evaluate(v: FloatArray, tau0: FloatArray | None) -> tuple[RollingSolution, FloatArray]:
             nonlocal solves
             solves += 1
-            s = self.solve(float(v[0]) * xref, float(v[1]) * xref, phi, tau0=tau0, tol=tol)
+            s = self.solve(
+                float(v[0]) * xref, float(v[1]) * xref, phi, tau0=tau0, tol=tol, check_units=False
+            )
             return s, np.array([s.Tx, s.Ty]) / muP - target
 
         sol, r = evaluate(u, None)
