@@ -94,9 +94,8 @@ class HalfSpaceContact:
     n: the grid. ``(mx, my)``: mx elements along x and my along y over the potential
     contact area, the Hertz ellipse's bounding box with one element to spare on every
     side (the box is (mx - 2) x (my - 2) elements, dx = 2 a1/(mx - 2), dy = 2 a2/(my -
-    2); CONTACT's mx x my over its potential contact area). An int n: an n x n grid
-    with one element to spare along x only (dx = 2 a1/(n - 2), dy = 2 a2/n), the grid
-    of the creep-force tables and the scenes.
+    2); CONTACT's mx x my over its potential contact area). An int n is (n, n): one
+    rule for both forms.
 
     Other ways in: ``from_ellipse`` (semi-axes and the load or the approach),
     ``from_curvatures`` (the relative curvatures A, B).
@@ -228,7 +227,7 @@ class HalfSpaceContact:
             kappa=e.kappa if self.coupling else 0.0,
             P=self.P,
             ny=my,
-            spare_y=isinstance(self.n, tuple),
+            spare_y=True,
         )
         return patch
 
@@ -251,27 +250,40 @@ class HalfSpaceContact:
         A spin creepage |phi| c below SPIN_PLAUSIBLE (1e-5) but not zero warns
         (UnitWarning: phi looks like rad/mm, CONTACT's unit) unless ``check_units=False``.
 
-        richardson: also solve on the grid of half the elements per side (same rule,
-        same potential contact area) and return, with this grid's solution, the error
-        estimate F(n/2) - F(n) of F(n) and the extrapolated forces 2 F(n) - F(n/2) (``error``,
-        ``extrapolated`` of RollingSolution; the scheme is first order, docs/
-        validation.md). The coarse solve costs about a quarter of the fine one."""
+        richardson: also solve on the grid of twice the element size over the same
+        ellipse (``richardson_grids``: its box of half the elements; ratio r = 2 exactly
+        for grids of an even number of elements per side) and return, with this grid's
+        solution, the error estimate (F(r h) - F(h))/(r - 1) of F(h) and the extrapolated
+        forces F(h) minus it (``error``, ``extrapolated`` of RollingSolution; the scheme
+        is first order, docs/validation.md). The coarse solve costs about a quarter of
+        the fine one."""
         phi = finite("phi", phi)
         if 0.0 < abs(phi) * self.c < SPIN_PLAUSIBLE:
             unit_warning("phi", phi, "rad/mm (here 1/m)", flag("check_units", check_units))
         sol = solve_rolling(self.patch, xi, eta, phi, tau0=tau0, tol=tol)
         if not flag("richardson", richardson):
             return sol
-        mx, my = self.elements
-        if min(mx, my) // 2 < MIN_N:
-            raise InputError("n", self.n, f">= {2 * MIN_N} per side for richardson=True")
-        half = (mx // 2, my // 2) if isinstance(self.n, tuple) else mx // 2
-        coarse = replace(self, n=half).solve(xi, eta, phi, tol=tol, check_units=False)
+        (bx, by), (cx, cy), r = self.richardson_grids()
+        coarse = replace(self, n=(cx + 2, cy + 2)).solve(xi, eta, phi, tol=tol, check_units=False)
         fine = np.array([sol.Tx, sol.Ty, sol.Mz])
-        err = np.array([coarse.Tx, coarse.Ty, coarse.Mz]) - fine  # F(n) - F for order 1
+        # first order: F(h) = F + C h, so F(h) - F = (F(r h) - F(h))/(r - 1)
+        err = (np.array([coarse.Tx, coarse.Ty, coarse.Mz]) - fine) / (r - 1.0)
         return replace(
             sol, error=tuple(map(float, err)), extrapolated=tuple(map(float, fine - err))
         )
+
+    def richardson_grids(self) -> tuple[tuple[int, int], tuple[int, int], float]:
+        """The grids of ``solve(richardson=True)``: the elements (bx, by) of this grid's
+        bounding box of the ellipse, those (cx, cy) of the coarse grid's (half of them,
+        rounded up; the coarse grid spares one element on every side, ``n=(cx + 2, cy +
+        2)``) and the ratio r of the element sizes, coarse over fine: exactly 2 for an
+        even box, (bx/cx + by/cy)/2 otherwise (within 1/b of 2)."""
+        mx, my = self.elements
+        bx, by = mx - 2, my - 2
+        cx, cy = (bx + 1) // 2, (by + 1) // 2
+        if min(cx, cy) + 2 < MIN_N:
+            raise InputError("n", self.n, f">= {2 * MIN_N - 2} per side for richardson=True")
+        return (bx, by), (cx, cy), 0.5 * (bx / cx + by / cy)
 
     def traction(self, vx: float, vy: float, phi: float, Vx: float) -> RollingSolution:
         """The solution for rigid slip (vx, vy) (m/s), Omega_z = phi (rad/s), speed Vx (m/s),

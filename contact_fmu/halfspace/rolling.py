@@ -140,8 +140,9 @@ class RollingSolution:
     iteration, (nx, ny, Newton, GMRES) per level from the coarsest to this grid (the last
     entry repeats the two counts above); empty for a single-level solve. ``error``:
     with ``HalfSpaceContact.solve(richardson=True)``, the estimated discretisation error
-    (Tx, Ty, Mz) of this grid's forces, F(n/2) - F(n) for the scheme's first order, and
-    ``extrapolated`` the Richardson values 2 F(n) - F(n/2); None otherwise. ``solves``:
+    (Tx, Ty, Mz) of this grid's forces, (F(r h) - F(h))/(r - 1) for the scheme's first
+    order and elements r times larger (r = 2 on even grids), and ``extrapolated`` the
+    Richardson values F(h) minus it; None otherwise. ``solves``:
     the steady-rolling solves that produced it (``HalfSpaceContact.creepages_for``: its
     whole search; 1 otherwise).
     """
