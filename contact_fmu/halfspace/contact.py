@@ -94,8 +94,9 @@ class HalfSpaceContact:
     n: the grid. ``(mx, my)``: mx elements along x and my along y over the potential
     contact area, the Hertz ellipse's bounding box with one element to spare on every
     side (the box is (mx - 2) x (my - 2) elements, dx = 2 a1/(mx - 2), dy = 2 a2/(my -
-    2); CONTACT's mx x my over its potential contact area). An int n is (n, n): one
-    rule for both forms.
+    2); CONTACT's mx x my over its potential contact area). An int n: an n x n grid
+    with one element to spare along x only (dx = 2 a1/(n - 2), dy = 2 a2/n), the grid
+    of the creep-force tables and the scenes.
 
     Other ways in: ``from_ellipse`` (semi-axes and the load or the approach),
     ``from_curvatures`` (the relative curvatures A, B).
@@ -227,7 +228,7 @@ class HalfSpaceContact:
             kappa=e.kappa if self.coupling else 0.0,
             P=self.P,
             ny=my,
-            spare_y=True,
+            spare_y=isinstance(self.n, tuple),
         )
         return patch
 
@@ -274,12 +275,14 @@ class HalfSpaceContact:
 
     def richardson_grids(self) -> tuple[tuple[int, int], tuple[int, int], float]:
         """The grids of ``solve(richardson=True)``: the elements (bx, by) of this grid's
-        bounding box of the ellipse, those (cx, cy) of the coarse grid's (half of them,
-        rounded up; the coarse grid spares one element on every side, ``n=(cx + 2, cy +
-        2)``) and the ratio r of the element sizes, coarse over fine: exactly 2 for an
-        even box, (bx/cx + by/cy)/2 otherwise (within 1/b of 2)."""
+        bounding box of the ellipse (an int n: (n - 2, n)), those (cx, cy) of the coarse
+        grid's (half of them, rounded up; the coarse grid spares one element on every
+        side, ``n=(cx + 2, cy + 2)``, for every form of this grid) and the ratio r of the
+        element sizes, coarse over fine: exactly 2 for an even box (every even n),
+        (bx/cx + by/cy)/2 otherwise (within 1/b of 2)."""
         mx, my = self.elements
-        bx, by = mx - 2, my - 2
+        # the box of an int n spans all n rows (no spare element in y)
+        bx, by = mx - 2, my - 2 if isinstance(self.n, tuple) else my
         cx, cy = (bx + 1) // 2, (by + 1) // 2
         if min(cx, cy) + 2 < MIN_N:
             raise InputError("n", self.n, f">= {2 * MIN_N - 2} per side for richardson=True")
