@@ -169,6 +169,13 @@ class RollingSolution:
         n = int(self.contact.sum())
         return float(self.adhesion.sum()) / n if n else 0.0
 
+    def plot(self, ax: Any = None, arrows: bool = True, title: bool = True) -> Any:
+        """Traction arrows over contours of |tau|, adhesion and slip areas marked
+        (matplotlib; ``plotting.plot_solution``). Returns the axes."""
+        from .plotting import plot_solution  # matplotlib only when plotting
+
+        return plot_solution(self, ax, arrows, title)
+
     @property
     def gmres_work(self) -> float:
         """GMRES iterations of all levels in units of this grid's (a coarse iteration
