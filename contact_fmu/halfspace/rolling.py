@@ -66,6 +66,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.ndimage as ndi
 from numpy.typing import NDArray
+from scipy.linalg.lapack import dgetrf, dgetrs
 
 from .._validate import (
     InputError,
@@ -330,7 +331,10 @@ class RollingPatch:
     def dense_contact_lu(self) -> tuple[FloatArray, NDArray[np.int32]]:
         """LU factors of K on the contact (the full-adhesion solves of a direct-path patch
         without its K^-1: a third of the inversion's cost)."""
-        return sla.lu_factor(self.dense_contact_operator, check_finite=False)
+        lu, piv, info = dgetrf(self.dense_contact_operator)
+        if info != 0:
+            raise RuntimeError(f"steady rolling: singular contact operator ({info})")
+        return lu, piv
 
     @cached_property
     def dense_contact_inverse(self) -> FloatArray:
@@ -463,7 +467,7 @@ class RollingPatch:
         if "dense_contact_inverse" in self.__dict__:
             x = self.dense_contact_inverse @ b
         else:
-            x = sla.lu_solve(self.dense_contact_lu, b, check_finite=False)
+            x, _ = dgetrs(*self.dense_contact_lu, b)
         out = []
         for j in range(len(Ws)):
             tau = np.zeros((2, *self.grid.shape))
@@ -484,15 +488,17 @@ class RollingPatch:
         # for nu > 0); FASTSIM's march of the lateral part phi x carries Ty
         spin = np.stack([np.where(C, -Y * dx, 0.0), np.where(C, X * dx, 0.0)])
         loads = ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin))
-        if self.direct:
-            exacts = self._adhesion_dense([W for _, W in loads])
+        fs = march(np.stack([W[a] for a, W in loads]), C).sum(axis=(1, 2))
+        if self.direct:  # the three solves at once by the dense LU, only their sums kept
+            exact = [
+                t[a].sum()
+                for (a, _), t in zip(
+                    loads, self._adhesion_dense([W for _, W in loads]), strict=True
+                )
+            ]
         else:
-            exacts = [self.solve_adhesion(W, rtol=1e-6)[0] for _, W in loads]
-        out = []
-        for (a, W), exact in zip(loads, exacts, strict=True):
-            fs = march(W[a], C)
-            out.append(float(fs.sum()) / float(exact[a].sum()))
-        return out[0], out[1], out[2]
+            exact = [self.solve_adhesion(W, rtol=1e-6)[0][a].sum() for a, W in loads]
+        return tuple(float(f) / float(e) for f, e in zip(fs, exact, strict=True))
 
     def fastsim_guess(self, xi: float, eta: float, phi: float) -> FloatArray:
         """Kalker's simplified theory on this grid with ``flexibilities``: the march from the
