@@ -134,3 +134,34 @@ def test_circulant_symbol_is_positive_definite(nu, aspect):
     g = Grid(48, 48, 1.0, aspect, 0.0, 0.0)
     S = np.moveaxis(tangential_operator(g, 1.0, nu).symbols, (0, 1), (-2, -1))
     assert np.linalg.eigvalsh(S).min() > 0.0
+
+
+def test_scaled_reference_kernels_equal_direct_evaluation():
+    """tangential_operator takes its kernel blocks from a reference operator of unit
+    element length and modulus scaled by dx/G (the Cerruti coefficients are homogeneous
+    of degree 1 in length and -1 in G): they equal the directly evaluated kernel to
+    1e-12 of its largest entry (the aspect ratio is a cache key to 12 digits; measured
+    2e-13 and below), and a grid of the same shape, aspect ratio and nu at
+    another size reuses the reference (the cache holds one entry for both)."""
+    from contact_fmu.halfspace.influence import (
+        BlockConvolution,
+        Grid,
+        _cerruti_reference,
+        cerruti_kernels,
+        tangential_operator,
+    )
+
+    _cerruti_reference.cache_clear()
+    for scale in (1.0, 0.37):
+        g = Grid(13, 9, 2e-4 * scale, 3e-4 * scale, -1e-3, -1e-3)
+        G, nu = 81e9, 0.28
+        op = tangential_operator(g, G, nu)
+
+        def kern(X, Y, g=g, G=G, nu=nu):
+            axx, ayy, axy = cerruti_kernels(X, Y, g.dx, g.dy, G, nu)
+            return ((axx, axy), (axy, ayy))
+
+        ref = BlockConvolution(g, kern)
+        assert np.abs(op.torus - ref.torus).max() <= 1e-12 * np.abs(ref.torus).max()
+        assert np.abs(op.symbols - ref.symbols).max() <= 1e-12 * np.abs(ref.symbols).max()
+    assert _cerruti_reference.cache_info().currsize == 1

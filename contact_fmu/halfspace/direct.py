@@ -44,7 +44,51 @@ CHORD_DECREASE = 0.5
 
 
 def contact_operator(patch: Any) -> FloatArray:
-    """K on the contact: (2 m, 2 m), columns K e_j for unit tractions e_j (m/Pa)."""
+    """K on the contact: (2 m, 2 m) (m/Pa), gathered from the kernel blocks.
+
+    K e_J for a unit traction at the contact element J applies (A + k) and the layer
+    terms to its differences D e_J = e_J - e_J- (J- the element behind J, which exists:
+    no contact in the first column). In the rows I of the contact the Toeplitz
+    operator A gives A(I - J) - A(I - J-) = Ad(x_I - x_J), with the difference kernel
+    Ad(d) = A(d) - A(d + dx e_x) taken once on the torus (offsets within the grid are
+    their own minimum images there), so that each block is one indexed gather; the local
+    terms (k + k_extra_I) (delta_IJ - delta_I,J-) add to the diagonal blocks. Equal to
+    applying ``apply_K`` to unit tractions (2 m FFT convolutions) to rounding
+    (tests/test_halfspace_direct.py), ``contact_operator_by_columns``."""
+    C = patch.contact
+    jj, ii = np.nonzero(C)
+    m = len(jj)
+    op = patch.op
+    T = op.torus
+    Ly, Lx = op.shape
+    diff = T - np.roll(T, -1, axis=-1)  # Ad: A(d) - A(d + dx e_x) at every torus offset
+    idx = ((jj[:, None] - jj[None, :]) % Ly) * Lx + (ii[:, None] - ii[None, :]) % Lx
+    K = np.empty((2 * m, 2 * m))
+    for a in range(2):
+        for b in range(a, 2):
+            blk = diff[a, b].ravel().take(idx)
+            K[a * m : (a + 1) * m, b * m : (b + 1) * m] = blk
+            if a != b:  # a_yx = a_xy: the y-x block is the x-y one
+                K[b * m : (b + 1) * m, a * m : (a + 1) * m] = blk
+    # local terms: row I gets (k + k_extra_I) at column I and minus it at column I+
+    loc = op.local + patch.k_extra[C]
+    if np.any(loc != 0.0):
+        number = np.full(C.shape, -1)
+        number[C] = np.arange(m)
+        ahead = np.full(m, -1)
+        fwd = ii + 1 < C.shape[1]
+        ahead[fwd] = number[jj[fwd], ii[fwd] + 1]
+        has = ahead >= 0
+        rows = np.arange(m)
+        for a in range(2):
+            K[a * m + rows, a * m + rows] += loc
+            K[a * m + rows[has], a * m + ahead[has]] -= loc[has]
+    return K
+
+
+def contact_operator_by_columns(patch: Any) -> FloatArray:
+    """K on the contact by applying ``apply_K`` to unit tractions (2 m FFT convolutions):
+    the reference for ``contact_operator``."""
     C = patch.contact
     jj, ii = np.nonzero(C)
     m = len(jj)
@@ -71,7 +115,11 @@ def newton(
     Returns tau, S (2, ny, nx), the slip mask and the Newton count; RuntimeError after
     ``maxit`` steps."""
     C, r = patch.contact, patch.r
-    K, Kinv = patch.dense_contact_operator, patch.dense_contact_inverse
+    K = patch.dense_contact_operator
+    # K^-1 (the slip form) costs about three Newton factorisations (2 (2m)^3 flops): built
+    # from a patch's second solve on, when its cost spreads over the solves that reuse it
+    Kinv = patch.dense_contact_inverse if patch.solves > 0 else None
+    patch.solves += 1
     m = K.shape[0] // 2
     g = patch.g[C]
     gmax = float(g.max())
@@ -167,7 +215,7 @@ class _Jacobian:
     def __init__(
         self,
         K: FloatArray,
-        Kinv: FloatArray,
+        Kinv: FloatArray | None,
         r: float,
         zx: FloatArray,
         zy: FloatArray,
@@ -184,7 +232,7 @@ class _Jacobian:
         f = g[iS] / nzS
         self.iS, self.hx, self.hy, self.f = iS, hx, hy, f
         tx, ty = -hy, hx
-        self.slip_form = 2 * k <= 2 * m - k  # the smaller of the two systems
+        self.slip_form = Kinv is not None and 2 * k <= 2 * m - k  # the smaller system
         bR, bT, bA = _workspace(4 * m * m)
         if self.slip_form:
             n = 2 * k

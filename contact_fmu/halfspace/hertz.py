@@ -24,6 +24,7 @@ scipy.special.ellipk/ellipe take the parameter m = e^2.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -48,18 +49,71 @@ M_MAX = 1.0 - 1e-12
 M_LINEAR = 1e-6
 
 
-@dataclass(frozen=True)
+class UnitWarning(UserWarning):
+    """An input that looks like it was given in another unit than SI (N/mm^2, mm, rad/mm:
+    CONTACT's units). A warning, not an error: the value may be meant; silenced by the
+    call's ``check_units=False``."""
+
+
+# Plausibility bounds (SI): moduli below MODULUS_PLAUSIBLE Pa (1 MPa, soft rubber) look
+# like N/mm^2 (steel's 210e3 MPa); contact semi-axes above SEMI_AXIS_PLAUSIBLE m look like
+# mm (6.0 for 6 mm); spin creepages |phi| c (phi in 1/m, c the contact size) below
+# SPIN_PLAUSIBLE but not zero look like rad/mm (CONTACT's unit, 1000 times smaller than
+# 1/m; a tread's spin is 0.01-1 1/m, phi c = 1e-4-1e-2).
+MODULUS_PLAUSIBLE = 1e6
+SEMI_AXIS_PLAUSIBLE = 0.1
+SPIN_PLAUSIBLE = 1e-5
+
+
+def unit_warning(name: str, value: float, looks_like: str, check_units: bool) -> None:
+    """Warn (UnitWarning) that ``name`` = ``value`` looks like it is in ``looks_like``."""
+    if check_units:
+        warnings.warn(
+            f"{name} = {value!r} looks like {looks_like}; the inputs are SI "
+            "(check_units=False silences this)",
+            UnitWarning,
+            stacklevel=3,
+        )
+
+
+@dataclass(frozen=True, init=False)
 class Material:
-    """Isotropic elastic material: Young's modulus E (Pa), Poisson's ratio nu (-)."""
+    """Isotropic elastic material: Young's modulus E (Pa), Poisson's ratio nu (-).
+
+    ``Material(E, nu)``, ``Material(E=..., nu=...)`` or, as CONTACT users give it,
+    ``Material(G=..., nu=...)`` with the shear modulus G (Pa) (E = 2 G (1 + nu)); exactly
+    one of E and G. A modulus below MODULUS_PLAUSIBLE (1 MPa) warns (UnitWarning: it
+    looks like N/mm^2) unless ``check_units=False``."""
 
     E: float
     nu: float
 
-    def __post_init__(self) -> None:
-        positive("E", self.E)
-        finite("nu", self.nu)
-        if not -1.0 < self.nu <= 0.5:
-            raise InputError("nu", self.nu, "in (-1, 0.5]")
+    def __init__(
+        self,
+        E: float | None = None,
+        nu: float | None = None,
+        *,
+        G: float | None = None,
+        check_units: bool = True,
+    ) -> None:
+        if nu is None:
+            raise InputError("nu", nu, "given (Poisson's ratio, -)")
+        nu = finite("nu", nu)
+        if not -1.0 < nu <= 0.5:
+            raise InputError("nu", nu, "in (-1, 0.5]")
+        if (E is None) == (G is None):
+            raise InputError("E, G", (E, G), "exactly one of them given (Pa)")
+        if E is None:
+            G = positive("G", G)
+            if G < MODULUS_PLAUSIBLE:
+                unit_warning("G", G, "N/mm^2 (MPa)", check_units)
+            E = 2.0 * G * (1.0 + nu)
+        else:
+            E = positive("E", E)
+            if E < MODULUS_PLAUSIBLE:
+                unit_warning("E", E, "N/mm^2 (MPa)", check_units)
+        object.__setattr__(self, "E", E)
+        object.__setattr__(self, "nu", nu)
 
     @property
     def G(self) -> float:

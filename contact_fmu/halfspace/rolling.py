@@ -66,6 +66,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.ndimage as ndi
 from numpy.typing import NDArray
+from scipy.linalg.lapack import dgetrf, dgetrs
 
 from .._validate import (
     InputError,
@@ -140,8 +141,11 @@ class RollingSolution:
     iteration, (nx, ny, Newton, GMRES) per level from the coarsest to this grid (the last
     entry repeats the two counts above); empty for a single-level solve. ``error``:
     with ``HalfSpaceContact.solve(richardson=True)``, the estimated discretisation error
-    (Tx, Ty, Mz) of this grid's forces, F(n/2) - F(n) for the scheme's first order, and
-    ``extrapolated`` the Richardson values 2 F(n) - F(n/2); None otherwise.
+    (Tx, Ty, Mz) of this grid's forces, (F(r h) - F(h))/(r - 1) for the scheme's first
+    order and elements r times larger (r = 2 on even grids), and ``extrapolated`` the
+    Richardson values F(h) minus it; None otherwise. ``solves``:
+    the steady-rolling solves that produced it (``HalfSpaceContact.creepages_for``: its
+    whole search; 1 otherwise).
     """
 
     grid: Grid
@@ -158,12 +162,20 @@ class RollingSolution:
     levels: tuple[tuple[int, int, int, int], ...] = ()
     error: tuple[float, float, float] | None = None
     extrapolated: tuple[float, float, float] | None = None
+    solves: int = 1
 
     @property
     def adhesion_fraction(self) -> float:
         """Adhesion area over contact area (-)."""
         n = int(self.contact.sum())
         return float(self.adhesion.sum()) / n if n else 0.0
+
+    def plot(self, ax: Any = None, arrows: bool = True, title: bool = True) -> Any:
+        """Traction arrows over contours of |tau|, adhesion and slip areas marked
+        (matplotlib; ``plotting.plot_solution``). Returns the axes."""
+        from .plotting import plot_solution  # matplotlib only when plotting
+
+        return plot_solution(self, ax, arrows, title)
 
     @property
     def gmres_work(self) -> float:
@@ -205,6 +217,7 @@ class RollingPatch:
     use_closure: bool = False
     operator: BlockConvolution | None = None
     coarsen: Callable[[str], RollingPatch] | None = field(default=None, repr=False, compare=False)
+    solves: int = field(default=0, repr=False, compare=False)  # direct-path solves so far
 
     def __post_init__(self) -> None:
         instance("grid", self.grid, Grid, "an influence.Grid")
@@ -304,9 +317,24 @@ class RollingPatch:
         return full[keep], cols
 
     @cached_property
+    def direct(self) -> bool:
+        """Whether ``solve_rolling(method="auto")`` takes the direct path on this patch:
+        contacts of at most DIRECT_MAX_ELEMENTS elements, FFT backend."""
+        return int(self.contact.sum()) <= DIRECT_MAX_ELEMENTS and self.backend == "fft"
+
+    @cached_property
     def dense_contact_operator(self) -> FloatArray:
         """K on the contact as a dense (2 m, 2 m) matrix (direct.py; small grids)."""
         return direct.contact_operator(self)
+
+    @cached_property
+    def dense_contact_lu(self) -> tuple[FloatArray, NDArray[np.int32]]:
+        """LU factors of K on the contact (the full-adhesion solves of a direct-path patch
+        without its K^-1: a third of the inversion's cost)."""
+        lu, piv, info = dgetrf(self.dense_contact_operator)
+        if info != 0:
+            raise RuntimeError(f"steady rolling: singular contact operator ({info})")
+        return lu, piv
 
     @cached_property
     def dense_contact_inverse(self) -> FloatArray:
@@ -404,9 +432,12 @@ class RollingPatch:
     def solve_adhesion(self, W: FloatArray, rtol: float = 1e-10) -> tuple[FloatArray, int]:
         """Full adhesion (mu -> inf, Kalker's linear theory): K tau = W on the contact.
 
-        Returns tau (2, ny, nx) (Pa) and the GMRES iteration count."""
+        Returns tau (2, ny, nx) (Pa) and the GMRES iteration count (0 for the contacts
+        of the direct path, which use the dense K^-1 it keeps anyway)."""
         C = self.contact
         m = int(C.sum())
+        if self.direct:
+            return self._adhesion_dense([W])[0], 0
         clo = self._closure(C)
 
         def matvec(x):
@@ -427,6 +458,23 @@ class RollingPatch:
         tau[0][C], tau[1][C] = x[:m], x[m:]
         return tau, its
 
+    def _adhesion_dense(self, Ws: list[FloatArray]) -> list[FloatArray]:
+        """Full adhesion K tau = W for several W at once by the dense K (direct path):
+        K^-1 where built, else its LU factors."""
+        C = self.contact
+        m = int(C.sum())
+        b = np.stack([np.concatenate([W[0][C], W[1][C]]) for W in Ws], axis=1)
+        if "dense_contact_inverse" in self.__dict__:
+            x = self.dense_contact_inverse @ b
+        else:
+            x, _ = dgetrs(*self.dense_contact_lu, b)
+        out = []
+        for j in range(len(Ws)):
+            tau = np.zeros((2, *self.grid.shape))
+            tau[0][C], tau[1][C] = x[:m, j], x[m:, j]
+            out.append(tau)
+        return out
+
     @cached_property
     def flexibilities(self) -> tuple[float, float, float]:
         """FASTSIM flexibilities (L_x, L_y, L_phi) (m/Pa) that reproduce this patch's linear
@@ -439,12 +487,18 @@ class RollingPatch:
         # the spin load is the whole rigid slip phi (-y, x) (its -y part loads Ty too
         # for nu > 0); FASTSIM's march of the lateral part phi x carries Ty
         spin = np.stack([np.where(C, -Y * dx, 0.0), np.where(C, X * dx, 0.0)])
-        out = []
-        for a, W in ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin)):
-            exact, _ = self.solve_adhesion(W, rtol=1e-6)
-            fs = march(W[a], C)
-            out.append(float(fs.sum()) / float(exact[a].sum()))
-        return out[0], out[1], out[2]
+        loads = ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin))
+        fs = march(np.stack([W[a] for a, W in loads]), C).sum(axis=(1, 2))
+        if self.direct:  # the three solves at once by the dense LU, only their sums kept
+            exact = [
+                t[a].sum()
+                for (a, _), t in zip(
+                    loads, self._adhesion_dense([W for _, W in loads]), strict=True
+                )
+            ]
+        else:
+            exact = [self.solve_adhesion(W, rtol=1e-6)[0][a].sum() for a, W in loads]
+        return tuple(float(f) / float(e) for f, e in zip(fs, exact, strict=True))
 
     def fastsim_guess(self, xi: float, eta: float, phi: float) -> FloatArray:
         """Kalker's simplified theory on this grid with ``flexibilities``: the march from the
@@ -517,9 +571,7 @@ def solve_rolling(
     one_of("method", method, ("auto", "iterative", "direct"))
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
-    if method == "direct" or (
-        method == "auto" and int(C.sum()) <= DIRECT_MAX_ELEMENTS and patch.backend == "fft"
-    ):
+    if method == "direct" or (method == "auto" and patch.direct):
         guess = tau0 if tau0 is not None else patch.fastsim_guess(xi, eta, phi)
         tau, S, slip, newton = direct.newton(patch, W, guess, tol, maxit)
         return _solution(patch, tau, S, slip, newton, 0, ())

@@ -565,7 +565,12 @@ def _table_task(contacts, axes, task) -> FloatArray | float:
     prev = None
     for i, (k1, k2, k3) in enumerate(line):
         s = ck.solve(
-            axes[0][k1] * xref, axes[1][k2] * xref, axes[2][k3] * pref, tau0=prev, tol=TABLE_TOL
+            axes[0][k1] * xref,
+            axes[1][k2] * xref,
+            axes[2][k3] * pref,
+            tau0=prev,
+            tol=TABLE_TOL,
+            check_units=False,  # the table's own nodes
         )
         prev = s.tau
         out[i] = (s.Tx / muP, s.Ty / muP, s.Mz / (muP * c), s.adhesion_fraction)

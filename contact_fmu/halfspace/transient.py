@@ -533,7 +533,9 @@ class HalfSpaceField:
     def shift_for_force(self, Fx: float, Fy: float = 0.0) -> tuple[float, float, StepResult]:
         """Cattaneo at a given tangential force: the static shift (delta_x, delta_y) (m)
         from rest whose field carries (Tx, Ty) = (Fx, Fy) (N), set as by ``set_shift``.
-        scipy.optimize.root from the adhesion stiffness's shift; |F| < mu P."""
+        scipy.optimize.root from the adhesion stiffness's shift; |F| < mu P. A force
+        it does not reach within SHIFT_FORCE_TOL of mu P answers InputError naming it,
+        with the closest force reached."""
         Fx, Fy = finite("Fx", Fx), finite("Fy", Fy)
         muP = self.contact.mu * self.P
         if math.hypot(Fx, Fy) >= muP:
@@ -550,7 +552,12 @@ class HalfSpaceField:
         res = self.set_shift(dx, dy)  # the field at the solution
         miss = max(abs(res.Tx - Fx), abs(res.Ty - Fy)) / muP
         if miss > SHIFT_FORCE_TOL:
-            raise RuntimeError(f"shift_for_force: no convergence ({miss:.3g} of mu P)")
+            raise InputError(
+                "Fx, Fy",
+                (Fx, Fy),
+                f"attainable by a static shift (closest: {res.Tx:.6g}, {res.Ty:.6g} N, "
+                f"{miss:.3g} of mu P off)",
+            )
         return dx, dy, res
 
     def steady_patch(self) -> RollingPatch:

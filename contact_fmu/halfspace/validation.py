@@ -52,9 +52,11 @@ def square_grid(aob: float, elements: int) -> tuple[int, int]:
 
 
 def kalker_contact(aob: float, nu: float, elements: int) -> HalfSpaceContact:
-    m = Material(2.0 * (1.0 + nu), nu)
+    # dimensionless (G = 1, c = 1): no unit checks
+    m = Material(2.0 * (1.0 + nu), nu, check_units=False)
     a1, a2 = math.sqrt(aob), 1.0 / math.sqrt(aob)
-    return HalfSpaceContact.from_ellipse(a1, a2, m, m, 0.3, P=1.0, n=square_grid(aob, elements))
+    n = square_grid(aob, elements)
+    return HalfSpaceContact.from_ellipse(a1, a2, m, m, 0.3, P=1.0, n=n, check_units=False)
 
 
 def pct(x: float) -> str:
