@@ -51,9 +51,12 @@ from . import identifier as model_identifier
 
 FORMAT = "contact_fmu-native-fmu-1"
 NATIVE_DIR = Path(native.__file__).resolve().parent
-SOURCES = ("fmu2.c", "stepper.c", "cf_core.h")  # fmu2.c includes the others: one unit
+# the FMU's C files: each .c its own translation unit (listed in <SourceFiles>), the
+# headers they include; with HEADER (generated) they are the FMU's sources/
+SOURCES = ("fmu2.c", "stepper.c", "stepper.h", "cf_core.h")
 HEADER = "cf_model.h"
-CFLAGS = (*native.CFLAGS, "-fvisibility=hidden", "-std=c11", "-D_DEFAULT_SOURCE")
+# no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
+CFLAGS = (*native.CFLAGS, "-std=c11", "-D_DEFAULT_SOURCE")
 PLATFORM = "linux64"
 
 
@@ -311,7 +314,8 @@ def _skeleton(cfg: ModelConfig, identifier: str, guid: str) -> bytes:
         providesDirectionalDerivative="true" if cfg.mode == "contact" else "false",
     )
     files = ET.SubElement(cs, "SourceFiles")
-    ET.SubElement(files, "File", name=SOURCES[0])
+    for name in c_files():
+        ET.SubElement(files, "File", name=name)
     cats = ET.SubElement(root, "LogCategories")
     for name, text in (
         ("logStatusWarning", "Log messages with fmi2Warning status."),
@@ -375,12 +379,19 @@ def identity(cfg: ModelConfig) -> str:
     return h.hexdigest()
 
 
+def c_files() -> tuple[str, ...]:
+    """The translation units among SOURCES (compiled each on its own, linked together)."""
+    return tuple(n for n in SOURCES if n.endswith(".c"))
+
+
 def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
-    """fmu2.c (with stepper.c, cf_core.h and cf_model.h in ``src_dir``) into the library
-    ``target``; CalledProcessError with the compiler's output on failure."""
+    """The C files of SOURCES in ``src_dir`` (with the headers and cf_model.h there) into
+    the library ``target``, linked with libm; CalledProcessError with the compiler's
+    output on failure."""
     cc = os.environ.get("CC", "cc")
+    units = [str(src_dir / n) for n in c_files()]
     cmd = [cc, *CFLAGS, *extra, f"-I{src_dir}", f"-I{fmi_headers()}", "-o", str(target),
-           str(src_dir / SOURCES[0]), "-lm"]  # fmt: skip
+           *units, "-lm"]  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=True, text=True)
     return target
 

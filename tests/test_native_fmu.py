@@ -141,10 +141,11 @@ def test_model_description_is_the_pythonfmu_ones_and_validates(native_fmus, pyth
     cs = a.find("CoSimulation")
     assert cs.get("needsExecutionTool") == "false"
     assert cs.get("canGetAndSetFMUstate") == "true" and cs.get("canSerializeFMUstate") == "true"
-    assert [f.get("name") for f in cs.find("SourceFiles")] == ["fmu2.c"]
+    listed = [f.get("name") for f in cs.find("SourceFiles")]
+    assert listed == list(native_fmu.c_files()) and "stepper.c" in listed
     with zipfile.ZipFile(native_fmus[name]) as z:
         names = set(z.namelist())
-    carried = ("fmu2.c", "stepper.c", "cf_core.h", "cf_model.h")
+    carried = (*native_fmu.SOURCES, "cf_model.h")
     assert {f"sources/{n}" for n in carried} <= names
     assert not any(n.endswith(".h") and "fmi2" in n for n in names)  # fmpy's headers
     assert validate_fmu(str(native_fmus[name])) == []
@@ -864,6 +865,44 @@ def test_native_binary_needs_no_python_and_an_old_c_library(native_fmus, tmp_pat
         assert glibc_needed(lib) <= GLIBC_FLOOR
 
 
+# the native FMU kinds a builder may compile from sources/: the scalar and the vector body
+# step, the contact mode with spin, the rigid body, the half-space table
+SOURCE_KINDS = ("fig13", "full body", "full contact", "full rigid_body", "rail_traction")
+
+
+@pytest.mark.parametrize("kind", SOURCE_KINDS)
+def test_sources_alone_compile_strictly_and_export_only_the_fmi_functions(
+    scenes, native_fmus, kind, tmp_path
+):
+    """Each C file of sources/ is its own translation unit: ``cc -shared -fPIC`` of
+    sources/*.c with fmpy's FMI headers, under -Wall -Wextra -pedantic -Werror and
+    without -fvisibility=hidden (as fmpy's cmake or an importer's own build compiles
+    them), builds a library whose dynamic symbol table defines the 34 functions of FMI
+    2.0 co-simulation and nothing else: the sources hide their own internals (stepper.h's
+    CF_HIDDEN, static), so no cf_* symbol can clash with a host's."""
+    import fmpy
+
+    path = (
+        native_fmus[kind]
+        if kind in native_fmus
+        else native_fmu.build(ModelConfig.full(kind.removeprefix("full ")), OUT).path
+    )
+    unzip = tmp_path / "fmu"
+    fmpy.extract(str(path), str(unzip))
+    units = sorted((unzip / "sources").glob("*.c"))
+    assert [u.name for u in units] == sorted(native_fmu.c_files())
+    lib = tmp_path / "built.so"
+    cmd = ["cc", "-shared", "-fPIC", "-Wall", "-Wextra", "-pedantic", "-Werror",
+           f"-I{native_fmu.fmi_headers()}", *map(str, units), "-lm", "-o", str(lib)]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    defined = subprocess.run(
+        ["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True
+    ).stdout.split("\n")
+    names = [line.split()[-1] for line in defined if line.strip()]
+    assert len(names) == 34 and all(n.startswith("fmi2") for n in names), names
+
+
 # ---- a C importer, a source build, sanitizers -------------------------------------------------
 IMPORTER = Path(__file__).with_name("native_importer.c")
 
@@ -1014,7 +1053,7 @@ def _sanitized(tmp_path: Path, unzip: Path) -> Path:
         "-DLINKED",
         f"-I{unzip / 'sources'}",
     )
-    sources = (str(IMPORTER), str(unzip / "sources" / "fmu2.c"))
+    sources = (str(IMPORTER), *(str(p) for p in sorted((unzip / "sources").glob("*.c"))))
     return _compile(tmp_path / "importer_asan", *flags, *sources)
 
 

@@ -44,7 +44,10 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
-#include "stepper.c"
+#include "stepper.h"
+
+/* Python's max(x, c) for a constant c: x unless c is strictly larger */
+static double py_max(double x, double c) { return c > x ? c : x; }
 
 /* ---- the variables (cf_model.h, generated from variables.py) ---------------------- */
 enum { K_PARAMETER, K_INPUT, K_OUTPUT };
@@ -388,7 +391,7 @@ static void spin_forces(const cf_params *p, const cf_strips *g, double vx, doubl
         return;
     }
     double with[3], without[3];
-    forces(p, vx, vy, Vx, T);
+    cf_law_forces(p, vx, vy, Vx, T);
     cf_march_standstill(g, vx, vy, phi, with);
     cf_march_standstill(g, vx, vy, 0.0, without);
     for (int k = 0; k < 3; k++) T[k] += with[k] - without[k];
@@ -409,13 +412,13 @@ static const char *contact_outputs(const cf_core *c, spin_grid *g, cf_params *p,
     double T[3], tab[4];
     const cf_strips *grid = NULL;
     if (CF_TABLE) {
-        table_scalar(p, vx, vy, Omega_z, Vx, tab); /* CreepTable._scalar, spin included */
+        cf_table_forces(p, vx, vy, Omega_z, Vx, tab); /* CreepTable._scalar, spin included */
         T[0] = tab[0], T[1] = tab[1], T[2] = tab[2];
     } else if (CF_CONTACT_SPIN && Omega_z != 0.0 && g != NULL) {
         grid = grid_at(g, c, p, b);
         spin_forces(p, grid, vx, vy, Omega_z, Vx, T);
     } else {
-        forces(p, vx, vy, Vx, T);
+        cf_law_forces(p, vx, vy, Vx, T);
     }
     for (int i = 0; i < N_OUT; i++) out[i] = 0.0;
     out[O_TX] = T[0], out[O_TY] = T[1], out[O_MZ] = T[2];
@@ -426,8 +429,8 @@ static const char *contact_outputs(const cf_core *c, spin_grid *g, cf_params *p,
     out[O_ADHESION] = CF_TABLE ? tab[3]
                       : grid ? cf_spin_adhesion(grid, vx, vy, Vx, Omega_z, g->tau, g->slip,
                                                 g->inside)
-                             : adhesion_fraction(p, vx, vy, Vx);
-    out[O_REGIME] = full_slip(p, vx, vy, Vx) ? 1.0 : 0.0;
+                             : cf_adhesion_fraction(p, vx, vy, Vx);
+    out[O_REGIME] = cf_full_slip(p, vx, vy, Vx) ? 1.0 : 0.0;
     return nonfinite(out, r, n);
 }
 
@@ -767,7 +770,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
         } else if (why == CF_STEP_NO_SLIDING) {
             snprintf(why_text, sizeof why_text, "StageSolveError: eta = inf (Iy = 0) admits no "
                      "gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = %.6g N reaches mu P = %.6g N",
-                     fabs(target_x(&p, b.Fx_ex, b.My_ex)), p.mu * p.P);
+                     fabs(cf_target_x(&p, b.Fx_ex, b.My_ex)), p.mu * p.P);
         } else { /* CF_STEP_NO_ROOT: no other code reaches here (the law is at P, h > 0) */
             snprintf(why_text, sizeof why_text, "StageSolveError: no root: the stage residual "
                      "keeps its sign (loads beyond mu P?)");
@@ -840,7 +843,7 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
     else if (strncmp(s, "file:/", 6) == 0) s += 5;
     size_t k = 0;
     for (; *s && k + 1 < sizeof path; s++) { /* percent-decoding */
-        int hi, lo;
+        unsigned hi, lo;
         if (s[0] == '%' && s[1] && s[2] && sscanf(s + 1, "%1x%1x", &hi, &lo) == 2) {
             path[k++] = (char)(hi * 16 + lo);
             s += 2;
@@ -1256,7 +1259,7 @@ static void law_jacobian(const cf_params *p, double vx, double vy, double V, dou
     const double sg = V > 0.0 ? 1.0 : -1.0, a1 = p->a1;
     const double s = hypot(vx, vy);
     if (s == 0.0) {
-        const double d = muP * force_fraction_slope(p, 0.0) * c / aV;
+        const double d = muP * cf_force_fraction_slope(p, 0.0) * c / aV;
         const double dg = -0.5; /* g'(0) = (h(0) - 1)/2 */
         double Z[3][3] = {{d, 0.0, 0.0}, {0.0, d, 0.0}, {0.0, sg * muP * a1 * dg * c / aV, 0.0}};
         memcpy(J, Z, sizeof Z);
@@ -1265,9 +1268,8 @@ static void law_jacobian(const cf_params *p, double vx, double vy, double V, dou
     const double ex = vx / s, ey = vy / s, beta = s * c / aV;
     double h = 1.0, dh = 0.0, dg = 0.0; /* g = beta (h - 1)/2 enters as g/|v| (g_s) */
     if (beta < p->beta_full_slip) {
-        const double m = m_of(beta);
-        h = py_min((2.0 / M_PI) * H_m(beta, m), 1.0);
-        dh = slope_m(beta, m);
+        h = cf_force_fraction(p, beta);
+        dh = cf_force_fraction_slope(p, beta);
         dg = 0.5 * (h - 1.0) + 0.5 * beta * dh;
     }
     const double per_beta = beta < p->beta_series
@@ -1319,7 +1321,7 @@ static int contact_jacobian(Inst *I, int need_phi, double J[3][4]) {
 
 /* the output's row of d(outputs)/d(Vx, Vy, Omega_y, Omega_z) where it is analytic (J:
  * contact_jacobian's, have: whether there is one), else 0 */
-static int analytic_row(const cf_core *c, int role, int have, const double J[3][4],
+static int analytic_row(const cf_core *c, int role, int have, double J[3][4],
                         double row[4]) {
     const double Rx = c->val[R_RX];
     int k;
