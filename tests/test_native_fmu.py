@@ -1025,23 +1025,93 @@ def test_importer_bench_repeats_the_case_and_stops_loudly(
     assert "fmi2SetReal at step 10 " in proc.stderr and "P = -1" in proc.stderr, proc.stderr
 
 
+# A host that links nothing but the C library and loads the FMU with RTLD_NOW (every
+# symbol bound at once): what a library needs and does not name in DT_NEEDED is missing.
+PLAIN_HOST = r"""
+#include <dlfcn.h>
+#include <stdio.h>
+int main(int argc, char **argv) {
+    void *h = argc > 1 ? dlopen(argv[1], RTLD_NOW | RTLD_LOCAL) : NULL;
+    if (h == NULL) { printf("%s\n", dlerror()); return 1; }
+    printf("%s\n", dlsym(h, "fmi2Instantiate") ? "loaded" : "no fmi2Instantiate");
+    return 0;
+}
+"""
+
+# what a builder of the FMU's sources tells fmpy's cmake (docs/fmu.md): link libm
+LINK_LIBM = {"CMAKE_C_STANDARD_LIBRARIES:STRING": "-lm"}
+
+
+def _needed(lib: Path) -> list[str]:
+    text = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True).stdout
+    return re.findall(r"\(NEEDED\)\s+Shared library: \[(.+?)\]", text)
+
+
 @pytest.mark.skipif(shutil.which("cmake") is None, reason="no cmake")
 def test_source_fmu_built_by_fmpy_from_sources_alone_gives_the_same_numbers(
     scenes, native_fmus, fig13_expected, tmp_path
 ):
     """fmpy's build of a source FMU (cmake, its own CMakeLists and FMI headers) from the
-    FMU's sources/ alone, the shipped binary removed first: the C importer gets the same
-    doubles from the binary it made."""
+    FMU's sources/ alone, the shipped binary removed first. Its CMakeLists links no
+    library: the result does not name libm, and a host that has not loaded libm itself
+    (a C program linked with libc only) cannot load it ("undefined symbol" of a libm
+    function such as asin). Told to link libm (CMAKE_C_STANDARD_LIBRARIES = -lm, as
+    docs/fmu.md says), the library names libm.so.6, that host loads it, and the C
+    importer gets the same doubles from it as from the shipped binary."""
     from fmpy.build import build_platform_binary
 
     unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
     shutil.rmtree(unzip / "binaries")
-    (tmp_path / "build").mkdir()
-    build_platform_binary(str(unzip), str(tmp_path / "build"))
     lib = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
-    assert lib.is_file()
+    (tmp_path / "host.c").write_text(PLAIN_HOST)
+    host = tmp_path / "host"
+    subprocess.run(["cc", "-o", str(host), str(tmp_path / "host.c"), "-ldl"], check=True)
+    assert not any(n.startswith("libm.") for n in _needed(host))
+    (tmp_path / "plain").mkdir()
+    build_platform_binary(str(unzip), str(tmp_path / "plain"))
+    assert not any(n.startswith("libm.") for n in _needed(lib))
+    proc = subprocess.run([str(host), str(lib)], capture_output=True, text=True)
+    assert proc.returncode == 1 and "undefined symbol" in proc.stdout, proc.stdout
+    lib.unlink()
+    (tmp_path / "libm").mkdir()
+    build_platform_binary(str(unzip), str(tmp_path / "libm"), cmake_options=dict(LINK_LIBM))
+    assert "libm.so.6" in _needed(lib)
+    proc = subprocess.run([str(host), str(lib)], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout == "loaded\n", proc.stdout
     exe = _compile(tmp_path / "importer", str(IMPORTER), "-ldl")
     assert np.array_equal(_importer_run(exe, lib, md, spec), expected)
+
+
+@pytest.mark.skipif(shutil.which("objdump") is None, reason="no objdump")
+def test_c_library_versions_the_binaries_of_both_targets_need(native_fmus, python_fmus, tmp_path):
+    """What docs/fmu.md states a Linux target needs, read with ``objdump -T`` from the
+    built FMUs: the native FMU's binary, libm and libc with no glibc symbol version newer
+    than 2.17 (GLIBC_2.14, memcpy); the pythonfmu FMU's own binary (the status shim) and
+    its compiled stepper likewise; but pythonfmu's libpythonfmu-export.so, which the shim
+    loads, needs GLIBC_2.32 (__libc_single_threaded) and libstdc++'s GLIBCXX_3.4.30 (GCC
+    12's): the pythonfmu FMU loads on glibc 2.32 or newer with GCC 12's libstdc++ or
+    newer, the native FMU on glibc 2.17 or newer."""
+    from test_native import GLIBC_FLOOR, glibc_needed
+
+    def versions(lib: Path, tag: str) -> tuple[int, ...]:
+        text = subprocess.run(["objdump", "-T", str(lib)], capture_output=True, text=True).stdout
+        found = {tuple(map(int, v.split("."))) for v in re.findall(rf"{tag}_([0-9.]+)\)", text)}
+        return max(found, default=())
+
+    for target, fmus in (("native", native_fmus), ("pythonfmu", python_fmus)):
+        unzip = tmp_path / target
+        with zipfile.ZipFile(fmus["fig13"]) as z:
+            z.extractall(unzip)
+        libs = {p.name: p for p in unzip.rglob("*.so")}
+        if target == "native":
+            (lib,) = libs.values()
+            assert glibc_needed(lib) <= GLIBC_FLOOR
+            assert sorted(_needed(lib)) == ["libc.so.6", "libm.so.6"]
+            continue
+        export = libs.pop("libpythonfmu-export.so")
+        assert glibc_needed(export) == (2, 32)
+        assert versions(export, "GLIBCXX") == (3, 4, 30)
+        assert libs and all(glibc_needed(p) <= GLIBC_FLOOR for p in libs.values()), libs
 
 
 def _sanitized(tmp_path: Path, unzip: Path) -> Path:
