@@ -53,7 +53,10 @@ FORMAT = "contact_fmu-native-fmu-1"
 NATIVE_DIR = Path(native.__file__).resolve().parent
 # the FMU's C files: each .c its own translation unit (listed in <SourceFiles>), the
 # headers they include; with HEADER (generated) they are the FMU's sources/
-SOURCES = ("fmu2.c", "stepper.c", "stepper.h", "cf_core.h")
+SOURCES = (
+    "fmi2.c", "instance.c", "model.c", "stepper.c",
+    "instance.h", "model.h", "stepper.h", "cf_core.h",
+)  # fmt: skip
 HEADER = "cf_model.h"
 # no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
 CFLAGS = (*native.CFLAGS, "-std=c11", "-D_DEFAULT_SOURCE")
@@ -269,7 +272,7 @@ def _table_header(cfg: ModelConfig) -> list[str]:
 
 
 def table_bytes(cfg: ModelConfig) -> bytes:
-    """The table resource read by fmu2.c (load_table): magic, sizes, the axes and the
+    """The table resource read by instance.c (load_table): magic, sizes, the axes and the
     patch coefficients as doubles, a CRC-32 (zlib's) of all before it (host byte
     order)."""
     import struct

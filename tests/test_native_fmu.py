@@ -1,5 +1,6 @@
-"""The native FMU (fmu_build --native: the FMI 2.0 layer fmu2.c on the compiled stepper,
-no Python on the target) against the pythonfmu FMU and the scenes' references.
+"""The native FMU (fmu_build --native: the FMI 2.0 front end fmi2.c on the instance layer
+instance.c, the model model.c and the compiled stepper, no Python on the target) against
+the pythonfmu FMU and the scenes' references.
 
 Both FMUs run the same C step (stepper.c's cf_advance and cf_body_outputs), the native
 one with the law's and the body's constants derived in C (cf_layer_law, cf_body_inertia)
@@ -350,7 +351,7 @@ def test_command_line_prints_the_fmu_path_last(native_fmus):
 
 # ---- call by call, both targets ------------------------------------------------------------------
 # The pythonfmu FMU (its adapter slave.py, with the FMI calls of native/fmi.c) and the
-# native FMU (fmu2.c) make the same checks in the same C (cf_core.h, stepper.c's
+# native FMU (instance.c) make the same checks in the same C (cf_core.h, stepper.c's
 # cf_body_check): the bad-input and FMU-state tests run against both.
 H = 1.75e-4  # s, the Fig. 13 scene's communication step
 
@@ -655,7 +656,7 @@ def test_serialized_native_state_restores_bit_for_bit_in_another_instance(native
         assert b.outputs() == a.outputs()
 
 
-# what each target's envelope names when it refuses bytes (pythonfmu_shim.c, fmu2.c)
+# what each target's envelope names when it refuses bytes (pythonfmu_shim.c, instance.c)
 REFUSALS = {
     "pythonfmu": {
         "garbage": "not a serialized contact_fmu FMU state",
@@ -1137,7 +1138,7 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     serialized, damaged and refused, state calls with a freed state, another live or
     freed instance's or a pointer into a buffer, resets) with no sanitizer report, no
     fmi2Fatal, no non-finite output served with fmi2OK, no damaged bytes and no pointer
-    that is not a live state of the instance accepted (without fmu2.c's table of live
+    that is not a live state of the instance accepted (without instance.c's table of live
     states, ASan reports the use after free). Then 3000 states held at once, set and
     freed in shuffled orders: each set until freed, each refused after."""
     unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)

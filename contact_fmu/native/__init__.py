@@ -17,7 +17,7 @@ path) have a CPython extension, fmi.c (``fmi_module``), that the adapter puts in
 of its Python methods while the compiled step runs; it is built for the running
 interpreter (its file name carries the extension suffix, so another Python finds none).
 Its checks of a value and a doStep call are cf_core.h's, and its step stepper.c's
-cf_body_step with the step's own checks: the same C as the native FMU's (fmu2.c).
+cf_body_step with the step's own checks: the same C as the native FMU's (instance.c).
 
 Both libraries are looked for next to this file, where an FMU carries them (built by
 fmu_build; a vendored copy uses only those). The package itself looks next in the

@@ -125,7 +125,7 @@ typedef struct {
 /* Why a communication step of the body is not served (else CF_OK): the checks of
  * BodyModel.step and the adapter, once for both front ends. fmi.c's fast path takes
  * any of them as CF_FALLBACK (cf_body_step: the Python adapter then words the refusal),
- * fmu2.c's doStep words each as the adapter does. */
+ * the native FMU's doStep (instance.c) words each as the adapter does. */
 enum {
     CF_STEP_LAW = 2,   /* the law is not at the load P (Python rebuilds it: Eq. 34) */
     CF_STEP_SIZE,      /* h not in (0, inf), or no h_max > 0 */
@@ -170,7 +170,7 @@ typedef struct {
     int sliding;                  /* RollingBody.sliding (quasistationary gross sliding) */
 } cf_vstate;
 
-/* The vector path of a step (Eqs. 10-11: fmu2.c's CF_VECTOR): its state, the lateral
+/* The vector path of a step (Eqs. 10-11: the native FMU's CF_VECTOR): its state, the lateral
  * loads, the spin grid's scratch and mask (cf_vbody_outputs) */
 typedef struct {
     cf_vstate *y;
