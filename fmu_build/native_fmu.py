@@ -1,15 +1,22 @@
 """The native FMU: FMI 2.0 co-simulation in compiled C only (``python -m fmu_build --native``).
 
-The binary is contact_fmu/native/fmu2.c (the FMI layer) with stepper.c (the kernel),
-cf_core.h (the checks of a value and of a doStep call, shared with the pythonfmu FMU's
-binding fmi.c) and a header generated here, cf_model.h: the FMU's variables from
+The binary is built from the C files of contact_fmu/native, each its own translation
+unit (SOURCES): fmi2.c (the FMI 2.0 front end: arguments and statuses), instance.c (the
+version-neutral instance layer: phases, checks, step admission, messages, FMU states),
+model.c (the contact outputs, the rigid-body step, the analytic Jacobian) and stepper.c
+(the kernel), with their headers instance.h, model.h, stepper.h, cf_core.h (the checks
+of a value and of a doStep call, shared with the pythonfmu FMU's binding fmi.c) and a
+header generated here, cf_model.h: the FMU's variables from
 ``contact_fmu.fmu.variables`` (names, kinds, starts, ranges and the requirement texts of
 their check messages), its GUID and the Python integrator's constants, so that each
 lives once. The model description is written like the pythonfmu FMU's and completed by
 the same ``model_description.patch`` (units, ranges, starts, ModelStructure); it lists the
-C sources (``<SourceFiles>``) that the FMU carries under ``sources/``, so that fmpy's
-build (or any importer's) compiles it on Windows or macOS; the FMI headers are fmpy's
-(``fmpy/c-code``), found at build time and not carried in this repository.
+C files (``<SourceFiles>``) that the FMU carries under ``sources/``, so that fmpy's
+build (or any importer's) compiles it on Windows or macOS: every .c file into one shared
+library, linked with libm (with fmpy's cmake: ``CMAKE_C_STANDARD_LIBRARIES=-lm``, which
+it does not link by itself; docs/fmu.md); the sources export the fmi2* functions only,
+without -fvisibility=hidden. The FMI headers are fmpy's (``fmpy/c-code``), found at
+build time and not carried in this repository.
 
 What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC and SDIRK2
 (the String parameter ``scheme`` where the FMU offers both), methods "full" and

@@ -318,16 +318,14 @@ def test_full_body_fmu_runs_both_schemes_and_methods_to_the_pythonfmu_doubles(fu
 
 @pytest.mark.parametrize("target", ["pythonfmu", "native"])
 def test_a_bad_scheme_is_refused_naming_it_until_corrected(full_body, target):
-    """scheme = 'rk4': refused with RollingBody's words (the native FMU at setString,
-    the pythonfmu FMU at initialisation), no initialisation with it; corrected, the
-    model starts and steps."""
+    """scheme = 'rk4': refused with RollingBody's words at setString by both targets,
+    no initialisation with it; corrected, the model starts and steps."""
     from fmpy.fmi1 import FMICallException
 
     with Instance(full_body[target], "bad", initialise=False) as b:
-        try:
+        with pytest.raises(FMICallException) as e:
             b.set("scheme", "rk4")
-        except FMICallException:
-            assert target == "native"
+        assert e.value.status == ERROR
         with pytest.raises(FMICallException):
             b.initialise()
         want = """scheme = 'rk4' is invalid: must be "lobatto3c" or "sdirk2\""""
@@ -487,6 +485,60 @@ def test_a_step_before_initialisation_or_after_terminate_is_an_error(fig13):
         assert b.messages[-1] == (ERROR, f"doStep at t = {H!r} refused: called after fmi2Terminate")
 
 
+def _phase_calls(b: Instance, calls: list[str]) -> tuple[list[int], list[tuple[int, str]]]:
+    """The statuses of fmpy's FMU2Slave methods ``calls`` on b and the messages logged."""
+    from fmpy.fmi1 import FMICallException
+
+    start, statuses = len(b.messages), []
+    for call in calls:
+        try:
+            getattr(b.fmu, call)()
+            statuses.append(OK)
+        except FMICallException as e:
+            statuses.append(int(e.status))
+    return statuses, b.messages[start:]
+
+
+def test_exit_before_enter_and_terminate_before_initialisation_are_refused_alike(
+    native_fmus, python_fmus
+):
+    """FMI 2.0's order of calls: exitInitializationMode only in initialisation mode,
+    terminate only once the model is initialised (after a failed one the instance is
+    reset or freed). Both targets answer fmi2Error with the same message to
+    exitInitializationMode before enterInitializationMode (after fmi2Reset) and to
+    terminate before initialisation (never tried, or failed), and then start normally:
+    enter, exit, a step, terminate OK."""
+    from fmpy.fmi1 import FMICallException
+
+    answers = []
+    for path in (python_fmus["fig13"], native_fmus["fig13"]):
+        with Instance(path, "order", initialise=False) as b:
+            got = _phase_calls(b, ["reset", "exitInitializationMode", "terminate"])
+            b.fmu.enterInitializationMode()
+            with pytest.raises(FMICallException):
+                b.set("h_max", 0.0)  # declared > 0: the start fails
+            got += _phase_calls(b, ["exitInitializationMode", "terminate"])
+            b.set("h_max", 1e-5)
+            got += _phase_calls(b, ["exitInitializationMode"])
+            b.initialised = True
+            got += ([b.step(H)], [])
+            got += _phase_calls(b, ["terminate"])
+            answers.append(got)
+    assert answers[0] == answers[1]
+    statuses = [s for k, s in enumerate(answers[1]) if k % 2 == 0]
+    assert statuses == [[OK, ERROR, ERROR], [ERROR, ERROR], [OK], [OK], [OK]], answers[1]
+    assert answers[1][1] == [
+        (ERROR, "exitInitializationMode refused: called before fmi2EnterInitializationMode"),
+        (ERROR, "terminate refused: called before the model is initialised "
+                "(fmi2ExitInitializationMode not called)"),
+    ]  # fmt: skip
+    assert answers[1][3][-1] == (
+        ERROR,
+        "terminate refused: called before the model is initialised "
+        "(fmi2ExitInitializationMode failed)",
+    )
+
+
 # the start values and the calls after a first step, whose statuses and messages both
 # targets must give word for word (the pythonfmu FMU words them in Python, the native
 # one in C)
@@ -628,6 +680,54 @@ def test_both_targets_refuse_a_start_beyond_rate_max_in_the_same_words(start_fmu
     assert answers[0][0] == [OK] * len(SPIN_START) + [ERROR, ERROR], answers
 
 
+def test_a_string_parameter_outside_its_choices_is_refused_at_once_alike(start_fmus):
+    """The String parameters method ("full" or "quasistationary") and scheme ("lobatto3c"
+    or "sdirk2", RollingBody's choices): a string that is neither answers fmi2Error at
+    setString on both targets with the same message naming the variable and the value
+    (the pythonfmu FMU checked it only at set-up before); exitInitializationMode then
+    fails naming both and doStep is refused; corrected, the model starts and steps."""
+    calls = [("set", "method", "garbage"), ("set", "scheme", "rk4"), ("initialise",)]
+    answers = []
+    for target in ("pythonfmu", "native"):
+        with Instance(start_fmus[target, "full body"], "choice", initialise=False) as b:
+            answers.append(_answer(b, [*calls, ("step", H)]))
+            b.set("method", "quasistationary")
+            b.set("scheme", "sdirk2")
+            b.initialise()
+            assert b.step(H) == OK
+    assert answers[0] == answers[1]
+    assert answers[0][0] == [ERROR, ERROR, ERROR, ERROR]
+    assert answers[0][1][0] == (
+        ERROR,
+        'method = \'garbage\' is invalid: must be "full" or "quasistationary"; doStep '
+        "answers fmi2Discard until it is corrected",
+    )
+
+
+@pytest.mark.parametrize("kind", ("fig13", "full body"))
+@pytest.mark.parametrize("Vx0", [0.0, None], ids=["Vx0 = 0", "Vx0 default"])
+def test_a_body_whose_inertia_underflows_cannot_start_in_the_same_words(start_fmus, kind, Vx0):
+    """dynamics.Body: A1 and A2 (Eq. 23) divide by M Rx^2 + Iy, which must neither
+    underflow nor overflow. Iy = 0 (eta = inf) with Rx = 1e-200 m (each admissible
+    alone) gives M Rx^2 = 0 in doubles: both targets refuse the start at
+    exitInitializationMode naming M Rx^2 + Iy, M, Rx and Iy, word for word, whether the
+    start itself is at rest (Vx0 = 0, where the native FMU started before with A2 =
+    0/0) or rolls (Omega_y0 = Vx0/Rx far beyond RATE_MAX, which it named instead)."""
+    params = {"Rx": 1e-200, "Iy": 0.0} | ({} if Vx0 is None else {"Vx0": Vx0})
+    calls = [("set", *kv) for kv in params.items()] + [("initialise",), ("step", H)]
+    answers = []
+    for target in ("pythonfmu", "native"):
+        with Instance(start_fmus[target, kind], "inertia", initialise=False) as b:
+            answers.append(_answer(b, calls))
+    assert answers[0] == answers[1]
+    assert answers[0][0] == [OK] * len(params) + [ERROR, ERROR], answers
+    assert answers[0][1][0] == (
+        ERROR,
+        "cannot initialise the model: M Rx^2 + Iy = 0.0 is invalid: must be positive and "
+        "finite with M Rx^2 > 0 (M = 1.0, Rx = 1e-200, Iy = 0.0)",
+    )
+
+
 def test_fmu_state_get_step_set_step_is_bit_identical(fig13):
     with body(fig13) as b:
         steps(b, 4)
@@ -710,6 +810,128 @@ def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(
         b.set_state(b.deserialize_state(good, state[1]))
         steps(b, 1)
         assert all(s < FATAL for s, _ in b.messages)
+
+
+PYTHONFMU_ENVELOPE = b"contact_fmu state\n"  # pythonfmu_shim.c's CF_MAGIC
+PYTHONFMU_STATE = b"contact_fmu FMU state 1\n"  # fmu/state_bytes.py's MAGIC
+
+
+def _fnv1a(data: bytes) -> int:
+    h = 1469598103934665603
+    for byte in data:
+        h = ((h ^ byte) * 1099511628211) % 2**64
+    return h
+
+
+def _tampered(data: bytes, old: dict[str, float], new: dict[str, float]) -> bytes:
+    """State bytes of either target with the values of ``old`` replaced by ``new`` and
+    the envelope made whole again (length and checksum recomputed): a content that no
+    setter admits in an intact envelope. pythonfmu: the pickled state's values and
+    outputs (its classes are the loaded FMU's, in sys.modules); native: every double of
+    the instance's core that holds the old value (the value, its copy by role, the
+    model's state and outputs)."""
+    import pickle
+    import struct
+    import zlib
+
+    if data.startswith(PYTHONFMU_ENVELOPE):
+        m = len(PYTHONFMU_ENVELOPE)
+        glen = int.from_bytes(data[m + 4 : m + 8], "little")
+        head = m + 8 + glen + 8 + 4
+        payload = data[head:]
+        assert payload.startswith(PYTHONFMU_STATE)
+        owner, _, body = payload[len(PYTHONFMU_STATE) :].partition(b"\n")
+        state = pickle.loads(body)
+        for name, value in new.items():
+            state["out" if name in state["out"] else "values"][name] = value
+        payload = PYTHONFMU_STATE + owner + b"\n" + pickle.dumps(state, protocol=5)
+        size = len(payload).to_bytes(8, "little") + zlib.crc32(payload).to_bytes(4, "little")
+        return data[: m + 8 + glen] + size + payload
+    assert data.startswith(b"cfmuSTAT")
+    glen = int.from_bytes(data[12:16], sys.byteorder)
+    start = 16 + glen + 8
+    payload = data[start:-8]
+    for name, value in new.items():
+        was = struct.pack("=d", old[name])
+        assert was in payload, name
+        payload = payload.replace(was, struct.pack("=d", value))
+    body = data[:start] + payload
+    return body + struct.pack("=Q", _fnv1a(body))
+
+
+@pytest.mark.parametrize(
+    ("change", "reason"),
+    [
+        ({"mu": math.nan}, "its record of invalid values does not match its values"),
+        ({"P": -1.0}, "its record of invalid values does not match its values"),
+        ({"Vx": math.inf}, "its output Vx = inf is not a finite float"),
+        ({"Vx": math.nan}, "its output Vx = nan is not a finite float"),
+    ],
+    ids=["mu nan", "P -1", "Vx inf", "Vx nan"],
+)
+def test_a_state_whose_content_no_setter_admits_is_refused_and_nothing_changes(
+    fig13, change, reason
+):
+    """An FMU state is checked whole, not only its envelope: bytes whose length and
+    checksum are intact but whose content holds mu = NaN or P = -1 (values the setters
+    refuse, not recorded as held bad) or an output Vx = inf or NaN are refused with
+    fmi2Error naming the reason in the words of the pythonfmu FMU's check (the native
+    FMU at deserialisation, the pythonfmu FMU at setFMUstate); the outputs are
+    unchanged and the instance steps on."""
+    from fmpy.fmi1 import FMICallException
+
+    with body(fig13) as b:
+        steps(b, 2)
+        old = {n: b.get(n) for n in change}
+        state = b.get_state()
+        bad = _tampered(b.serialize_state(state), old, change)
+        steps(b, 1)
+        before = b.outputs()
+        now = b.time
+        with pytest.raises(FMICallException) as e:
+            b.set_state(b.deserialize_state(bad, state[1]))
+        b.time = now  # the master's time: the state was not set
+        assert e.value.status == ERROR
+        assert reason in b.messages[-1][1], b.messages[-1:]
+        assert b.outputs() == before
+        steps(b, 1)
+        assert all(s < FATAL for s, _ in b.messages)
+
+
+def test_a_live_native_state_altered_in_memory_is_refused_at_set_in_the_pythonfmu_words(
+    native_fmus,
+):
+    """The same check at fmi2SetFMUstate, for a state altered where it lives (mu = NaN
+    written into the state the instance handed out): fmi2Error with the pythonfmu FMU's
+    message (slave._set_fmu_state), the instance unchanged."""
+    import struct
+
+    from fmpy.fmi1 import FMICallException
+
+    with body(native_fmus["fig13"]) as b:
+        steps(b, 2)
+        state = b.get_state()
+        payload = b.serialize_state(state)
+        start = 16 + int.from_bytes(payload[12:16], sys.byteorder) + 8
+        mu = struct.pack("=d", b.get("mu"))
+        core = payload[start:-8]
+        offsets = [k for k in range(0, len(core) - 7, 8) if core[k : k + 8] == mu]
+        assert len(offsets) >= 2  # the value and its copy by role
+        for k in offsets:
+            ctypes.memmove(state[0].value + k, struct.pack("=d", math.nan), 8)
+        steps(b, 1)
+        before = b.outputs()
+        now = b.time
+        with pytest.raises(FMICallException) as e:
+            b.set_state(state)
+        b.time = now  # the master's time: the state was not set
+        assert e.value.status == ERROR
+        assert b.messages[-1][1].startswith(
+            "the FMU state given to setFMUstate is refused: its record of invalid values "
+            "does not match its values (mu = nan is invalid: must be finite, recorded as valid)"
+        ) and b.messages[-1][1].endswith("; the instance's state is unchanged")
+        assert b.outputs() == before
+        steps(b, 1)
 
 
 NOT_A_STATE = "is not an FMU state of this instance (never given, or freed)"

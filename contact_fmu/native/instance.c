@@ -391,6 +391,26 @@ static int build(Inst *I) {
         return 1;
     }
     const double M = v[R_M], Rx = v[R_RX], Iy = v[R_IY];
+    if (CF_VECTOR && CF_DYN_SPIN && !(v[R_IZ] > 0.0)) { /* dynamics.Body's checks */
+        py_repr(v[R_IZ], r, sizeof r);
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: Iz = %s is invalid: must be "
+            "> 0", r);
+        return 0;
+    }
+    /* A1, A2 (Eq. 23) divide by M Rx^2 + Iy: it must neither underflow to 0 nor overflow
+     * (each value alone admissible, e.g. Rx = 1e-200 with Iy = 0) */
+    const double MR2 = M * pow(Rx, 2.0), inertia = MR2 + Iy;
+    if (!(0.0 < MR2 && MR2 < INFINITY && inertia < INFINITY)) {
+        char rM[40], rR[40], rI[40];
+        py_repr(inertia, r, sizeof r);
+        py_repr(M, rM, sizeof rM);
+        py_repr(Rx, rR, sizeof rR);
+        py_repr(Iy, rI, sizeof rI);
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: M Rx^2 + Iy = %s is invalid: "
+            "must be positive and finite with M Rx^2 > 0 (M = %s, Rx = %s, Iy = %s)", r, rM,
+            rR, rI);
+        return 0;
+    }
     p.M = M, p.Rx = Rx;
     cf_body_inertia(&p, M, Rx, Iy);
     p.ry = v[R_VY_RATIO];
@@ -400,12 +420,6 @@ static int build(Inst *I) {
     cf_model_law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = v[R_FX_EX], b.My_ex = v[R_MY_EX], b.h_max = v[R_H_MAX];
     if (CF_VECTOR) {
-        if (CF_DYN_SPIN && !(v[R_IZ] > 0.0)) {
-            py_repr(v[R_IZ], r, sizeof r);
-            say(I, CF_STATUS_ERROR, "cannot initialise the model: Iz = %s is invalid: must be "
-                "> 0", r);
-            return 0;
-        }
         /* VectorKernel._path: the held ratios (0 where a rate is an unknown), Iz */
         p.ry = CF_DYN_VY ? 0.0 : v[R_VY_RATIO];
         p.rz = CF_DYN_SPIN ? 0.0 : v[R_SPIN_RATIO];
@@ -845,6 +859,11 @@ cf_status cf_enter_initialization_mode(cf_inst *I) {
 }
 
 cf_status cf_exit_initialization_mode(cf_inst *I) {
+    if (I->c.phase == PH_INSTANTIATED) { /* FMI: only in initialisation mode */
+        say(I, CF_STATUS_ERROR, "exitInitializationMode refused: called before "
+            "%sEnterInitializationMode", I->api);
+        return CF_STATUS_ERROR;
+    }
     I->c.init_tried = 1;
     if (!build(I)) { /* slave.exit_initialization_mode's refusal, its words */
         char list[1536];
@@ -858,6 +877,11 @@ cf_status cf_exit_initialization_mode(cf_inst *I) {
 }
 
 cf_status cf_terminate(cf_inst *I) {
+    if (!I->c.built) { /* FMI: only once initialised; after an error: reset or free */
+        say(I, CF_STATUS_ERROR, "terminate refused: called before the model is initialised "
+            "(%sExitInitializationMode %s)", I->api, I->c.init_tried ? "failed" : "not called");
+        return CF_STATUS_ERROR;
+    }
     I->c.phase = PH_TERMINATED;
     return CF_STATUS_OK;
 }
@@ -1141,15 +1165,15 @@ not_finite:
  * flags); values are whatever they were (a non-finite one only makes steps decline) */
 static void sanitize(cf_core *c) {
     cf_model_constants(&c->p, &c->b);
-    if (c->method < -1 || c->method >= N_METHODS) c->method = -1;
     c->method_text[METHOD_TEXT - 1] = '\0';
-    c->p.quasistationary = c->method == 1;
-    if (c->scheme < -1 || c->scheme >= N_SCHEMES) c->scheme = -1;
     c->scheme_text[METHOD_TEXT - 1] = '\0';
+    c->method = c->scheme = -1; /* the texts decide, as at setString */
+    for (int m = 0; m < N_METHODS; m++)
+        if (strcmp(c->method_text, METHOD_NAMES[m]) == 0) c->method = m;
+    for (int m = 0; m < N_SCHEMES; m++)
+        if (strcmp(c->scheme_text, SCHEME_NAMES[m]) == 0) c->scheme = m;
+    c->p.quasistationary = c->method == 1;
     c->p.sdirk = c->scheme == 1;
-    c->built = c->built != 0;
-    c->dirty = c->dirty != 0;
-    if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED) c->phase = PH_STEP;
     c->s.out_sliding = c->s.out_sliding != 0;
     c->s.sliding = c->s.sliding != 0;
     c->vs.out_sliding = c->vs.out_sliding != 0;
@@ -1162,6 +1186,96 @@ static void sanitize(cf_core *c) {
     unsigned top = 0;
     for (int i = 0; i < CF_N_VARS; i++) top = c->bad[i] > top ? c->bad[i] : top;
     c->next_bad = top;
+}
+
+/* the same double, NaN included (a state holds what the setter stored) */
+static int same_double(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* all n doubles finite */
+static int all_finite(const double *x, size_t n) {
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(x[i])) return 0;
+    return 1;
+}
+
+/* Why a sanitized core is not a state this FMU could have reached, in the words of the
+ * pythonfmu FMU's check (slave._apply_state), or NULL: its phase and flags, every value
+ * against its declared range with the record of the values held bad (the setters'
+ * check, requirement), the outputs and the model's state finite. A state's envelope
+ * (length, checksum) says nothing of its content: bytes made elsewhere can be intact. */
+static const char *state_problem(const cf_core *c, char *why, size_t n) {
+    char r[40];
+    if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED || (c->built != 0) != c->built ||
+        (c->dirty != 0) != c->dirty || (c->init_tried != 0) != c->init_tried ||
+        (c->built && !c->init_tried)) {
+        snprintf(why, n, "its phase and flags (%d, %d, %d, %d) are not this FMU's", c->phase,
+                 c->built, c->dirty, c->init_tried);
+        return why;
+    }
+    if (!isfinite(c->time)) {
+        py_repr(c->time, r, sizeof r);
+        snprintf(why, n, "its time %s is not a finite float", r);
+        return why;
+    }
+    for (int i = 0; i < CF_N_VARS; i++) {
+        const cf_var *v = &CF_VARS[i];
+        if (v->kind == K_OUTPUT) {
+            if (c->bad[i] || !isfinite(c->var[i])) {
+                py_repr(c->var[i], r, sizeof r);
+                snprintf(why, n, "its output %s = %s is not a finite float", v->name, r);
+                return why;
+            }
+            continue;
+        }
+        int bad;
+        char one[256];
+        if (v->type == T_STRING) {
+            bad = (is_scheme(i) ? c->scheme : c->method) < 0;
+            snprintf(one, sizeof one, "%s = '%s'", v->name, string_text(c, i));
+        } else {
+            if (v->role < R_COUNT && !same_double(c->val[v->role], c->var[i])) {
+                snprintf(why, n, "its values of %s disagree", v->name);
+                return why;
+            }
+            bad = requirement(v, c->var[i]) != NULL;
+            if (bad) bad_text(v, c->var[i], one, sizeof one);
+            else {
+                py_repr(c->var[i], r, sizeof r);
+                snprintf(one, sizeof one, "%s = %s", v->name, r);
+            }
+        }
+        if (bad != (c->bad[i] != 0)) {
+            snprintf(why, n, "its record of invalid values does not match its values (%s, "
+                     "recorded as %s)", one, c->bad[i] ? "invalid" : "valid");
+            return why;
+        }
+        if (bad && c->built && v->kind == K_PARAMETER && v->role != R_MU) {
+            snprintf(why, n, "its model's parameters differ from its values or are invalid "
+                     "(%s)", one);
+            return why;
+        }
+    }
+    if (c->built) { /* the model's state: what its steps and outputs read */
+        const cf_params *p = &c->p;
+        const double law[] = {p->mu, p->P, p->a1, p->creep_full_slip, p->beta_per_creep,
+                              p->M, p->Rx, p->A1, p->A2, p->m_slip, p->c, p->xi_ref,
+                              p->phi_ref, c->b.a2, c->b.p0, c->b.h_max, c->P_law};
+        const double body[] = {c->s.Vx, c->s.vx, c->s.t, c->s.dv, c->s.Tx, c->s.Ty, c->s.Mz,
+                               c->vs.Vx, c->vs.vx, c->vs.Vy, c->vs.Oz, c->vs.t, c->vs.dv,
+                               c->vs.Tx, c->vs.Ty, c->vs.Mz, c->vs.jac_h, c->rb_Vx,
+                               c->rb_Omega_y};
+        const int body_ok = CF_MODE != MODE_BODY ||
+                            (all_finite(body, 7) && (!CF_VECTOR || all_finite(body + 7, 9)));
+        const int rigid_ok = CF_MODE != MODE_RIGID || all_finite(body + 17, 2);
+        const int law_ok = CF_MODE == MODE_RIGID || all_finite(law, CF_MODE == MODE_BODY ? 17 : 13);
+        const int jac_ok = !(CF_MODE == MODE_BODY && CF_VECTOR && c->vs.jac_valid) ||
+                           (isfinite(c->vs.jac_h) && all_finite(c->vs.J, 36));
+        if (!(body_ok && rigid_ok && law_ok && jac_ok && all_finite(c->b.out, N_OUT))) {
+            snprintf(why, n, "its model state cannot be restored (it is not finite)");
+            return why;
+        }
+    }
+    return NULL;
 }
 
 /* The live states: FMI 2.0 forbids passing back a freed state or one of another
@@ -1257,8 +1371,15 @@ cf_status cf_set_state(cf_inst *I, const void *state) {
         return CF_STATUS_ERROR;
     }
     if (!live_or_refuse(I, state, "SetFMUstate")) return CF_STATUS_ERROR;
-    I->c = *(const cf_core *)state;
-    sanitize(&I->c);
+    cf_core c = *(const cf_core *)state;
+    sanitize(&c);
+    char why[512];
+    if (state_problem(&c, why, sizeof why)) { /* slave._set_fmu_state's words */
+        say(I, CF_STATUS_ERROR, "the FMU state given to setFMUstate is refused: %s; the "
+            "instance's state is unchanged", why);
+        return CF_STATUS_ERROR;
+    }
+    I->c = c;
     cf_model_attach_table(I->table, &I->c.p);
     if (CF_VECTOR && I->c.built) ensure_grid(I, &I->c.p, &I->c.b, &I->c.p); /* its load's */
     return CF_STATUS_OK;
@@ -1353,10 +1474,18 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
         say(I, CF_STATUS_ERROR, "%sDeSerializeFMUstate: the bytes are refused: %s", I->api, why);
         return CF_STATUS_ERROR;
     }
+    cf_core c;
+    memcpy(&c, p + 16 + glen + 8, sizeof(cf_core));
+    sanitize(&c);
+    char problem[512];
+    if (state_problem(&c, problem, sizeof problem)) {
+        say(I, CF_STATUS_ERROR, "%sDeSerializeFMUstate: the bytes are refused: %s", I->api,
+            problem);
+        return CF_STATUS_ERROR;
+    }
     cf_core *s = state_to_fill(I, state, "DeSerializeFMUstate");
     if (s == NULL) return CF_STATUS_ERROR;
-    memcpy(s, p + 16 + glen + 8, sizeof(cf_core));
-    sanitize(s);
+    *s = c;
     *state = s;
     return CF_STATUS_OK;
 }
