@@ -138,14 +138,20 @@ def variables_html(cfg: ModelConfig) -> str:
 _TARGETS = {
     "pythonfmu": (
         "The FMU's Python parts run in the importing process: the host needs Python 3.11 "
-        "with numpy and scipy (pythonfmu's binary).",
+        "with numpy and scipy (pythonfmu's binary; on Linux it needs glibc 2.32 and GCC "
+        "12's libstdc++, GLIBCXX_3.4.30, or newer).",
         '<p>MIT: see <a href="licenses/LICENSE.txt">licenses/LICENSE.txt</a>; pythonfmu '
         '(the FMU\'s inner binary): <a href="licenses/pythonfmu-LICENSE.txt">'
         "licenses/pythonfmu-LICENSE.txt</a>.</p>",
     ),
     "native": (
         "A native C FMU (binaries/linux64 and its C sources under sources/): any FMI 2.0 "
-        "importer runs it, with no Python on the host.",
+        "importer runs it, with no Python on the host (on Linux: glibc 2.17 or newer, "
+        "libm). To build it from sources/ elsewhere, compile every .c file there with the "
+        "FMI 2.0 headers into one shared library and link the C math library (-lm where "
+        "it is separate); with fmpy: fmpy.build.build_platform_binary(folder, "
+        "cmake_options={'CMAKE_C_STANDARD_LIBRARIES:STRING': '-lm'}), as fmpy's cmake "
+        "links no library by itself.",
         '<p>MIT: see <a href="licenses/LICENSE.txt">licenses/LICENSE.txt</a>.</p>',
     ),
 }

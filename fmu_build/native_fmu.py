@@ -1,15 +1,22 @@
 """The native FMU: FMI 2.0 co-simulation in compiled C only (``python -m fmu_build --native``).
 
-The binary is contact_fmu/native/fmu2.c (the FMI layer) with stepper.c (the kernel),
-cf_core.h (the checks of a value and of a doStep call, shared with the pythonfmu FMU's
-binding fmi.c) and a header generated here, cf_model.h: the FMU's variables from
+The binary is built from the C files of contact_fmu/native, each its own translation
+unit (SOURCES): fmi2.c (the FMI 2.0 front end: arguments and statuses), instance.c (the
+version-neutral instance layer: phases, checks, step admission, messages, FMU states),
+model.c (the contact outputs, the rigid-body step, the analytic Jacobian) and stepper.c
+(the kernel), with their headers instance.h, model.h, stepper.h, cf_core.h (the checks
+of a value and of a doStep call, shared with the pythonfmu FMU's binding fmi.c) and a
+header generated here, cf_model.h: the FMU's variables from
 ``contact_fmu.fmu.variables`` (names, kinds, starts, ranges and the requirement texts of
 their check messages), its GUID and the Python integrator's constants, so that each
 lives once. The model description is written like the pythonfmu FMU's and completed by
 the same ``model_description.patch`` (units, ranges, starts, ModelStructure); it lists the
-C sources (``<SourceFiles>``) that the FMU carries under ``sources/``, so that fmpy's
-build (or any importer's) compiles it on Windows or macOS; the FMI headers are fmpy's
-(``fmpy/c-code``), found at build time and not carried in this repository.
+C files (``<SourceFiles>``) that the FMU carries under ``sources/``, so that fmpy's
+build (or any importer's) compiles it on Windows or macOS: every .c file into one shared
+library, linked with libm (with fmpy's cmake: ``CMAKE_C_STANDARD_LIBRARIES=-lm``, which
+it does not link by itself; docs/fmu.md); the sources export the fmi2* functions only,
+without -fvisibility=hidden. The FMI headers are fmpy's (``fmpy/c-code``), found at
+build time and not carried in this repository.
 
 What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC and SDIRK2
 (the String parameter ``scheme`` where the FMU offers both), methods "full" and
@@ -51,9 +58,15 @@ from . import identifier as model_identifier
 
 FORMAT = "contact_fmu-native-fmu-1"
 NATIVE_DIR = Path(native.__file__).resolve().parent
-SOURCES = ("fmu2.c", "stepper.c", "cf_core.h")  # fmu2.c includes the others: one unit
+# the FMU's C files: each .c its own translation unit (listed in <SourceFiles>), the
+# headers they include; with HEADER (generated) they are the FMU's sources/
+SOURCES = (
+    "fmi2.c", "instance.c", "model.c", "stepper.c",
+    "instance.h", "model.h", "stepper.h", "cf_core.h",
+)  # fmt: skip
 HEADER = "cf_model.h"
-CFLAGS = (*native.CFLAGS, "-fvisibility=hidden", "-std=c11", "-D_DEFAULT_SOURCE")
+# no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
+CFLAGS = (*native.CFLAGS, "-std=c11", "-D_DEFAULT_SOURCE")
 PLATFORM = "linux64"
 
 
@@ -266,7 +279,7 @@ def _table_header(cfg: ModelConfig) -> list[str]:
 
 
 def table_bytes(cfg: ModelConfig) -> bytes:
-    """The table resource read by fmu2.c (load_table): magic, sizes, the axes and the
+    """The table resource read by instance.c (load_table): magic, sizes, the axes and the
     patch coefficients as doubles, a CRC-32 (zlib's) of all before it (host byte
     order)."""
     import struct
@@ -311,7 +324,8 @@ def _skeleton(cfg: ModelConfig, identifier: str, guid: str) -> bytes:
         providesDirectionalDerivative="true" if cfg.mode == "contact" else "false",
     )
     files = ET.SubElement(cs, "SourceFiles")
-    ET.SubElement(files, "File", name=SOURCES[0])
+    for name in c_files():
+        ET.SubElement(files, "File", name=name)
     cats = ET.SubElement(root, "LogCategories")
     for name, text in (
         ("logStatusWarning", "Log messages with fmi2Warning status."),
@@ -375,12 +389,19 @@ def identity(cfg: ModelConfig) -> str:
     return h.hexdigest()
 
 
+def c_files() -> tuple[str, ...]:
+    """The translation units among SOURCES (compiled each on its own, linked together)."""
+    return tuple(n for n in SOURCES if n.endswith(".c"))
+
+
 def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
-    """fmu2.c (with stepper.c, cf_core.h and cf_model.h in ``src_dir``) into the library
-    ``target``; CalledProcessError with the compiler's output on failure."""
+    """The C files of SOURCES in ``src_dir`` (with the headers and cf_model.h there) into
+    the library ``target``, linked with libm; CalledProcessError with the compiler's
+    output on failure."""
     cc = os.environ.get("CC", "cc")
+    units = [str(src_dir / n) for n in c_files()]
     cmd = [cc, *CFLAGS, *extra, f"-I{src_dir}", f"-I{fmi_headers()}", "-o", str(target),
-           str(src_dir / SOURCES[0]), "-lm"]  # fmt: skip
+           *units, "-lm"]  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=True, text=True)
     return target
 

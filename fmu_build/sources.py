@@ -92,7 +92,9 @@ def closure(roots: list[str]) -> list[str]:
 
 
 # Files other than Python a module reads next to itself, by module.
-COMPANIONS = {"native": ("native/stepper.c", "native/fmi.c", "native/cf_core.h")}
+COMPANIONS = {
+    "native": ("native/stepper.c", "native/stepper.h", "native/fmi.c", "native/cf_core.h")
+}
 
 
 def files(modules: list[str], companions: bool = True) -> list[tuple[str, Path]]:

@@ -233,7 +233,9 @@ def test_full_body_fmu_lateral_dynamics_and_method_parameter():
                 assert out["Tx"] == pytest.approx(A2 * 0.2 * MU_P, rel=1e-12)
                 assert out["Ty"] == pytest.approx(0.2 * MU_P, rel=1e-12)
                 assert out["Mz"] == pytest.approx(0.0, abs=1e-9)
-    with Instance(path, "bad", {"method": "euler"}, initialise=False) as b:
+    with Instance(path, "bad", initialise=False) as b:
+        with pytest.raises(FMICallException):
+            b.set("method", "euler")  # refused at once, and held
         with pytest.raises(FMICallException):
             b.initialise()
         assert any("method = 'euler' is invalid" in m for _, m in b.messages), b.messages

@@ -825,7 +825,7 @@ def test_physical_ranges_in_c_are_the_declared_ones():
     from contact_fmu.fmu.variables import RATE_MAX, SPEED_MAX
     from contact_fmu.integrator import LOAD_LIMIT
 
-    text = native.SOURCE.read_text()
+    text = native.HEADER.read_text()
     found = dict(re.findall(r"^#define CF_(SPEED_MAX|RATE_MAX|LOAD_LIMIT) (\S+)", text, re.M))
     assert {k: float(v) for k, v in found.items()} == {
         "SPEED_MAX": SPEED_MAX, "RATE_MAX": RATE_MAX, "LOAD_LIMIT": LOAD_LIMIT
@@ -833,9 +833,9 @@ def test_physical_ranges_in_c_are_the_declared_ones():
 
 
 def test_c_sources_compile_without_warnings(tmp_path):
-    """stepper.c, fmi.c and fmu2.c (with the generated headers of the body FMU with Eqs.
-    10-11, of the half-space table's and of the full contact FMU: the model parts the
-    header switches on) under -Wall -Wextra -Werror and the flags they ship with: a
+    """stepper.c, fmi.c and the native FMU's C files (with the generated headers of the
+    body FMU with Eqs. 10-11, of the half-space table's and of the full contact FMU: the
+    model parts the header switches on) under -Wall -Wextra -Werror and the flags they ship with: a
     warning there is a defect left for a user's compiler to find."""
     import subprocess
 
@@ -845,7 +845,7 @@ def test_c_sources_compile_without_warnings(tmp_path):
 
     strict = ("-Wall", "-Wextra", "-Werror")
     cc = os.environ.get("CC", "cc")
-    runs = [[*native.CFLAGS, *strict, "-o", str(tmp_path / "s.so"), str(native.SOURCE)]]
+    runs = [[*native.KERNEL_FLAGS, *strict, "-o", str(tmp_path / "s.so"), str(native.SOURCE)]]
     if Path(sysconfig.get_paths()["include"], "Python.h").is_file():
         runs.append([*native._fmi_flags(), *strict, "-o", str(tmp_path / "f.so"),
                      str(native.SOURCE_FMI)])  # fmt: skip
@@ -857,8 +857,9 @@ def test_c_sources_compile_without_warnings(tmp_path):
         for source in native_fmu.SOURCES:
             shutil.copyfile(native_fmu.NATIVE_DIR / source, src / source)
         (src / native_fmu.HEADER).write_text(native_fmu.header(cfg, "{}"))
+        units = [str(src / n) for n in native_fmu.c_files()]
         runs.append([*native_fmu.CFLAGS, *strict, f"-I{src}", f"-I{native_fmu.fmi_headers()}",
-                     "-o", str(src / "m.so"), str(src / native_fmu.SOURCES[0])])  # fmt: skip
+                     "-o", str(src / "m.so"), *units])  # fmt: skip
     for args in runs:
         proc = subprocess.run([cc, *args, "-lm"], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr[-3000:]

@@ -1,5 +1,5 @@
 """The native contact FMU with a spin input (``--native --full contact``): the strip march
-of the thin-layer law on its spin grid, built in C for each load (fmu2.c, grid_at), and
+of the thin-layer law on its spin grid, built in C for each load (model.c, cf_model_grid), and
 the forward-mode derivative of that march behind its directional derivatives
 (stepper.c, cf_march_jacobian), against the pythonfmu FMU and central differences."""
 

@@ -1,5 +1,6 @@
-"""The native FMU (fmu_build --native: the FMI 2.0 layer fmu2.c on the compiled stepper,
-no Python on the target) against the pythonfmu FMU and the scenes' references.
+"""The native FMU (fmu_build --native: the FMI 2.0 front end fmi2.c on the instance layer
+instance.c, the model model.c and the compiled stepper, no Python on the target) against
+the pythonfmu FMU and the scenes' references.
 
 Both FMUs run the same C step (stepper.c's cf_advance and cf_body_outputs), the native
 one with the law's and the body's constants derived in C (cf_layer_law, cf_body_inertia)
@@ -141,10 +142,11 @@ def test_model_description_is_the_pythonfmu_ones_and_validates(native_fmus, pyth
     cs = a.find("CoSimulation")
     assert cs.get("needsExecutionTool") == "false"
     assert cs.get("canGetAndSetFMUstate") == "true" and cs.get("canSerializeFMUstate") == "true"
-    assert [f.get("name") for f in cs.find("SourceFiles")] == ["fmu2.c"]
+    listed = [f.get("name") for f in cs.find("SourceFiles")]
+    assert listed == list(native_fmu.c_files()) and "stepper.c" in listed
     with zipfile.ZipFile(native_fmus[name]) as z:
         names = set(z.namelist())
-    carried = ("fmu2.c", "stepper.c", "cf_core.h", "cf_model.h")
+    carried = (*native_fmu.SOURCES, "cf_model.h")
     assert {f"sources/{n}" for n in carried} <= names
     assert not any(n.endswith(".h") and "fmi2" in n for n in names)  # fmpy's headers
     assert validate_fmu(str(native_fmus[name])) == []
@@ -316,16 +318,14 @@ def test_full_body_fmu_runs_both_schemes_and_methods_to_the_pythonfmu_doubles(fu
 
 @pytest.mark.parametrize("target", ["pythonfmu", "native"])
 def test_a_bad_scheme_is_refused_naming_it_until_corrected(full_body, target):
-    """scheme = 'rk4': refused with RollingBody's words (the native FMU at setString,
-    the pythonfmu FMU at initialisation), no initialisation with it; corrected, the
-    model starts and steps."""
+    """scheme = 'rk4': refused with RollingBody's words at setString by both targets,
+    no initialisation with it; corrected, the model starts and steps."""
     from fmpy.fmi1 import FMICallException
 
     with Instance(full_body[target], "bad", initialise=False) as b:
-        try:
+        with pytest.raises(FMICallException) as e:
             b.set("scheme", "rk4")
-        except FMICallException:
-            assert target == "native"
+        assert e.value.status == ERROR
         with pytest.raises(FMICallException):
             b.initialise()
         want = """scheme = 'rk4' is invalid: must be "lobatto3c" or "sdirk2\""""
@@ -349,7 +349,7 @@ def test_command_line_prints_the_fmu_path_last(native_fmus):
 
 # ---- call by call, both targets ------------------------------------------------------------------
 # The pythonfmu FMU (its adapter slave.py, with the FMI calls of native/fmi.c) and the
-# native FMU (fmu2.c) make the same checks in the same C (cf_core.h, stepper.c's
+# native FMU (instance.c) make the same checks in the same C (cf_core.h, stepper.c's
 # cf_body_check): the bad-input and FMU-state tests run against both.
 H = 1.75e-4  # s, the Fig. 13 scene's communication step
 
@@ -483,6 +483,60 @@ def test_a_step_before_initialisation_or_after_terminate_is_an_error(fig13):
         b.fmu.terminate()
         assert b.step(H) == ERROR
         assert b.messages[-1] == (ERROR, f"doStep at t = {H!r} refused: called after fmi2Terminate")
+
+
+def _phase_calls(b: Instance, calls: list[str]) -> tuple[list[int], list[tuple[int, str]]]:
+    """The statuses of fmpy's FMU2Slave methods ``calls`` on b and the messages logged."""
+    from fmpy.fmi1 import FMICallException
+
+    start, statuses = len(b.messages), []
+    for call in calls:
+        try:
+            getattr(b.fmu, call)()
+            statuses.append(OK)
+        except FMICallException as e:
+            statuses.append(int(e.status))
+    return statuses, b.messages[start:]
+
+
+def test_exit_before_enter_and_terminate_before_initialisation_are_refused_alike(
+    native_fmus, python_fmus
+):
+    """FMI 2.0's order of calls: exitInitializationMode only in initialisation mode,
+    terminate only once the model is initialised (after a failed one the instance is
+    reset or freed). Both targets answer fmi2Error with the same message to
+    exitInitializationMode before enterInitializationMode (after fmi2Reset) and to
+    terminate before initialisation (never tried, or failed), and then start normally:
+    enter, exit, a step, terminate OK."""
+    from fmpy.fmi1 import FMICallException
+
+    answers = []
+    for path in (python_fmus["fig13"], native_fmus["fig13"]):
+        with Instance(path, "order", initialise=False) as b:
+            got = _phase_calls(b, ["reset", "exitInitializationMode", "terminate"])
+            b.fmu.enterInitializationMode()
+            with pytest.raises(FMICallException):
+                b.set("h_max", 0.0)  # declared > 0: the start fails
+            got += _phase_calls(b, ["exitInitializationMode", "terminate"])
+            b.set("h_max", 1e-5)
+            got += _phase_calls(b, ["exitInitializationMode"])
+            b.initialised = True
+            got += ([b.step(H)], [])
+            got += _phase_calls(b, ["terminate"])
+            answers.append(got)
+    assert answers[0] == answers[1]
+    statuses = [s for k, s in enumerate(answers[1]) if k % 2 == 0]
+    assert statuses == [[OK, ERROR, ERROR], [ERROR, ERROR], [OK], [OK], [OK]], answers[1]
+    assert answers[1][1] == [
+        (ERROR, "exitInitializationMode refused: called before fmi2EnterInitializationMode"),
+        (ERROR, "terminate refused: called before the model is initialised "
+                "(fmi2ExitInitializationMode not called)"),
+    ]  # fmt: skip
+    assert answers[1][3][-1] == (
+        ERROR,
+        "terminate refused: called before the model is initialised "
+        "(fmi2ExitInitializationMode failed)",
+    )
 
 
 # the start values and the calls after a first step, whose statuses and messages both
@@ -626,6 +680,54 @@ def test_both_targets_refuse_a_start_beyond_rate_max_in_the_same_words(start_fmu
     assert answers[0][0] == [OK] * len(SPIN_START) + [ERROR, ERROR], answers
 
 
+def test_a_string_parameter_outside_its_choices_is_refused_at_once_alike(start_fmus):
+    """The String parameters method ("full" or "quasistationary") and scheme ("lobatto3c"
+    or "sdirk2", RollingBody's choices): a string that is neither answers fmi2Error at
+    setString on both targets with the same message naming the variable and the value
+    (the pythonfmu FMU checked it only at set-up before); exitInitializationMode then
+    fails naming both and doStep is refused; corrected, the model starts and steps."""
+    calls = [("set", "method", "garbage"), ("set", "scheme", "rk4"), ("initialise",)]
+    answers = []
+    for target in ("pythonfmu", "native"):
+        with Instance(start_fmus[target, "full body"], "choice", initialise=False) as b:
+            answers.append(_answer(b, [*calls, ("step", H)]))
+            b.set("method", "quasistationary")
+            b.set("scheme", "sdirk2")
+            b.initialise()
+            assert b.step(H) == OK
+    assert answers[0] == answers[1]
+    assert answers[0][0] == [ERROR, ERROR, ERROR, ERROR]
+    assert answers[0][1][0] == (
+        ERROR,
+        'method = \'garbage\' is invalid: must be "full" or "quasistationary"; doStep '
+        "answers fmi2Discard until it is corrected",
+    )
+
+
+@pytest.mark.parametrize("kind", ("fig13", "full body"))
+@pytest.mark.parametrize("Vx0", [0.0, None], ids=["Vx0 = 0", "Vx0 default"])
+def test_a_body_whose_inertia_underflows_cannot_start_in_the_same_words(start_fmus, kind, Vx0):
+    """dynamics.Body: A1 and A2 (Eq. 23) divide by M Rx^2 + Iy, which must neither
+    underflow nor overflow. Iy = 0 (eta = inf) with Rx = 1e-200 m (each admissible
+    alone) gives M Rx^2 = 0 in doubles: both targets refuse the start at
+    exitInitializationMode naming M Rx^2 + Iy, M, Rx and Iy, word for word, whether the
+    start itself is at rest (Vx0 = 0, where the native FMU started before with A2 =
+    0/0) or rolls (Omega_y0 = Vx0/Rx far beyond RATE_MAX, which it named instead)."""
+    params = {"Rx": 1e-200, "Iy": 0.0} | ({} if Vx0 is None else {"Vx0": Vx0})
+    calls = [("set", *kv) for kv in params.items()] + [("initialise",), ("step", H)]
+    answers = []
+    for target in ("pythonfmu", "native"):
+        with Instance(start_fmus[target, kind], "inertia", initialise=False) as b:
+            answers.append(_answer(b, calls))
+    assert answers[0] == answers[1]
+    assert answers[0][0] == [OK] * len(params) + [ERROR, ERROR], answers
+    assert answers[0][1][0] == (
+        ERROR,
+        "cannot initialise the model: M Rx^2 + Iy = 0.0 is invalid: must be positive and "
+        "finite with M Rx^2 > 0 (M = 1.0, Rx = 1e-200, Iy = 0.0)",
+    )
+
+
 def test_fmu_state_get_step_set_step_is_bit_identical(fig13):
     with body(fig13) as b:
         steps(b, 4)
@@ -654,7 +756,7 @@ def test_serialized_native_state_restores_bit_for_bit_in_another_instance(native
         assert b.outputs() == a.outputs()
 
 
-# what each target's envelope names when it refuses bytes (pythonfmu_shim.c, fmu2.c)
+# what each target's envelope names when it refuses bytes (pythonfmu_shim.c, instance.c)
 REFUSALS = {
     "pythonfmu": {
         "garbage": "not a serialized contact_fmu FMU state",
@@ -708,6 +810,128 @@ def test_state_bytes_not_of_this_fmu_are_refused_and_the_instance_recovers(
         b.set_state(b.deserialize_state(good, state[1]))
         steps(b, 1)
         assert all(s < FATAL for s, _ in b.messages)
+
+
+PYTHONFMU_ENVELOPE = b"contact_fmu state\n"  # pythonfmu_shim.c's CF_MAGIC
+PYTHONFMU_STATE = b"contact_fmu FMU state 1\n"  # fmu/state_bytes.py's MAGIC
+
+
+def _fnv1a(data: bytes) -> int:
+    h = 1469598103934665603
+    for byte in data:
+        h = ((h ^ byte) * 1099511628211) % 2**64
+    return h
+
+
+def _tampered(data: bytes, old: dict[str, float], new: dict[str, float]) -> bytes:
+    """State bytes of either target with the values of ``old`` replaced by ``new`` and
+    the envelope made whole again (length and checksum recomputed): a content that no
+    setter admits in an intact envelope. pythonfmu: the pickled state's values and
+    outputs (its classes are the loaded FMU's, in sys.modules); native: every double of
+    the instance's core that holds the old value (the value, its copy by role, the
+    model's state and outputs)."""
+    import pickle
+    import struct
+    import zlib
+
+    if data.startswith(PYTHONFMU_ENVELOPE):
+        m = len(PYTHONFMU_ENVELOPE)
+        glen = int.from_bytes(data[m + 4 : m + 8], "little")
+        head = m + 8 + glen + 8 + 4
+        payload = data[head:]
+        assert payload.startswith(PYTHONFMU_STATE)
+        owner, _, body = payload[len(PYTHONFMU_STATE) :].partition(b"\n")
+        state = pickle.loads(body)
+        for name, value in new.items():
+            state["out" if name in state["out"] else "values"][name] = value
+        payload = PYTHONFMU_STATE + owner + b"\n" + pickle.dumps(state, protocol=5)
+        size = len(payload).to_bytes(8, "little") + zlib.crc32(payload).to_bytes(4, "little")
+        return data[: m + 8 + glen] + size + payload
+    assert data.startswith(b"cfmuSTAT")
+    glen = int.from_bytes(data[12:16], sys.byteorder)
+    start = 16 + glen + 8
+    payload = data[start:-8]
+    for name, value in new.items():
+        was = struct.pack("=d", old[name])
+        assert was in payload, name
+        payload = payload.replace(was, struct.pack("=d", value))
+    body = data[:start] + payload
+    return body + struct.pack("=Q", _fnv1a(body))
+
+
+@pytest.mark.parametrize(
+    ("change", "reason"),
+    [
+        ({"mu": math.nan}, "its record of invalid values does not match its values"),
+        ({"P": -1.0}, "its record of invalid values does not match its values"),
+        ({"Vx": math.inf}, "its output Vx = inf is not a finite float"),
+        ({"Vx": math.nan}, "its output Vx = nan is not a finite float"),
+    ],
+    ids=["mu nan", "P -1", "Vx inf", "Vx nan"],
+)
+def test_a_state_whose_content_no_setter_admits_is_refused_and_nothing_changes(
+    fig13, change, reason
+):
+    """An FMU state is checked whole, not only its envelope: bytes whose length and
+    checksum are intact but whose content holds mu = NaN or P = -1 (values the setters
+    refuse, not recorded as held bad) or an output Vx = inf or NaN are refused with
+    fmi2Error naming the reason in the words of the pythonfmu FMU's check (the native
+    FMU at deserialisation, the pythonfmu FMU at setFMUstate); the outputs are
+    unchanged and the instance steps on."""
+    from fmpy.fmi1 import FMICallException
+
+    with body(fig13) as b:
+        steps(b, 2)
+        old = {n: b.get(n) for n in change}
+        state = b.get_state()
+        bad = _tampered(b.serialize_state(state), old, change)
+        steps(b, 1)
+        before = b.outputs()
+        now = b.time
+        with pytest.raises(FMICallException) as e:
+            b.set_state(b.deserialize_state(bad, state[1]))
+        b.time = now  # the master's time: the state was not set
+        assert e.value.status == ERROR
+        assert reason in b.messages[-1][1], b.messages[-1:]
+        assert b.outputs() == before
+        steps(b, 1)
+        assert all(s < FATAL for s, _ in b.messages)
+
+
+def test_a_live_native_state_altered_in_memory_is_refused_at_set_in_the_pythonfmu_words(
+    native_fmus,
+):
+    """The same check at fmi2SetFMUstate, for a state altered where it lives (mu = NaN
+    written into the state the instance handed out): fmi2Error with the pythonfmu FMU's
+    message (slave._set_fmu_state), the instance unchanged."""
+    import struct
+
+    from fmpy.fmi1 import FMICallException
+
+    with body(native_fmus["fig13"]) as b:
+        steps(b, 2)
+        state = b.get_state()
+        payload = b.serialize_state(state)
+        start = 16 + int.from_bytes(payload[12:16], sys.byteorder) + 8
+        mu = struct.pack("=d", b.get("mu"))
+        core = payload[start:-8]
+        offsets = [k for k in range(0, len(core) - 7, 8) if core[k : k + 8] == mu]
+        assert len(offsets) >= 2  # the value and its copy by role
+        for k in offsets:
+            ctypes.memmove(state[0].value + k, struct.pack("=d", math.nan), 8)
+        steps(b, 1)
+        before = b.outputs()
+        now = b.time
+        with pytest.raises(FMICallException) as e:
+            b.set_state(state)
+        b.time = now  # the master's time: the state was not set
+        assert e.value.status == ERROR
+        assert b.messages[-1][1].startswith(
+            "the FMU state given to setFMUstate is refused: its record of invalid values "
+            "does not match its values (mu = nan is invalid: must be finite, recorded as valid)"
+        ) and b.messages[-1][1].endswith("; the instance's state is unchanged")
+        assert b.outputs() == before
+        steps(b, 1)
 
 
 NOT_A_STATE = "is not an FMU state of this instance (never given, or freed)"
@@ -864,6 +1088,44 @@ def test_native_binary_needs_no_python_and_an_old_c_library(native_fmus, tmp_pat
         assert glibc_needed(lib) <= GLIBC_FLOOR
 
 
+# the native FMU kinds a builder may compile from sources/: the scalar and the vector body
+# step, the contact mode with spin, the rigid body, the half-space table
+SOURCE_KINDS = ("fig13", "full body", "full contact", "full rigid_body", "rail_traction")
+
+
+@pytest.mark.parametrize("kind", SOURCE_KINDS)
+def test_sources_alone_compile_strictly_and_export_only_the_fmi_functions(
+    scenes, native_fmus, kind, tmp_path
+):
+    """Each C file of sources/ is its own translation unit: ``cc -shared -fPIC`` of
+    sources/*.c with fmpy's FMI headers, under -Wall -Wextra -pedantic -Werror and
+    without -fvisibility=hidden (as fmpy's cmake or an importer's own build compiles
+    them), builds a library whose dynamic symbol table defines the 34 functions of FMI
+    2.0 co-simulation and nothing else: the sources hide their own internals (stepper.h's
+    CF_HIDDEN, static), so no cf_* symbol can clash with a host's."""
+    import fmpy
+
+    path = (
+        native_fmus[kind]
+        if kind in native_fmus
+        else native_fmu.build(ModelConfig.full(kind.removeprefix("full ")), OUT).path
+    )
+    unzip = tmp_path / "fmu"
+    fmpy.extract(str(path), str(unzip))
+    units = sorted((unzip / "sources").glob("*.c"))
+    assert [u.name for u in units] == sorted(native_fmu.c_files())
+    lib = tmp_path / "built.so"
+    cmd = ["cc", "-shared", "-fPIC", "-Wall", "-Wextra", "-pedantic", "-Werror",
+           f"-I{native_fmu.fmi_headers()}", *map(str, units), "-lm", "-o", str(lib)]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    defined = subprocess.run(
+        ["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True
+    ).stdout.split("\n")
+    names = [line.split()[-1] for line in defined if line.strip()]
+    assert len(names) == 34 and all(n.startswith("fmi2") for n in names), names
+
+
 # ---- a C importer, a source build, sanitizers -------------------------------------------------
 IMPORTER = Path(__file__).with_name("native_importer.c")
 
@@ -986,23 +1248,93 @@ def test_importer_bench_repeats_the_case_and_stops_loudly(
     assert "fmi2SetReal at step 10 " in proc.stderr and "P = -1" in proc.stderr, proc.stderr
 
 
+# A host that links nothing but the C library and loads the FMU with RTLD_NOW (every
+# symbol bound at once): what a library needs and does not name in DT_NEEDED is missing.
+PLAIN_HOST = r"""
+#include <dlfcn.h>
+#include <stdio.h>
+int main(int argc, char **argv) {
+    void *h = argc > 1 ? dlopen(argv[1], RTLD_NOW | RTLD_LOCAL) : NULL;
+    if (h == NULL) { printf("%s\n", dlerror()); return 1; }
+    printf("%s\n", dlsym(h, "fmi2Instantiate") ? "loaded" : "no fmi2Instantiate");
+    return 0;
+}
+"""
+
+# what a builder of the FMU's sources tells fmpy's cmake (docs/fmu.md): link libm
+LINK_LIBM = {"CMAKE_C_STANDARD_LIBRARIES:STRING": "-lm"}
+
+
+def _needed(lib: Path) -> list[str]:
+    text = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True).stdout
+    return re.findall(r"\(NEEDED\)\s+Shared library: \[(.+?)\]", text)
+
+
 @pytest.mark.skipif(shutil.which("cmake") is None, reason="no cmake")
 def test_source_fmu_built_by_fmpy_from_sources_alone_gives_the_same_numbers(
     scenes, native_fmus, fig13_expected, tmp_path
 ):
     """fmpy's build of a source FMU (cmake, its own CMakeLists and FMI headers) from the
-    FMU's sources/ alone, the shipped binary removed first: the C importer gets the same
-    doubles from the binary it made."""
+    FMU's sources/ alone, the shipped binary removed first. Its CMakeLists links no
+    library: the result does not name libm, and a host that has not loaded libm itself
+    (a C program linked with libc only) cannot load it ("undefined symbol" of a libm
+    function such as asin). Told to link libm (CMAKE_C_STANDARD_LIBRARIES = -lm, as
+    docs/fmu.md says), the library names libm.so.6, that host loads it, and the C
+    importer gets the same doubles from it as from the shipped binary."""
     from fmpy.build import build_platform_binary
 
     unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)
     shutil.rmtree(unzip / "binaries")
-    (tmp_path / "build").mkdir()
-    build_platform_binary(str(unzip), str(tmp_path / "build"))
     lib = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
-    assert lib.is_file()
+    (tmp_path / "host.c").write_text(PLAIN_HOST)
+    host = tmp_path / "host"
+    subprocess.run(["cc", "-o", str(host), str(tmp_path / "host.c"), "-ldl"], check=True)
+    assert not any(n.startswith("libm.") for n in _needed(host))
+    (tmp_path / "plain").mkdir()
+    build_platform_binary(str(unzip), str(tmp_path / "plain"))
+    assert not any(n.startswith("libm.") for n in _needed(lib))
+    proc = subprocess.run([str(host), str(lib)], capture_output=True, text=True)
+    assert proc.returncode == 1 and "undefined symbol" in proc.stdout, proc.stdout
+    lib.unlink()
+    (tmp_path / "libm").mkdir()
+    build_platform_binary(str(unzip), str(tmp_path / "libm"), cmake_options=dict(LINK_LIBM))
+    assert "libm.so.6" in _needed(lib)
+    proc = subprocess.run([str(host), str(lib)], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout == "loaded\n", proc.stdout
     exe = _compile(tmp_path / "importer", str(IMPORTER), "-ldl")
     assert np.array_equal(_importer_run(exe, lib, md, spec), expected)
+
+
+@pytest.mark.skipif(shutil.which("objdump") is None, reason="no objdump")
+def test_c_library_versions_the_binaries_of_both_targets_need(native_fmus, python_fmus, tmp_path):
+    """What docs/fmu.md states a Linux target needs, read with ``objdump -T`` from the
+    built FMUs: the native FMU's binary, libm and libc with no glibc symbol version newer
+    than 2.17 (GLIBC_2.14, memcpy); the pythonfmu FMU's own binary (the status shim) and
+    its compiled stepper likewise; but pythonfmu's libpythonfmu-export.so, which the shim
+    loads, needs GLIBC_2.32 (__libc_single_threaded) and libstdc++'s GLIBCXX_3.4.30 (GCC
+    12's): the pythonfmu FMU loads on glibc 2.32 or newer with GCC 12's libstdc++ or
+    newer, the native FMU on glibc 2.17 or newer."""
+    from test_native import GLIBC_FLOOR, glibc_needed
+
+    def versions(lib: Path, tag: str) -> tuple[int, ...]:
+        text = subprocess.run(["objdump", "-T", str(lib)], capture_output=True, text=True).stdout
+        found = {tuple(map(int, v.split("."))) for v in re.findall(rf"{tag}_([0-9.]+)\)", text)}
+        return max(found, default=())
+
+    for target, fmus in (("native", native_fmus), ("pythonfmu", python_fmus)):
+        unzip = tmp_path / target
+        with zipfile.ZipFile(fmus["fig13"]) as z:
+            z.extractall(unzip)
+        libs = {p.name: p for p in unzip.rglob("*.so")}
+        if target == "native":
+            (lib,) = libs.values()
+            assert glibc_needed(lib) <= GLIBC_FLOOR
+            assert sorted(_needed(lib)) == ["libc.so.6", "libm.so.6"]
+            continue
+        export = libs.pop("libpythonfmu-export.so")
+        assert glibc_needed(export) == (2, 32)
+        assert versions(export, "GLIBCXX") == (3, 4, 30)
+        assert libs and all(glibc_needed(p) <= GLIBC_FLOOR for p in libs.values()), libs
 
 
 def _sanitized(tmp_path: Path, unzip: Path) -> Path:
@@ -1014,7 +1346,7 @@ def _sanitized(tmp_path: Path, unzip: Path) -> Path:
         "-DLINKED",
         f"-I{unzip / 'sources'}",
     )
-    sources = (str(IMPORTER), str(unzip / "sources" / "fmu2.c"))
+    sources = (str(IMPORTER), *(str(p) for p in sorted((unzip / "sources").glob("*.c"))))
     return _compile(tmp_path / "importer_asan", *flags, *sources)
 
 
@@ -1028,7 +1360,7 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     serialized, damaged and refused, state calls with a freed state, another live or
     freed instance's or a pointer into a buffer, resets) with no sanitizer report, no
     fmi2Fatal, no non-finite output served with fmi2OK, no damaged bytes and no pointer
-    that is not a live state of the instance accepted (without fmu2.c's table of live
+    that is not a live state of the instance accepted (without instance.c's table of live
     states, ASan reports the use after free). Then 3000 states held at once, set and
     freed in shuffled orders: each set until freed, each refused after."""
     unzip, md, spec, expected = _fig13_case(scenes, native_fmus, fig13_expected, tmp_path)

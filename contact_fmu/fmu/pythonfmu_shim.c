@@ -86,6 +86,10 @@ typedef struct {
     char *guid;
     size_t guid_len;
     int cell; /* the adapter's worst status of the current call */
+    /* FMI 2.0's order of the calls that pythonfmu does not check: 0 instantiated, 1 in
+     * initialisation mode, 2 initialised (exitInitializationMode answered OK); and
+     * whether an exitInitializationMode failed */
+    int phase, init_failed;
     fmi2FMUstate *states; /* live states handed out */
     size_t n_states, cap_states;
 } shim;
@@ -234,6 +238,11 @@ static fmi2Status worst(fmi2Status a, int b) {
     return b > (int)a && b <= (int)fmi2Pending ? (fmi2Status)b : a;
 }
 
+/* pythonfmu's answer st to a call, made worse by the cell's: the call is an argument, so
+ * it has run (and set the cell) before the cell is read here; in worst(call, s->cell)
+ * the order of the two would be unspecified */
+static fmi2Status with_cell(const shim *s, fmi2Status st) { return worst(st, s->cell); }
+
 /* ---- life cycle ------------------------------------------------------------------ */
 FMI2_Export const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 FMI2_Export const char *fmi2GetVersion(void) { return fmi2Version; }
@@ -323,16 +332,42 @@ FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDefin
 
 FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     shim *s = c;
-    CALL(s, s->api.EnterInitializationMode(s->inner));
+    fmi2Status st;
+    if (s == NULL) return fmi2Error;
+    s->cell = fmi2OK;
+    st = with_cell(s, s->api.EnterInitializationMode(s->inner));
+    if (st <= fmi2Warning && s->phase == 0) s->phase = 1;
+    return st;
 }
 
+/* The phase rules of the native FMU (contact_fmu/native/instance.c), in its words:
+ * exitInitializationMode only after enterInitializationMode, terminate only once the
+ * model is initialised. */
 FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     shim *s = c;
-    CALL(s, s->api.ExitInitializationMode(s->inner));
+    fmi2Status st;
+    if (s == NULL) return fmi2Error;
+    if (s->phase == 0) {
+        cf_log(&s->cb, s->name, fmi2Error,
+               "exitInitializationMode refused: called before fmi2EnterInitializationMode");
+        return fmi2Error;
+    }
+    s->cell = fmi2OK;
+    st = with_cell(s, s->api.ExitInitializationMode(s->inner));
+    s->init_failed = st > fmi2Warning;
+    if (!s->init_failed) s->phase = 2;
+    return st;
 }
 
 FMI2_Export fmi2Status fmi2Terminate(fmi2Component c) {
     shim *s = c;
+    if (s == NULL) return fmi2Error;
+    if (s->phase < 2) {
+        cf_log(&s->cb, s->name, fmi2Error,
+               "terminate refused: called before the model is initialised "
+               "(fmi2ExitInitializationMode %s)", s->init_failed ? "failed" : "not called");
+        return fmi2Error;
+    }
     CALL(s, s->api.Terminate(s->inner));
 }
 
@@ -341,6 +376,7 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c) {
     fmi2Status st;
     if (s == NULL) return fmi2Error;
     s->cell = fmi2OK;
+    s->phase = s->init_failed = 0;
     st = s->api.Reset(s->inner); /* a new Python object: it needs the cell again */
     if (st <= fmi2Warning) st = worst(st, send_cell(s));
     return worst(st, s->cell);
@@ -428,7 +464,7 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     if (s == NULL || state == NULL) return fmi2Error;
     if ((freed = release_given(s, state, "fmi2GetFMUstate")) > fmi2Warning) return freed;
     s->cell = fmi2OK;
-    status = worst(s->api.GetFMUstate(s->inner, &st), s->cell);
+    status = with_cell(s, s->api.GetFMUstate(s->inner, &st));
     return adopt(s, state, st, status);
 }
 
@@ -449,7 +485,7 @@ FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
     s->states[i] = s->states[--s->n_states];
     s->cell = fmi2OK;
     {
-        fmi2Status st = worst(s->api.FreeFMUstate(s->inner, state), s->cell);
+        fmi2Status st = with_cell(s, s->api.FreeFMUstate(s->inner, state));
         *state = NULL;
         return st;
     }
@@ -486,7 +522,7 @@ FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate 
     if (s == NULL || size == NULL) return fmi2Error;
     if (!live_or_refuse(s, state, "fmi2SerializedFMUstateSize")) return fmi2Error;
     s->cell = fmi2OK;
-    st = worst(s->api.SerializedFMUstateSize(s->inner, state, &inner), s->cell);
+    st = with_cell(s, s->api.SerializedFMUstateSize(s->inner, state, &inner));
     if (st <= fmi2Warning) *size = header_size(s) + inner;
     return st;
 }
@@ -501,7 +537,7 @@ FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state
     if (!live_or_refuse(s, state, "fmi2SerializeFMUstate")) return fmi2Error;
     head = header_size(s);
     s->cell = fmi2OK;
-    st = worst(s->api.SerializedFMUstateSize(s->inner, state, &inner), s->cell);
+    st = with_cell(s, s->api.SerializedFMUstateSize(s->inner, state, &inner));
     if (st > fmi2Warning) return st;
     if (size != head + inner) {
         cf_log(&s->cb, s->name, fmi2Error,
@@ -509,7 +545,7 @@ FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state
                "(fmi2SerializedFMUstateSize)", size, head + inner);
         return fmi2Error;
     }
-    st = worst(s->api.SerializeFMUstate(s->inner, state, bytes + head, inner), s->cell);
+    st = with_cell(s, s->api.SerializeFMUstate(s->inner, state, bytes + head, inner));
     if (st > fmi2Warning) return st;
     memcpy(p, CF_MAGIC, sizeof CF_MAGIC - 1);
     p += sizeof CF_MAGIC - 1;

@@ -84,6 +84,9 @@ _CAUSALITY = {
 _TYPES = {"Real": Real, "Integer": Integer, "String": String}
 # This FMU's package (cfmu_<content hash> when built): the owner named in its state bytes
 _PACKAGE = __name__.split(".")[0]
+# the String parameters' choices (integrator.RollingBody checks them at set-up; refused
+# at once here, as by the native FMU, in RollingBody's words)
+_CHOICES = {"method": ("full", "quasistationary"), "scheme": ("lobatto3c", "sdirk2")}
 # the entry of _bad that a refused FMU state holds (no variable has this name)
 _STATE = "FMU state"
 # the fields of an FMU state (_get_fmu_state)
@@ -272,6 +275,8 @@ class ContactSlave(Fmi2Slave):
             )
             return
         problem = self.cfg.check(name, value)
+        if problem is None and value not in _CHOICES.get(name, (value,)):
+            problem = " or ".join(f'"{s}"' for s in _CHOICES[name])
         if c == fv.PARAMETER and self._model is not None:
             self._fast_pull()  # the outputs of the mu they were computed with (_out_mu)
         self._values[name] = (

@@ -17,7 +17,7 @@ path) have a CPython extension, fmi.c (``fmi_module``), that the adapter puts in
 of its Python methods while the compiled step runs; it is built for the running
 interpreter (its file name carries the extension suffix, so another Python finds none).
 Its checks of a value and a doStep call are cf_core.h's, and its step stepper.c's
-cf_body_step with the step's own checks: the same C as the native FMU's (fmu2.c).
+cf_body_step with the step's own checks: the same C as the native FMU's (instance.c).
 
 Both libraries are looked for next to this file, where an FMU carries them (built by
 fmu_build; a vendored copy uses only those). The package itself looks next in the
@@ -44,9 +44,13 @@ from typing import Any
 import numpy as np
 
 SOURCE = Path(__file__).with_name("stepper.c")
+HEADER = Path(__file__).with_name("stepper.h")  # its types and functions (the FMU's too)
 # No contraction into fused multiply-adds, no fast math: the Python path's roundings.
-# CF_GLIBC_COMPAT: the oldest glibc symbol versions of hypot and pow (stepper.c).
+# CF_GLIBC_COMPAT: the oldest glibc symbol versions of hypot and pow (stepper.h).
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math", "-DCF_GLIBC_COMPAT")
+# The kernel library exports the functions ctypes calls (stepper.h's CF_HIDDEN is empty
+# with CF_KERNEL_EXPORT; the native FMU's library, built without it, exports fmi2* only).
+KERNEL_FLAGS = (*CFLAGS, "-DCF_KERNEL_EXPORT")
 OK = 0
 
 
@@ -113,7 +117,7 @@ class BodyIO(ctypes.Structure):
 
 
 SOURCE_FMI = Path(__file__).with_name("fmi.c")
-# the checks both front ends make (included by stepper.c and fmi.c; fmu2.c through stepper.c)
+# the checks both front ends make (included by fmi.c, and by stepper.c through stepper.h)
 CORE = Path(__file__).with_name("cf_core.h")
 FMI_MODULE = "contact_fmu_fmi"  # its PyInit_ name
 
@@ -123,14 +127,16 @@ def _fmi_flags() -> tuple[str, ...]:
 
 
 def _key(source: Path) -> str:
-    """The content key of a library built from ``source`` (and cf_core.h, which it
-    includes) with CFLAGS; OSError where a file is not there."""
-    text = source.read_bytes() + CORE.read_bytes() + " ".join(CFLAGS).encode()
+    """The content key of a library built from ``source`` (and the headers stepper.h and
+    cf_core.h) with KERNEL_FLAGS; OSError where a file is not there."""
+    text = source.read_bytes() + CORE.read_bytes() + " ".join(KERNEL_FLAGS).encode()
+    if source == SOURCE:
+        text += HEADER.read_bytes()
     return hashlib.sha256(text).hexdigest()[:12]
 
 
 def library_name() -> str:
-    """File name of the library built from this stepper.c with CFLAGS."""
+    """File name of the library built from this stepper.c with KERNEL_FLAGS."""
     return f"_stepper_{_key(SOURCE)}.so"
 
 
@@ -146,7 +152,7 @@ def fmi_name() -> str:
 PROBLEMS: list[str] = []
 
 
-def compile_to(target: Path, source: Path = SOURCE, flags: tuple[str, ...] = CFLAGS) -> Path:
+def compile_to(target: Path, source: Path = SOURCE, flags: tuple[str, ...] = KERNEL_FLAGS) -> Path:
     """Compile ``source`` into ``target`` (atomically); CalledProcessError/OSError on
     failure."""
     target.parent.mkdir(parents=True, exist_ok=True)

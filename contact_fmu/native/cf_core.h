@@ -1,9 +1,9 @@
 /* The adapter's checks of a value and of a doStep call, written once for both front
  * ends of the compiled step: the CPython binding of the pythonfmu FMU (fmi.c, which
- * includes this file) and the FMI 2.0 layer of the native FMU (fmu2.c, through
- * stepper.c). Each is the rule of contact_fmu/fmu/slave.py (and variables.Var.check);
+ * includes this file) and the instance layer of the native FMU (instance.c, through
+ * stepper.h). Each is the rule of contact_fmu/fmu/slave.py (and variables.Var.check);
  * the messages are the callers': fmi.c hands a refused call to the Python adapter,
- * which words it, fmu2.c words it the same (tests/test_native_fmu.py compares them).
+ * which words it, instance.c words it the same (tests/test_native_fmu.py compares them).
  * The step's own checks (the load limit, the cap on internal steps, the outputs'
  * range and finiteness) are stepper.c's, next to the step (cf_body_check). */
 #ifndef CF_CORE_H

@@ -20,7 +20,7 @@
  *
  * Python state is read and written through the adapter's attributes on every call (no
  * copy kept here), so whatever the adapter reassigns stays the truth. The checks are
- * the native FMU's (fmu2.c): the value's range and the time's in cf_core.h, the step's
+ * the native FMU's (instance.c): the value's range and the time's in cf_core.h, the step's
  * caps, load limit and outputs in stepper.c's cf_body_step; each is slave.py's rule,
  * and test_fmu_slave compares the two paths bit for bit.
  *

@@ -64,6 +64,7 @@ class Instance:
             instanceName=name,
         )
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
+        self.initialised = False  # exitInitializationMode answered OK
         self.time = start_time
         try:
             self.fmu.setupExperiment(startTime=start_time)
@@ -79,6 +80,7 @@ class Instance:
     def initialise(self) -> None:
         """fmi2ExitInitializationMode (fmpy raises FMICallException above Warning)."""
         self.fmu.exitInitializationMode()
+        self.initialised = True
 
     def _log(self, env, instance, status, category, message) -> None:
         self.messages.append((int(status), message.decode(errors="replace") if message else ""))
@@ -139,7 +141,8 @@ class Instance:
 
     def close(self) -> None:
         try:
-            self.fmu.terminate()
+            if self.initialised:  # FMI 2.0: terminate ends an initialised model only
+                self.fmu.terminate()
         finally:
             self.fmu.freeInstance()
             if self._own_dir:

@@ -1,8 +1,9 @@
-/* The FMI 2.0 co-simulation layer of the native FMU (fmu_build --native): contact_fmu's
- * body mode on the compiled stepper (stepper.c, included: one translation unit), its
- * contact mode (fmu/contact_model.py: the thin-layer law, with a spin input by the strip
- * march on the law's spin grid, and its analytic directional derivatives) and its
- * rigid_body mode (fmu/rigid_body.py), with no Python anywhere (CF_MODE picks one).
+/* The native FMU's instance layer (instance.h): one instance of contact_fmu's model
+ * whatever FMI version calls it; fmi2.c is the FMI 2.0 front end on it. The model is the
+ * body mode on the compiled stepper (stepper.c), the contact mode (fmu/contact_model.py:
+ * the thin-layer law, with a spin input by the strip march on the law's spin grid, and
+ * its analytic directional derivatives) or the rigid_body mode (fmu/rigid_body.py), with
+ * no Python anywhere (CF_MODE picks one); its numerics outside the kernel are model.c's.
  *
  * The body model is the one of fmu/body_model.py on its compiled paths: the thin-layer
  * law (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
@@ -15,7 +16,8 @@
  * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
  * the generated cf_model.h; the constants the Python integrator uses travel in it too.
  *
- * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py, docs/reliability.md):
+ * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py, docs/reliability.md); in
+ * FMI 2.0's words (a status CF_STATUS_X is fmi2X):
  * - an inadmissible value (non-finite, out of its declared range) answers fmi2Error at
  *   its setter and is held, with a logged error naming the variable and the value;
  *   while it is held every doStep answers fmi2Discard with that message and changes
@@ -24,6 +26,8 @@
  * - doStep before a successful exitInitializationMode or after fmi2Terminate:
  *   fmi2Error; with a step not in (0, inf) or not at the FMU's time (64 ulp of t):
  *   fmi2Discard; loads beyond integrator.LOAD_LIMIT mu P: fmi2Discard;
+ * - exitInitializationMode before enterInitializationMode, terminate before the model
+ *   is initialised: fmi2Error (the pythonfmu FMU's shim says the same);
  * - a step with no stage root (loads beyond mu P with an eta = inf body; a stage whose
  *   Newton iteration does not converge is bracketed and closed by brentq, as in Python)
  *   or with non-finite outputs: fmi2Discard, state unchanged;
@@ -32,10 +36,11 @@
  *   rebuilt at the next step (or, in contact mode, the next output read);
  * - a model that cannot be set up (bad parameters): fmi2Error at
  *   exitInitializationMode, with the reason.
- * Memory comes from the importer's callbacks; there is no mutable global: instances
+ * Memory comes from the front end's callbacks; there is no mutable global: instances
  * are independent, also on several threads. The logger never gets user text as its
  * format. FMU state: the whole instance core (plain data), serialized with a format
- * version, the GUID, the length and a checksum; foreign or damaged bytes are refused.
+ * version, the GUID, the length and a checksum; foreign or damaged bytes are refused,
+ * and so is a state whose content no setter would have admitted (sanitize, state_ok).
  */
 #include <stdarg.h>
 #include <stdint.h>
@@ -43,86 +48,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fmi2Functions.h"
-#include "stepper.c"
-
-/* ---- the variables (cf_model.h, generated from variables.py) ---------------------- */
-enum { K_PARAMETER, K_INPUT, K_OUTPUT };
-enum { T_REAL, T_INTEGER, T_STRING };
-
-/* the parameters and inputs the model reads, by role */
-enum {
-    R_MU, R_RX, R_RY, R_K1, R_K2, R_KB, R_KS, R_M, R_IY, R_VY_RATIO, R_VX0, R_SLIP0,
-    R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX,
-    R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
-    R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
-    R_SCHEME, /* the integrator's scheme (a String, as R_METHOD) */
-    R_COUNT
-};
-/* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
-enum { MODE_BODY, MODE_CONTACT, MODE_RIGID };
-#define R_OUT 1000 /* outputs: R_OUT + the index in cf_body.out */
-
-typedef struct {
-    const char *name;
-    int kind, type, role;
-    double start;
-    double lo, hi;             /* declared range (-inf, inf where none) */
-    int open_lo;               /* lo itself excluded */
-    const char *lo_req, *hi_req; /* Var.check's requirement texts: "> 0", "<= 1" */
-    double fix;                  /* a value the build fixes (ModelConfig.fixed) ... */
-    const char *fix_req;         /* ... and the requirement text, or NULL */
-} cf_var;
-
-#include "cf_model.h"
+#include "instance.h"
+#include "model.h"
 
 #define N_METHODS 2
 static const char *const METHOD_NAMES[N_METHODS] = {"full", "quasistationary"};
 #define N_SCHEMES 2
 static const char *const SCHEME_NAMES[N_SCHEMES] = {"lobatto3c", "sdirk2"}; /* integrator */
-#define METHOD_TEXT 64
 
 /* ---- the instance ------------------------------------------------------------------ */
-enum { PH_INSTANTIATED, PH_INIT, PH_STEP, PH_TERMINATED };
-
-/* Everything an FMU state holds: plain data, no pointer that is not NULL. */
-typedef struct {
-    double val[R_COUNT];          /* parameters and inputs by role */
-    double var[CF_N_VARS];        /* every Real/Integer variable's value, by vr */
-    unsigned bad[CF_N_VARS];      /* 0, or the order in which the value became bad */
-    unsigned next_bad;
-    int method;                   /* index into METHOD_NAMES, -1: not a method */
-    char method_text[METHOD_TEXT]; /* the string set (cut at METHOD_TEXT - 1) */
-    int scheme;                   /* index into SCHEME_NAMES, -1: not a scheme */
-    char scheme_text[METHOD_TEXT]; /* the string set, as method_text */
-    double time;
-    int phase, built;
-    int init_tried;               /* fmi2ExitInitializationMode was called */
-    int dirty;                    /* contact mode: inputs set since the outputs */
-    double rb_Vx, rb_Omega_y;     /* rigid_body mode's state */
-    cf_vstate vs;                 /* body mode with Vy and/or Omega_z as unknowns */
-    double P_law;                 /* the load the law's constants are for */
-    cf_params p;
-    cf_state s;
-    cf_body b;
-} cf_core;
-
-/* the spin grid of the vector path and of the contact mode's spin input (layer._Grid of
- * SPIN_GRID): a function of the law at its load (a1, a2, p0, mu, kb + ks), rebuilt when
- * one of them changes (a new load, a tuned mu, a reset), not part of the FMU state */
-#define GRID_N (CF_SPIN_NX * CF_SPIN_NY)
-#define CF_GRID ((CF_VECTOR || CF_CONTACT_SPIN) && !CF_TABLE)
-typedef struct {
-    double key[5];                /* the law it is for: a1, a2, p0, mu, k (NaN: none yet) */
-    cf_strips strips;
-    double x[CF_SPIN_NX], y[CF_SPIN_NY], dist[GRID_N], mid[GRID_N], cap[GRID_N], w[GRID_N];
-    unsigned char inside[GRID_N];
-    double tau[2 * GRID_N];       /* scratch of the adhesion's march */
-    unsigned char slip[GRID_N];
-} spin_grid;
-
-typedef struct {
-    fmi2CallbackFunctions cb;
+typedef struct cf_inst Inst;
+struct cf_inst {
+    cf_callbacks cb;
+    void *env;                    /* the front end's bytes (cf_instantiate), after this */
+    const char *api;              /* "fmi2": the prefix of call names in messages */
     char *name;
     int logging;
     cf_core c;
@@ -133,18 +72,8 @@ typedef struct {
     unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
     cf_core **states;             /* the live FMU states handed out: an open-addressing */
     size_t n_states, cap_states;  /* set of pointers (NULL: empty slot), cap a power of 2 */
-} Inst;
+};
 
-/* the creep-force table's arrays into p (after set_constants) */
-static void attach_table(const Inst *I, cf_params *p) {
-    if (!CF_TABLE || I->table == NULL) return;
-    p->ax1 = I->table;
-    p->ax2 = p->ax1 + CF_T_N1;
-    p->ax3 = p->ax2 + CF_T_N2;
-    p->coef = p->ax3 + CF_T_N3;
-    p->n1 = CF_T_N1, p->n2 = CF_T_N2, p->n3 = CF_T_N3;
-    p->ext1 = p->ax1[CF_T_N1 - 1], p->ext2 = p->ax2[CF_T_N2 - 1], p->ext3 = p->ax3[CF_T_N3 - 1];
-}
 
 /* ---- messages ---------------------------------------------------------------------- */
 /* Python's repr of a float: the shortest digits that read back, its layout */
@@ -199,27 +128,40 @@ static void py_repr(double x, char *out, size_t n) {
     snprintf(out, n, "%s%s", neg ? "-" : "", body);
 }
 
-static const char *category(fmi2Status s) {
+static const char *category(cf_status s) {
     switch (s) {
-    case fmi2Warning: return "logStatusWarning";
-    case fmi2Discard: return "logStatusDiscard";
-    case fmi2Error: return "logStatusError";
-    case fmi2Fatal: return "logStatusFatal";
+    case CF_STATUS_WARNING: return "logStatusWarning";
+    case CF_STATUS_DISCARD: return "logStatusDiscard";
+    case CF_STATUS_ERROR: return "logStatusError";
+    case CF_STATUS_FATAL: return "logStatusFatal";
     default: return "logAll";
     }
 }
 
 /* a message to the importer's logger (never as its format) */
-static void say(const Inst *I, fmi2Status status, const char *fmt, ...) {
-    if (I == NULL || I->cb.logger == NULL) return;
-    if (status == fmi2OK && !I->logging) return;
+static void vsay(const Inst *I, cf_status status, const char *fmt, va_list ap) {
+    if (I == NULL || I->cb.log == NULL) return;
+    if (status == CF_STATUS_OK && !I->logging) return;
     char msg[2048];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    I->cb.log(I->env, I->name ? I->name : "", (int)status, category(status), msg);
+}
+
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static void say(const Inst *I, cf_status status, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    vsay(I, status, fmt, ap);
     va_end(ap);
-    I->cb.logger(I->cb.componentEnvironment, I->name ? I->name : "", status, category(status),
-                 "%s", msg);
+}
+
+void cf_log(const cf_inst *I, cf_status status, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsay(I, status, fmt, ap);
+    va_end(ap);
 }
 
 /* Var.check for a Real: NULL if admissible, else the requirement (the range check is
@@ -289,48 +231,6 @@ static void bad_list(const Inst *I, char *out, size_t n) {
 }
 
 /* ---- the model ------------------------------------------------------------------------ */
-static void set_constants(cf_params *p, cf_body *b) {
-    p->v_standstill = CF_V_STANDSTILL;
-    p->v_scale_floor = CF_V_SCALE_FLOOR;
-    p->z_algebraic = CF_Z_ALGEBRAIC;
-    p->capacity_margin = CF_CAPACITY_MARGIN;
-    p->solve_rtol = CF_SOLVE_RTOL;
-    p->expand = CF_EXPAND;
-    p->max_newton = CF_MAX_NEWTON;
-    p->beta_full_slip = CF_BETA_FULL_SLIP;
-    p->beta_series = CF_BETA_SERIES;
-    p->fd_step = CF_FD_STEP;
-    p->line_search_min = CF_LINE_SEARCH_MIN;
-    p->contraction_max = CF_CONTRACTION_MAX;
-    p->contraction_fast = CF_CONTRACTION_FAST;
-    p->newton_iterations = CF_NEWTON_ITERATIONS;
-    p->algebraic_key = CF_ALGEBRAIC_KEY;
-    p->bracket = 1; /* a stage Newton cannot close: bracket and brentq, as Python does */
-    p->max_expansions = CF_MAX_EXPANSIONS;
-    p->gamma = CF_GAMMA;
-    p->law = CF_TABLE ? LAW_TABLE : LAW_LAYER;
-    p->saturation_width = CF_SAT_WIDTH;
-    p->coef = p->ax1 = p->ax2 = p->ax3 = NULL; /* the table's: attach_table */
-    p->strips = NULL;
-    p->dyn_vy = p->dyn_spin = 0;
-    p->rz = 0.0;
-    p->Iz = 0.0;
-    b->v_creep_floor = CF_V_CREEP_FLOOR;
-    b->substep_slack = CF_SUBSTEP_SLACK;
-    b->max_substeps = CF_MAX_SUBSTEPS;
-}
-
-/* the law at load P into p and b (its reported a2, p0) */
-static void law_at_load(const cf_core *c, double P, cf_params *p, cf_body *b) {
-    const double *v = c->val;
-    if (CF_TABLE) { /* the table's coefficients do not depend on P (one load node) */
-        cf_table_law(p, P, v[R_MU], CF_T_KFAC, CF_T_M, CF_T_AMIN, CF_T_A_LE_B, CF_T_ESTAR,
-                     CF_T_G, CF_T_ONSET, &b->a2, &b->p0);
-        return;
-    }
-    cf_layer_law(p, P, v[R_RX], v[R_RY], v[R_K1], v[R_K2], v[R_KB], v[R_KS], v[R_MU], &b->a2,
-                 &b->p0);
-}
 
 /* the outputs of the struct into the variables */
 static void publish(cf_core *c) {
@@ -362,77 +262,16 @@ static const char *nonfinite(const double *out, char *r, size_t n) {
     return out_name(i);
 }
 
-/* the spin grid g for the law at its load (p, b: a1, a2, p0 there) with the parameters
- * of c (mu, kb + ks), built unless it is already for these */
-static const cf_strips *grid_at(spin_grid *g, const cf_core *c, const cf_params *law,
-                                const cf_body *b) {
-    const double *v = c->val;
-    const double key[5] = {law->a1, b->a2, b->p0, v[R_MU], v[R_KB] + v[R_KS]};
-    int same = 1;
-    for (int k = 0; k < 5; k++) same = same && g->key[k] == key[k];
-    if (!same) {
-        cf_grid_build(&g->strips, g->x, g->y, g->dist, g->mid, g->cap, g->w, g->inside,
-                      CF_SPIN_NX, CF_SPIN_NY, key[0], key[1], key[2], key[3], key[4], CF_TINY);
-        memcpy(g->key, key, sizeof key);
-    }
-    return &g->strips;
-}
-
-/* LayerContact.forces for one input with spin phi != 0 on the spin grid g: rolling,
- * cf_layer_forces (the closed form plus the march with the spin less the march without
- * it); at standstill the same with the sliding field (cf_march_standstill), as numpy. */
-static void spin_forces(const cf_params *p, const cf_strips *g, double vx, double vy,
-                        double phi, double Vx, double T[3]) {
-    if (Vx != 0.0) {
-        cf_layer_forces(p, g, 1, &vx, &vy, &phi, &Vx, T); /* NaN for a non-finite input */
-        return;
-    }
-    double with[3], without[3];
-    forces(p, vx, vy, Vx, T);
-    cf_march_standstill(g, vx, vy, phi, with);
-    cf_march_standstill(g, vx, vy, 0.0, without);
-    for (int k = 0; k < 3; k++) T[k] += with[k] - without[k];
-}
-
-/* ContactElement.evaluate: the law at the inputs' load and kinematics, rigid slip of
- * Eq. (3) at the contact centre (kinematics.rigid_slip), the forces (the closed form,
- * LayerContact._forces_scalar, or with a spin input Omega_z != 0 LayerContact.forces
- * by the strip march on the spin grid g, built here for the load) and
- * kinematics.contact_quantities; p and b hold the law at the load afterwards. The name
- * of a non-finite output, or NULL. */
-static const char *contact_outputs(const cf_core *c, spin_grid *g, cf_params *p, cf_body *b,
+/* the contact mode's outputs at c's inputs (cf_model_contact_outputs): the name of the
+ * first output served that is not finite (its value in r), or NULL */
+static const char *contact_outputs(const Inst *I, const cf_core *c, cf_params *p, cf_body *b,
                                    double out[N_OUT], char *r, size_t n) {
-    const double *v = c->val;
-    if (v[R_P] != p->P || v[R_MU] != p->mu) law_at_load(c, v[R_P], p, b); /* mu: tunable */
-    const double Vx = v[R_VX], vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY];
-    const double Omega_z = v[R_OMEGA_Z];
-    double T[3], tab[4];
-    const cf_strips *grid = NULL;
-    if (CF_TABLE) {
-        table_scalar(p, vx, vy, Omega_z, Vx, tab); /* CreepTable._scalar, spin included */
-        T[0] = tab[0], T[1] = tab[1], T[2] = tab[2];
-    } else if (CF_CONTACT_SPIN && Omega_z != 0.0 && g != NULL) {
-        grid = grid_at(g, c, p, b);
-        spin_forces(p, grid, vx, vy, Omega_z, Vx, T);
-    } else {
-        forces(p, vx, vy, Vx, T);
-    }
-    for (int i = 0; i < N_OUT; i++) out[i] = 0.0;
-    out[O_TX] = T[0], out[O_TY] = T[1], out[O_MZ] = T[2];
-    out[O_VX_SLIP] = vx, out[O_VY_SLIP] = vy;
-    const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
-    out[O_XI_X] = vx / V, out[O_XI_Y] = vy / V, out[O_XI_SP] = Omega_z / V;
-    out[O_A1] = p->a1, out[O_A2] = b->a2, out[O_P0] = b->p0;
-    out[O_ADHESION] = CF_TABLE ? tab[3]
-                      : grid ? cf_spin_adhesion(grid, vx, vy, Vx, Omega_z, g->tau, g->slip,
-                                                g->inside)
-                             : adhesion_fraction(p, vx, vy, Vx);
-    /* with spin the creepage alone does not tell gross sliding: no adhesion area left
-     * does (ContactElement.evaluate) */
-    out[O_REGIME] = (Omega_z != 0.0 ? !(out[O_ADHESION] > 0.0) : full_slip(p, vx, vy, Vx))
-                        ? 1.0 : 0.0;
-    return nonfinite(out, r, n);
+    const int i = cf_model_contact_outputs(c, I->grid, p, b, out, I->served);
+    if (i < 0) return NULL;
+    py_repr(out[i], r, n);
+    return out_name(i);
 }
+
 
 /* The initial state within the ranges of the body mode's steps (cf_body_out_check's
  * table, ranges.within_range(start=True)): beyond, every step would be discarded,
@@ -445,7 +284,7 @@ static int start_in_range(Inst *I, const double *out) {
     const cf_ranged *q = &CF_RANGED[which];
     char rv[40];
     py_repr(out[q->i], rv, sizeof rv);
-    say(I, fmi2Error, "cannot initialise the model: %s0 = %s is invalid: must be within abs "
+    say(I, CF_STATUS_ERROR, "cannot initialise the model: %s0 = %s is invalid: must be within abs "
         "<= %g (" START_RANGE_WHY ")", q->name, rv, q->bound);
     return 0;
 }
@@ -457,7 +296,7 @@ static int start_ok(Inst *I, const double *out) {
     if (!start_in_range(I, out)) return 0;
     const char *bad = nonfinite(out, r, sizeof r);
     if (bad) {
-        say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: output %s = %s "
             "is not finite", bad, r);
         return 0;
     }
@@ -474,7 +313,7 @@ static int build_rigid(Inst *I) {
         if (!(v[need[k]] > 0.0)) {
             char r[40];
             py_repr(v[need[k]], r, sizeof r);
-            say(I, fmi2Error, "cannot initialise the model: %s = %s is invalid: must be > 0",
+            say(I, CF_STATUS_ERROR, "cannot initialise the model: %s = %s is invalid: must be > 0",
                 names[k], r);
             return 0;
         }
@@ -494,18 +333,18 @@ static int build_rigid(Inst *I) {
 /* the spin grid at the law's load into p->strips */
 static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_params *p) {
     if (I->grid == NULL) return;
-    p->strips = grid_at(I->grid, &I->c, law, b);
+    p->strips = cf_model_grid(I->grid, &I->c, law, b);
 }
 
 /* BodyModel / RollingBody set up from the parameters and inputs at the FMU's time;
- * 0 with the reasons logged (fmi2Error) where it cannot be */
+ * 0 with the reasons logged (an error) where it cannot be */
 static int build(Inst *I) {
     cf_core *c = &I->c;
     unsigned last = 0;
     char one[256];
     int held = 0;
     while (next_bad(c, &last, one, sizeof one)) { /* one message each, as slave.py */
-        say(I, fmi2Error, "cannot initialise the model: %s", one);
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", one);
         held = 1;
     }
     if (held) return 0;
@@ -515,13 +354,13 @@ static int build(Inst *I) {
     /* LayerContact.__post_init__ beyond the declared ranges */
     if (!CF_TABLE && !(v[R_K1] + v[R_K2] > 0.0)) {
         py_repr(v[R_K1] + v[R_K2], r, sizeof r);
-        say(I, fmi2Error, "cannot initialise the model: k1 + k2 = %s is invalid: must be > 0 "
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: k1 + k2 = %s is invalid: must be > 0 "
             "(a Winkler layer carries the load)", r);
         return 0;
     }
     if (!CF_TABLE && !(v[R_KB] + v[R_KS] > 0.0)) {
         py_repr(v[R_KB] + v[R_KS], r, sizeof r);
-        say(I, fmi2Error, "cannot initialise the model: kb + ks = %s is invalid: must be > 0 "
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: kb + ks = %s is invalid: must be > 0 "
             "(tangential layer compliance)", r);
         return 0;
     }
@@ -531,14 +370,15 @@ static int build(Inst *I) {
     memset(&p, 0, sizeof p);
     memset(&b, 0, sizeof b);
     memset(&s, 0, sizeof s);
-    set_constants(&p, &b);
-    attach_table(I, &p);
+    cf_model_constants(&p, &b);
+    cf_model_attach_table(I->table, &p);
     if (CF_MODE == MODE_CONTACT) {
-        law_at_load(c, v[R_P], &p, &b);
+        cf_model_law_at_load(c, v[R_P], &p, &b);
         double out[N_OUT];
-        const char *bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
+        const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
         if (bad) {
-            say(I, fmi2Error, "cannot initialise the model: FloatingPointError: output %s = %s "
+            say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: output "
+                "%s = %s "
                 "is not finite", bad, r);
             return 0;
         }
@@ -551,20 +391,35 @@ static int build(Inst *I) {
         return 1;
     }
     const double M = v[R_M], Rx = v[R_RX], Iy = v[R_IY];
+    if (CF_VECTOR && CF_DYN_SPIN && !(v[R_IZ] > 0.0)) { /* dynamics.Body's checks */
+        py_repr(v[R_IZ], r, sizeof r);
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: Iz = %s is invalid: must be "
+            "> 0", r);
+        return 0;
+    }
+    /* A1, A2 (Eq. 23) divide by M Rx^2 + Iy: it must neither underflow to 0 nor overflow
+     * (each value alone admissible, e.g. Rx = 1e-200 with Iy = 0) */
+    const double MR2 = M * pow(Rx, 2.0), inertia = MR2 + Iy;
+    if (!(0.0 < MR2 && MR2 < INFINITY && inertia < INFINITY)) {
+        char rM[40], rR[40], rI[40];
+        py_repr(inertia, r, sizeof r);
+        py_repr(M, rM, sizeof rM);
+        py_repr(Rx, rR, sizeof rR);
+        py_repr(Iy, rI, sizeof rI);
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: M Rx^2 + Iy = %s is invalid: "
+            "must be positive and finite with M Rx^2 > 0 (M = %s, Rx = %s, Iy = %s)", r, rM,
+            rR, rI);
+        return 0;
+    }
     p.M = M, p.Rx = Rx;
     cf_body_inertia(&p, M, Rx, Iy);
     p.ry = v[R_VY_RATIO];
     p.quasistationary = c->method == 1;
     p.sdirk = c->scheme == 1;
     const double P = v[R_P];
-    law_at_load(c, P, &p, &b);
+    cf_model_law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = v[R_FX_EX], b.My_ex = v[R_MY_EX], b.h_max = v[R_H_MAX];
     if (CF_VECTOR) {
-        if (CF_DYN_SPIN && !(v[R_IZ] > 0.0)) {
-            py_repr(v[R_IZ], r, sizeof r);
-            say(I, fmi2Error, "cannot initialise the model: Iz = %s is invalid: must be > 0", r);
-            return 0;
-        }
         /* VectorKernel._path: the held ratios (0 where a rate is an unknown), Iz */
         p.ry = CF_DYN_VY ? 0.0 : v[R_VY_RATIO];
         p.rz = CF_DYN_SPIN ? 0.0 : v[R_SPIN_RATIO];
@@ -620,17 +475,17 @@ static void out_check_text(int why, int which, const double *out, char *t, size_
 }
 
 /* a step of the contact mode (the outputs at the inputs held) or of the rigid body
- * (Eqs. 8-9 under held inputs, exact: Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx
- * Tx)/Iy), committed only when its outputs pass the checks of the body mode's
+ * (Eqs. 8-9 under held inputs: cf_model_rigid_step), committed only when its outputs
+ * pass the checks of the body mode's
  * (cf_body_out_check: Vx, Omega_y within their ranges, then finite) */
-static fmi2Status other_step(Inst *I, double t, double h) {
+static cf_status other_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
     char r[40], why_text[512] = "";
     if (CF_MODE == MODE_CONTACT) {
         cf_params p = c->p;
         cf_body b = c->b;
         double out[N_OUT];
-        const char *bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
+        const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
         if (bad) {
             snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
                      "finite", bad, r);
@@ -639,12 +494,9 @@ static fmi2Status other_step(Inst *I, double t, double h) {
             memcpy(c->b.out, out, sizeof out);
         }
     } else {
-        const double *v = c->val;
-        const double Tx = v[R_TX];
-        const double Vx = c->rb_Vx + h * (v[R_FX_EX] - Tx) / v[R_M];
-        const double Oy = c->rb_Omega_y + h * (v[R_MY_EX] + v[R_RX] * Tx) / v[R_IY];
-        double out[N_OUT] = {0.0};
-        out[O_VX] = Vx, out[O_OMEGA_Y] = Oy;
+        double out[N_OUT];
+        cf_model_rigid_step(c, h, out);
+        const double Vx = out[O_VX], Oy = out[O_OMEGA_Y];
         int which = 0;
         const int why = cf_body_out_check(out, I->served, &which);
         if (why != CF_OK) {
@@ -658,47 +510,45 @@ static fmi2Status other_step(Inst *I, double t, double h) {
         char rt[40], rh[40];
         py_repr(t, rt, sizeof rt);
         py_repr(h, rh, sizeof rh);
-        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
+        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
             rh, why_text);
-        return fmi2Discard;
+        return CF_STATUS_DISCARD;
     }
     publish(c);
     c->time = t + h;
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-/* ContactSlave._refresh (direct feedthrough): the outputs for the inputs set, unless an
- * input is bad (then the last ones stay); an output that is not finite keeps them too,
- * with a logged error */
-/* Contact mode's outputs for the current inputs; fmi2Error (the outputs kept are the
- * last good inputs', not to be used) where they cannot be had: slave._refresh */
-static fmi2Status refresh(Inst *I) {
+/* ContactSlave._refresh (direct feedthrough): the contact mode's outputs for the inputs
+ * set; an error (the outputs kept are the last good inputs', not to be used) where they
+ * cannot be had: an input held bad, an output that is not finite */
+static cf_status refresh(Inst *I) {
     cf_core *c = &I->c;
     for (int i = 0; i < CF_N_VARS; i++)
         if (c->bad[i] && CF_VARS[i].kind == K_INPUT) {
             char list[1536];
             bad_list(I, list, sizeof list);
-            say(I, fmi2Error, "no outputs for the current inputs: %s", list);
-            return fmi2Error;
+            say(I, CF_STATUS_ERROR, "no outputs for the current inputs: %s", list);
+            return CF_STATUS_ERROR;
         }
     cf_params p = c->p;
     cf_body b = c->b;
     double out[N_OUT];
     char r[40];
-    const char *bad = contact_outputs(c, I->grid, &p, &b, out, r, sizeof r);
+    const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
     if (bad) {
-        say(I, fmi2Error, "no outputs for the current inputs: FloatingPointError: output "
+        say(I, CF_STATUS_ERROR, "no outputs for the current inputs: FloatingPointError: output "
             "%s = %s is not finite", bad, r);
-        return fmi2Error;
+        return CF_STATUS_ERROR;
     }
     c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
     memcpy(c->b.out, out, sizeof out);
     publish(c);
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
 /* BodyModel.step + the outputs, committed only when all is well */
-static fmi2Status fmu_step(Inst *I, double t, double h) {
+static cf_status fmu_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
     /* t and h as Python writes them, formatted only for a message (a repr costs
      * microseconds: more than the step) */
@@ -709,32 +559,36 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
         if (c->init_tried) bad_list(I, list, sizeof list); /* the values that stop it */
         REPRS();
         if (c->phase == PH_TERMINATED)
-            say(I, fmi2Error, "doStep at t = %s refused: called after fmi2Terminate", rt);
+            say(I, CF_STATUS_ERROR, "doStep at t = %s refused: called after %sTerminate", rt,
+                I->api);
         else
-            say(I, fmi2Error, "doStep at t = %s refused: called before the model is initialised "
-                "(fmi2ExitInitializationMode %s%s)", rt, c->init_tried ? "failed: " : "not called",
+            say(I, CF_STATUS_ERROR, "doStep at t = %s refused: called before the model is "
+                "initialised (%sExitInitializationMode %s%s)", rt, I->api,
+                c->init_tried ? "failed: " : "not called",
                 c->init_tried ? (list[0] ? list : "see the messages above") : "");
-        return fmi2Error;
+        return CF_STATUS_ERROR;
     }
     if (!cf_step_size_ok(h)) {
         REPRS();
-        say(I, fmi2Discard, "communicationStepSize = %s is invalid: must be > 0 and finite", rh);
-        return fmi2Discard;
+        say(I, CF_STATUS_DISCARD, "communicationStepSize = %s is invalid: must be > 0 and "
+            "finite", rh);
+        return CF_STATUS_DISCARD;
     }
     if (!cf_time_ok(t, c->time, CF_TIME_RTOL)) {
         char now[40];
         REPRS();
         py_repr(c->time, now, sizeof now);
-        say(I, fmi2Discard, "currentCommunicationPoint = %s is invalid: must be the FMU's time "
+        say(I, CF_STATUS_DISCARD, "currentCommunicationPoint = %s is invalid: must be the "
+            "FMU's time "
             "%s", rt, now);
-        return fmi2Discard;
+        return CF_STATUS_DISCARD;
     }
     if (c->next_bad && any_bad(c)) {
         char list[1536];
         bad_list(I, list, sizeof list);
         REPRS();
-        say(I, fmi2Discard, "doStep at t = %s discarded, state unchanged: %s", rt, list);
-        return fmi2Discard;
+        say(I, CF_STATUS_DISCARD, "doStep at t = %s discarded, state unchanged: %s", rt, list);
+        return CF_STATUS_DISCARD;
     }
     if (CF_MODE != MODE_BODY) return other_step(I, t, h);
     cf_params p = c->p;
@@ -743,7 +597,7 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
     cf_vstate vw = c->vs;
     const double P = c->val[R_P];
     /* set_load: Eq. (34) at the new P; set_mu: the law at a tuned mu */
-    if (P != c->P_law || c->val[R_MU] != p.mu) law_at_load(c, P, &p, &b);
+    if (P != c->P_law || c->val[R_MU] != p.mu) cf_model_law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
     cf_vpath vector = {&vw, c->val[R_FY_EX], c->val[R_MZ_EX], NULL, NULL, NULL};
     if (CF_VECTOR) {
@@ -770,14 +624,14 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
         } else if (why == CF_STEP_NO_SLIDING) {
             snprintf(why_text, sizeof why_text, "StageSolveError: eta = inf (Iy = 0) admits no "
                      "gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = %.6g N reaches mu P = %.6g N",
-                     fabs(target_x(&p, b.Fx_ex, b.My_ex)), p.mu * p.P);
+                     fabs(cf_target_x(&p, b.Fx_ex, b.My_ex)), p.mu * p.P);
         } else { /* CF_STEP_NO_ROOT: no other code reaches here (the law is at P, h > 0) */
             snprintf(why_text, sizeof why_text, "StageSolveError: no root: the stage residual "
                      "keeps its sign (loads beyond mu P?)");
         }
-        say(I, fmi2Discard, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
+        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
             rh, why_text);
-        return fmi2Discard;
+        return CF_STATUS_DISCARD;
     }
     c->p = p, c->b = b, c->s = w, c->vs = vw, c->P_law = P;
     publish(c);
@@ -785,9 +639,10 @@ static fmi2Status fmu_step(Inst *I, double t, double h) {
 #undef REPRS
     const int n = b.max_substeps;
     if (capped && h / b.h_max > n)
-        say(I, fmi2Warning, "communication step h = %g s exceeds %d internal steps of h_max = "
+        say(I, CF_STATUS_WARNING, "communication step h = %g s exceeds %d internal steps of "
+            "h_max = "
             "%g s: taken in %d steps of %g s", h, n, b.h_max, n, h / n);
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
 /* the instance at its start values */
@@ -807,25 +662,10 @@ static void start_values(Inst *I) {
     c->phase = PH_INSTANTIATED;
 }
 
-/* ---- FMI 2.0 ----------------------------------------------------------------------------- */
-#define INST(fn)                                                                         \
-    Inst *I = (Inst *)c;                                                                 \
-    if (I == NULL) return fmi2Error
+/* ---- lifetime ------------------------------------------------------------------------ */
+void cf_set_debug_logging(cf_inst *I, int on) { I->logging = on != 0; }
 
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cats[]) {
-    INST(fmi2SetDebugLogging);
-    (void)n, (void)cats;
-    I->logging = on != fmi2False;
-    return fmi2OK;
-}
-
-/* the table resource (fmu_build/native_fmu.py, table_bytes): "cfmuTBL1", n1, n2, n3
- * (u32), the count of doubles (u64), the axes and the patch coefficients (doubles), the
- * CRC-32 (zlib's) of all before it (u64); read from the resources folder (a file URI) at
- * instantiation into memory of the importer's; 0 with a logged reason */
+/* CRC-32 (zlib's) of n bytes: the table resource's checksum */
 static uint64_t crc32_of(const unsigned char *p, size_t n) {
     uint32_t c = 0xFFFFFFFFu;
     for (size_t i = 0; i < n; i++) {
@@ -835,15 +675,16 @@ static uint64_t crc32_of(const unsigned char *p, size_t n) {
     return (uint64_t)(c ^ 0xFFFFFFFFu);
 }
 
-static int load_table(Inst *I, const char *uri, const Inst *probe) {
-    char path[4096];
+/* The local path of a file URI (file://localhost/p, file:///p, file:/p; anything else is
+ * taken as a path), percent-decoded, into path (n bytes, cut there); its length. */
+static size_t uri_to_path(const char *uri, char *path, size_t n) {
     const char *s = uri ? uri : "";
     if (strncmp(s, "file://localhost/", 17) == 0) s += 16;
     else if (strncmp(s, "file:///", 8) == 0) s += 7;
     else if (strncmp(s, "file:/", 6) == 0) s += 5;
     size_t k = 0;
-    for (; *s && k + 1 < sizeof path; s++) { /* percent-decoding */
-        int hi, lo;
+    for (; *s && k + 1 < n; s++) { /* percent-decoding */
+        unsigned hi, lo;
         if (s[0] == '%' && s[1] && s[2] && sscanf(s + 1, "%1x%1x", &hi, &lo) == 2) {
             path[k++] = (char)(hi * 16 + lo);
             s += 2;
@@ -855,10 +696,20 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
     if (k > 2 && path[0] == '/' && path[2] == ':') memmove(path, path + 1, k--); /* /C:/ */
 #endif
     path[k] = '\0';
+    return k;
+}
+
+/* the table resource (fmu_build/native_fmu.py, table_bytes): "cfmuTBL1", n1, n2, n3
+ * (u32), the count of doubles (u64), the axes and the patch coefficients (doubles), the
+ * CRC-32 (zlib's) of all before it (u64); read from the resources folder (a file URI) at
+ * instantiation into memory of the front end's; 0 with a logged reason */
+static int load_table(Inst *I, const char *uri, const Inst *probe) {
+    char path[4096];
+    const size_t k = uri_to_path(uri, path, sizeof path);
     const char *name = "/table.bin";
     if (k && path[k - 1] == '/') name++;
     if (k + strlen(name) + 1 > sizeof path) {
-        say(probe, fmi2Error, "fmi2Instantiate: the resource path is too long");
+        say(probe, CF_STATUS_ERROR, "%sInstantiate: the resource path is too long", I->api);
         return 0;
     }
     strcat(path, name);
@@ -866,10 +717,11 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
     const size_t size = 8 + 12 + 8 + 8 * n_data + 8;
     FILE *f = fopen(path, "rb");
     if (f == NULL) {
-        say(probe, fmi2Error, "fmi2Instantiate: the creep-force table %s cannot be opened", path);
+        say(probe, CF_STATUS_ERROR, "%sInstantiate: the creep-force table %s cannot be opened",
+            I->api, path);
         return 0;
     }
-    unsigned char *buf = (unsigned char *)I->cb.allocateMemory(size + 1, 1);
+    unsigned char *buf = (unsigned char *)I->cb.alloc(I->env, size + 1, 1);
     size_t got = buf ? fread(buf, 1, size + 1, f) : 0;
     fclose(f);
     const char *why = NULL;
@@ -886,215 +738,232 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
         else if (crc32_of(buf, size - 8) != sum) why = "damaged: its checksum does not match";
     }
     if (why) {
-        say(probe, fmi2Error, "fmi2Instantiate: the creep-force table %s is refused: %s", path,
-            why);
-        if (buf) I->cb.freeMemory(buf);
+        say(probe, CF_STATUS_ERROR, "%sInstantiate: the creep-force table %s is refused: %s",
+            I->api, path, why);
+        if (buf) I->cb.release(I->env, buf);
         return 0;
     }
-    I->table = (double *)I->cb.allocateMemory(n_data, sizeof(double));
+    I->table = (double *)I->cb.alloc(I->env, n_data, sizeof(double));
     if (I->table) memcpy(I->table, buf + 28, 8 * n_data);
-    I->cb.freeMemory(buf);
-    if (I->table == NULL) say(probe, fmi2Error, "fmi2Instantiate: out of memory");
+    I->cb.release(I->env, buf);
+    if (I->table == NULL) say(probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", I->api);
     return I->table != NULL;
 }
 
-fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
-                              fmi2String resources, const fmi2CallbackFunctions *cb,
-                              fmi2Boolean visible, fmi2Boolean logging) {
-    (void)resources, (void)visible;
-    if (cb == NULL || cb->allocateMemory == NULL || cb->freeMemory == NULL) return NULL;
+/* an instance that logs only (no model): for messages before there is an instance */
+static void probe_for(Inst *probe, const cf_callbacks *cb, void *env, const char *api,
+                      const char *name) {
+    memset(probe, 0, sizeof *probe);
+    probe->cb = *cb;
+    probe->env = env;
+    probe->api = api;
+    probe->name = (char *)(name ? name : "");
+}
+
+void cf_log_to(const cf_callbacks *cb, void *env, const char *name, cf_status status,
+               const char *fmt, ...) {
+    if (cb == NULL) return;
     Inst probe;
-    memset(&probe, 0, sizeof probe);
-    probe.cb = *cb;
-    probe.name = (char *)(name ? name : "");
-    if (type != fmi2CoSimulation) {
-        say(&probe, fmi2Error, "fmi2Instantiate: this FMU is for co-simulation only");
-        return NULL;
-    }
+    probe_for(&probe, cb, env, "", name);
+    va_list ap;
+    va_start(ap, fmt);
+    vsay(&probe, status, fmt, ap);
+    va_end(ap);
+}
+
+cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
+                        const char *resource_uri, int logging, const cf_callbacks *cb,
+                        void *env, size_t env_size) {
+    if (cb == NULL || cb->alloc == NULL || cb->release == NULL) return NULL;
+    Inst probe;
+    probe_for(&probe, cb, env, api, name);
     if (guid == NULL || strcmp(guid, CF_GUID) != 0) {
-        say(&probe, fmi2Error, "fmi2Instantiate: GUID %s is not this FMU's (%s)",
+        say(&probe, CF_STATUS_ERROR, "%sInstantiate: GUID %s is not this FMU's (%s)", api,
             guid ? guid : "(null)", CF_GUID);
         return NULL;
     }
-    Inst *I = (Inst *)cb->allocateMemory(1, sizeof(Inst));
+    /* the front end's bytes after the instance, aligned for any type */
+    const size_t head = (sizeof(Inst) + sizeof(max_align_t) - 1) / sizeof(max_align_t) *
+                        sizeof(max_align_t);
+    Inst *I = (Inst *)cb->alloc(env, 1, head + env_size);
     if (I == NULL) {
-        say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
+        say(&probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", api);
         return NULL;
     }
     memset(I, 0, sizeof *I);
     I->cb = *cb;
+    I->env = env_size ? (void *)((unsigned char *)I + head) : env;
+    if (env_size) memcpy(I->env, env, env_size);
+    I->api = api;
     size_t len = strlen(probe.name) + 1;
-    I->name = (char *)cb->allocateMemory(len, 1);
+    I->name = (char *)I->cb.alloc(I->env, len, 1);
     if (I->name == NULL) {
-        cb->freeMemory(I);
-        say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
+        cb->release(env, I);
+        say(&probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", api);
         return NULL;
     }
     memcpy(I->name, probe.name, len);
-    if (CF_TABLE && !load_table(I, resources, &probe)) {
-        cb->freeMemory(I->name);
-        cb->freeMemory(I);
+    if (CF_TABLE && !load_table(I, resource_uri, &probe)) {
+        I->cb.release(I->env, I->name);
+        cb->release(env, I);
         return NULL;
     }
     if (CF_GRID) {
-        I->grid = (spin_grid *)cb->allocateMemory(1, sizeof(spin_grid));
+        I->grid = (spin_grid *)I->cb.alloc(I->env, 1, sizeof(spin_grid));
         if (I->grid == NULL) {
-            cb->freeMemory(I->name);
-            cb->freeMemory(I);
-            say(&probe, fmi2Error, "fmi2Instantiate: out of memory");
+            I->cb.release(I->env, I->name);
+            cb->release(env, I);
+            say(&probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", api);
             return NULL;
         }
         for (int k = 0; k < 5; k++) I->grid->key[k] = NAN;
         I->grid->strips.ny = 0;
     }
-    I->logging = logging != fmi2False;
+    I->logging = logging != 0;
     I->served = served_mask();
     start_values(I);
     return I;
 }
 
-void fmi2FreeInstance(fmi2Component c) {
-    Inst *I = (Inst *)c;
+void cf_free_instance(cf_inst *I) {
     if (I == NULL) return;
-    fmi2CallbackFreeMemory release = I->cb.freeMemory;
     for (size_t i = 0; i < I->cap_states; i++) /* the states the importer did not free */
-        if (I->states[i]) release(I->states[i]);
-    if (I->states) release(I->states);
-    if (I->grid) release(I->grid);
-    if (I->table) release(I->table);
-    release(I->name);
-    release(I);
+        if (I->states[i]) I->cb.release(I->env, I->states[i]);
+    if (I->states) I->cb.release(I->env, I->states);
+    if (I->grid) I->cb.release(I->env, I->grid);
+    if (I->table) I->cb.release(I->env, I->table);
+    I->cb.release(I->env, I->name);
+    const cf_callbacks cb = I->cb; /* env may live in the instance: released last */
+    cb.release(I->env, I);
 }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDefined, fmi2Real tol,
-                               fmi2Real start, fmi2Boolean stopDefined, fmi2Real stop) {
-    INST(fmi2SetupExperiment);
-    (void)tolDefined, (void)tol, (void)stopDefined, (void)stop;
+/* ---- phases ------------------------------------------------------------------------- */
+cf_status cf_setup_experiment(cf_inst *I, double start) {
     if (I->c.built) {
-        say(I, fmi2Error, "fmi2SetupExperiment after initialisation is ignored");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sSetupExperiment after initialisation is ignored", I->api);
+        return CF_STATUS_ERROR;
     }
     if (isfinite(start)) {
         I->c.time = start;
-        return fmi2OK;
+        return CF_STATUS_OK;
     }
     char r[40];
     py_repr(start, r, sizeof r);
-    say(I, fmi2Error, "startTime = %s is invalid: must be finite; using 0", r);
-    return fmi2Error;
+    say(I, CF_STATUS_ERROR, "startTime = %s is invalid: must be finite; using 0", r);
+    return CF_STATUS_ERROR;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    INST(fmi2EnterInitializationMode);
+cf_status cf_enter_initialization_mode(cf_inst *I) {
     I->c.phase = PH_INIT;
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    INST(fmi2ExitInitializationMode);
+cf_status cf_exit_initialization_mode(cf_inst *I) {
+    if (I->c.phase == PH_INSTANTIATED) { /* FMI: only in initialisation mode */
+        say(I, CF_STATUS_ERROR, "exitInitializationMode refused: called before "
+            "%sEnterInitializationMode", I->api);
+        return CF_STATUS_ERROR;
+    }
     I->c.init_tried = 1;
     if (!build(I)) { /* slave.exit_initialization_mode's refusal, its words */
         char list[1536];
         bad_list(I, list, sizeof list);
-        say(I, fmi2Error, "exitInitializationMode: the model cannot start: %s",
+        say(I, CF_STATUS_ERROR, "exitInitializationMode: the model cannot start: %s",
             list[0] ? list : "see the messages above");
-        return fmi2Error;
+        return CF_STATUS_ERROR;
     }
     I->c.phase = PH_STEP;
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) {
-    INST(fmi2Terminate);
+cf_status cf_terminate(cf_inst *I) {
+    if (!I->c.built) { /* FMI: only once initialised; after an error: reset or free */
+        say(I, CF_STATUS_ERROR, "terminate refused: called before the model is initialised "
+            "(%sExitInitializationMode %s)", I->api, I->c.init_tried ? "failed" : "not called");
+        return CF_STATUS_ERROR;
+    }
     I->c.phase = PH_TERMINATED;
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2Reset(fmi2Component c) {
-    INST(fmi2Reset);
+cf_status cf_reset(cf_inst *I) {
     start_values(I);
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-static int vr_ok(const Inst *I, fmi2ValueReference vr, int type, const char *fn) {
+/* ---- variables ----------------------------------------------------------------------- */
+static int vr_ok(const Inst *I, unsigned vr, int type, const char *call) {
     if (vr < CF_N_VARS && CF_VARS[vr].type == type) return 1;
-    say(I, fmi2Error, "%s: value reference %u is not a variable of this type", fn, (unsigned)vr);
+    say(I, CF_STATUS_ERROR, "%s%s: value reference %u is not a variable of this type", I->api,
+        call, vr);
     return 0;
 }
 
-/* A value that was refused is held, not to be used: fmi2Error (slave._get) */
-static fmi2Status held_bad(const Inst *I, fmi2ValueReference vr) {
-    if (!I->c.bad[vr]) return fmi2OK;
+/* A value that was refused is held, not to be used: an error (slave._get) */
+static cf_status held_bad(const Inst *I, unsigned vr) {
+    if (!I->c.bad[vr]) return CF_STATUS_OK;
     char msg[256];
     bad_text(&CF_VARS[vr], I->c.var[vr], msg, sizeof msg);
-    say(I, fmi2Error, "%s: %s (held until corrected)", CF_VARS[vr].name, msg);
-    return fmi2Error;
+    say(I, CF_STATUS_ERROR, "%s: %s (held until corrected)", CF_VARS[vr].name, msg);
+    return CF_STATUS_ERROR;
 }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[]) {
-    INST(fmi2GetReal);
-    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    fmi2Status status = fmi2OK;
+cf_status cf_get_real(cf_inst *I, const unsigned *vr, size_t n, double *v) {
+    if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
+    cf_status status = CF_STATUS_OK;
     if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_REAL, "fmi2GetReal")) return fmi2Error;
+        if (!vr_ok(I, vr[i], T_REAL, "GetReal")) return CF_STATUS_ERROR;
         v[i] = I->c.var[vr[i]];
-        if (held_bad(I, vr[i]) != fmi2OK) status = fmi2Error;
+        if (held_bad(I, vr[i]) != CF_STATUS_OK) status = CF_STATUS_ERROR;
     }
     return status;
 }
 
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                          fmi2Integer v[]) {
-    INST(fmi2GetInteger);
-    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    fmi2Status status = fmi2OK;
+cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
+    if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
+    cf_status status = CF_STATUS_OK;
     if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_INTEGER, "fmi2GetInteger")) return fmi2Error;
+        if (!vr_ok(I, vr[i], T_INTEGER, "GetInteger")) return CF_STATUS_ERROR;
         double x = I->c.var[vr[i]];
         v[i] = x > 0.5 ? 1 : 0; /* the only Integer: regime, 0 or 1 */
     }
     return status;
 }
 
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                          fmi2Boolean v[]) {
-    INST(fmi2GetBoolean);
-    (void)v;
-    if (n == 0) return fmi2OK;
-    say(I, fmi2Error, "fmi2GetBoolean: this FMU has no Boolean variable (vr %u)",
-        vr ? (unsigned)vr[0] : 0u);
-    return fmi2Error;
+cf_status cf_get_boolean(cf_inst *I, const unsigned *vr, size_t n) {
+    if (n == 0) return CF_STATUS_OK;
+    say(I, CF_STATUS_ERROR, "%sGetBoolean: this FMU has no Boolean variable (vr %u)", I->api,
+        vr ? vr[0] : 0u);
+    return CF_STATUS_ERROR;
 }
 
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                         fmi2String v[]) {
-    INST(fmi2GetString);
-    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
+cf_status cf_get_string(cf_inst *I, const unsigned *vr, size_t n, const char **v) {
+    if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_STRING, "fmi2GetString")) return fmi2Error;
+        if (!vr_ok(I, vr[i], T_STRING, "GetString")) return CF_STATUS_ERROR;
         char *out = is_scheme((int)vr[i]) ? I->scheme_out : I->method_out;
         snprintf(out, METHOD_TEXT, "%s", string_text(&I->c, (int)vr[i]));
         v[i] = out;
     }
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
 /* a parameter or input may be set now; else the refusal logged */
 static int settable(Inst *I, int i, const char *value) {
     const cf_var *v = &CF_VARS[i];
     if (v->kind == K_OUTPUT) {
-        say(I, fmi2Error, "%s is an output of this FMU: the value %s set is ignored", v->name,
-            value);
+        say(I, CF_STATUS_ERROR, "%s is an output of this FMU: the value %s set is ignored",
+            v->name, value);
         return 0;
     }
     if (v->kind == K_PARAMETER && I->c.built && v->role != R_MU) { /* mu is tunable */
         char now[80];
         if (v->type == T_STRING) snprintf(now, sizeof now, "'%s'", string_text(&I->c, i));
         else py_repr(I->c.var[i], now, sizeof now);
-        say(I, fmi2Error, "%s is a fixed parameter and the model is initialised: %s = %s is "
-            "ignored (%s stays %s)", v->name, v->name, value, v->name, now);
+        say(I, CF_STATUS_ERROR, "%s is a fixed parameter and the model is initialised: %s = %s "
+            "is ignored (%s stays %s)", v->name, v->name, value, v->name, now);
         return 0;
     }
     return 1;
@@ -1105,20 +974,18 @@ static void mark(cf_core *c, int i, int bad) {
     else if (!c->bad[i]) c->bad[i] = ++c->next_bad;
 }
 
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                       const fmi2Real v[]) {
-    INST(fmi2SetReal);
-    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    fmi2Status status = fmi2OK;
+cf_status cf_set_real(cf_inst *I, const unsigned *vr, size_t n, const double *v) {
+    if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
+    cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (!vr_ok(I, vr[k], T_REAL, "fmi2SetReal")) return fmi2Error;
+        if (!vr_ok(I, vr[k], T_REAL, "SetReal")) return CF_STATUS_ERROR;
         const int i = (int)vr[k];
         const cf_var *var = &CF_VARS[i];
         char r[40] = "";
         if (var->kind == K_OUTPUT || (var->kind == K_PARAMETER && I->c.built))
             py_repr(v[k], r, sizeof r); /* for the refusal's message */
         if (!settable(I, i, r)) {
-            status = fmi2Error;
+            status = CF_STATUS_ERROR;
             continue;
         }
         cf_core *C = &I->c;
@@ -1128,52 +995,45 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
         mark(C, i, bad);
         /* an input, or the tunable mu: a force element's outputs follow */
         if (var->kind == K_INPUT || (var->role == R_MU && !bad)) C->dirty = 1;
-        if (bad) { /* refused: fmi2Error, the value held (as the pythonfmu FMU) */
+        if (bad) { /* refused: an error, the value held (as the pythonfmu FMU) */
             char msg[256];
             bad_text(var, v[k], msg, sizeof msg);
-            say(I, fmi2Error, "%s; doStep answers fmi2Discard until it is corrected", msg);
-            status = fmi2Error;
+            say(I, CF_STATUS_ERROR, "%s; doStep answers %sDiscard until it is corrected", msg,
+                I->api);
+            status = CF_STATUS_ERROR;
         }
     }
     return status;
 }
 
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                          const fmi2Integer v[]) {
-    INST(fmi2SetInteger);
-    (void)v;
+cf_status cf_set_integer(cf_inst *I, const unsigned *vr, size_t n, const int *v) {
     for (size_t k = 0; k < n; k++) {
-        if (vr == NULL || !vr_ok(I, vr[k], T_INTEGER, "fmi2SetInteger")) return fmi2Error;
+        if (vr == NULL || !vr_ok(I, vr[k], T_INTEGER, "SetInteger")) return CF_STATUS_ERROR;
         char r[24];
-        snprintf(r, sizeof r, "%d", (int)v[k]);
+        snprintf(r, sizeof r, "%d", v ? v[k] : 0);
         settable(I, (int)vr[k], r); /* the only Integer is an output */
-        return fmi2Error;
+        return CF_STATUS_ERROR;
     }
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                          const fmi2Boolean v[]) {
-    INST(fmi2SetBoolean);
-    (void)v;
-    if (n == 0) return fmi2OK;
-    say(I, fmi2Error, "fmi2SetBoolean: this FMU has no Boolean variable (vr %u)",
-        vr ? (unsigned)vr[0] : 0u);
-    return fmi2Error;
+cf_status cf_set_boolean(cf_inst *I, const unsigned *vr, size_t n) {
+    if (n == 0) return CF_STATUS_OK;
+    say(I, CF_STATUS_ERROR, "%sSetBoolean: this FMU has no Boolean variable (vr %u)", I->api,
+        vr ? vr[0] : 0u);
+    return CF_STATUS_ERROR;
 }
 
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                         const fmi2String v[]) {
-    INST(fmi2SetString);
-    if (n > 0 && (vr == NULL || v == NULL)) return fmi2Error;
-    fmi2Status status = fmi2OK;
+cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n, const char *const *v) {
+    if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
+    cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (!vr_ok(I, vr[k], T_STRING, "fmi2SetString")) return fmi2Error;
+        if (!vr_ok(I, vr[k], T_STRING, "SetString")) return CF_STATUS_ERROR;
         const char *s = v[k] ? v[k] : "";
         char shown[METHOD_TEXT + 2];
         snprintf(shown, sizeof shown, "'%s'", s);
         if (!settable(I, (int)vr[k], shown)) {
-            status = fmi2Error;
+            status = CF_STATUS_ERROR;
             continue;
         }
         cf_core *C = &I->c;
@@ -1187,194 +1047,53 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
         /* RollingBody's check, at set-up in Python: here at once, the same words */
         mark(C, i, *choice < 0);
         if (*choice < 0) {
-            say(I, fmi2Error, "%s = '%s' is invalid: must be %s; doStep answers fmi2Discard "
-                "until it is corrected", CF_VARS[i].name, text, string_choices(i));
-            status = fmi2Error;
+            say(I, CF_STATUS_ERROR, "%s = '%s' is invalid: must be %s; doStep answers %sDiscard "
+                "until it is corrected", CF_VARS[i].name, text, string_choices(i), I->api);
+            status = CF_STATUS_ERROR;
         }
     }
     return status;
 }
 
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
-    INST(fmi2DoStep);
-    (void)noSetPrior;
-    return fmu_step(I, t, h);
-}
+/* ---- stepping ------------------------------------------------------------------------ */
+cf_status cf_do_step(cf_inst *I, double t, double h) { return fmu_step(I, t, h); }
 
-fmi2Status fmi2CancelStep(fmi2Component c) {
-    INST(fmi2CancelStep);
-    say(I, fmi2Error, "fmi2CancelStep: doStep runs synchronously; nothing to cancel");
-    return fmi2Error;
-}
+double cf_time(const cf_inst *I) { return I->c.time; }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *v) {
-    INST(fmi2GetStatus);
-    (void)s, (void)v;
-    say(I, fmi2Error, "fmi2GetStatus: doStep runs synchronously; no pending status");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *v) {
-    INST(fmi2GetRealStatus);
-    if (s == fmi2LastSuccessfulTime && v != NULL) {
-        *v = I->c.time;
-        return fmi2OK;
-    }
-    say(I, fmi2Error, "fmi2GetRealStatus: only fmi2LastSuccessfulTime is provided");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *v) {
-    INST(fmi2GetIntegerStatus);
-    (void)s, (void)v;
-    say(I, fmi2Error, "fmi2GetIntegerStatus: not provided");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *v) {
-    INST(fmi2GetBooleanStatus);
-    if (s == fmi2Terminated && v != NULL) {
-        *v = fmi2False; /* the FMU never ends a simulation itself */
-        return fmi2OK;
-    }
-    say(I, fmi2Error, "fmi2GetBooleanStatus: only fmi2Terminated is provided");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *v) {
-    INST(fmi2GetStringStatus);
-    (void)s, (void)v;
-    say(I, fmi2Error, "fmi2GetStringStatus: not provided");
-    return fmi2Error;
-}
-
-/* d(Tx, Ty, Mz, vx, vy)/d(vx, vy, V) of the thin-layer law without spin at (vx, vy, V),
- * V != 0, analytic: T = mu P h(beta) e, Mz = sign(V) mu P a1 g(beta) e_y with
- * e = v/|v|, beta = |v| c/|V| (Eqs. 40-43 corrected; g = beta (h - 1)/2, docs/model.md),
- * so dT = mu P (h' dbeta e + h de), de = (I - e e^T) dv/|v|, dbeta = c e.dv/|V| -
- * beta dV/V; h/|v| = (h/beta)(c/|V|) from the series below BETA_SERIES. At v = 0 the
- * limits: dT = mu P h'(0) c dv/|V|, dMz = sign(V) mu P a1 g'(0) c dvy/|V|. */
-static void law_jacobian(const cf_params *p, double vx, double vy, double V, double J[3][3]) {
-    const double muP = p->mu * p->P, c = p->beta_per_creep, aV = fabs(V);
-    const double sg = V > 0.0 ? 1.0 : -1.0, a1 = p->a1;
-    const double s = hypot(vx, vy);
-    if (s == 0.0) {
-        const double d = muP * force_fraction_slope(p, 0.0) * c / aV;
-        const double dg = -0.5; /* g'(0) = (h(0) - 1)/2 */
-        double Z[3][3] = {{d, 0.0, 0.0}, {0.0, d, 0.0}, {0.0, sg * muP * a1 * dg * c / aV, 0.0}};
-        memcpy(J, Z, sizeof Z);
-        return;
-    }
-    const double ex = vx / s, ey = vy / s, beta = s * c / aV;
-    double h = 1.0, dh = 0.0, dg = 0.0; /* g = beta (h - 1)/2 enters as g/|v| (g_s) */
-    if (beta < p->beta_full_slip) {
-        const double m = m_of(beta);
-        h = py_min((2.0 / M_PI) * H_m(beta, m), 1.0);
-        dh = slope_m(beta, m);
-        dg = 0.5 * (h - 1.0) + 0.5 * beta * dh;
-    }
-    const double per_beta = beta < p->beta_series
-        ? 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI)
-        : h / beta;
-    const double h_s = per_beta * c / aV;                       /* h/|v| */
-    const double g_s = beta < p->beta_full_slip ? 0.5 * (h - 1.0) * c / aV : 0.0; /* g/|v| */
-    const double db[3] = {c * ex / aV, c * ey / aV, -beta / V}; /* dbeta/d(vx, vy, V) */
-    const double de[2][3] = {{ey * ey, -ex * ey, 0.0}, {-ex * ey, ex * ex, 0.0}}; /* |v| de */
-    for (int k = 0; k < 3; k++) {
-        J[0][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ex + h_s * de[0][k]);
-        J[1][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ey + h_s * de[1][k]);
-        J[2][k] = sg * muP * a1 * ((dg != 0.0 ? dg * db[k] : 0.0) * ey + g_s * de[1][k]);
-    }
-}
-
-/* d(Tx, Ty, Mz)/d(vx, vy, V, phi) of what contact_outputs computes at the current
- * inputs (the law at their load in c->p), rolling (V != 0) on the thin-layer law: the
- * closed form's (law_jacobian) and, with a spin phi != 0, the march with the spin less
- * the march without it differentiated in forward mode (cf_march_jacobian), whose phi
- * column is the only one in phi. At phi = 0 the FMU computes the closed form alone, and
- * the phi column is the march's slope there (the correction's, which vanishes at 0;
- * marched only where the direction has a component in phi: need_phi). 0 where no
- * analytic form is had: standstill, the table. */
-static int contact_jacobian(Inst *I, int need_phi, double J[3][4]) {
-    const cf_core *c = &I->c;
-    const double *v = c->val, Vx = v[R_VX];
-    const double vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY], phi = v[R_OMEGA_Z];
-    if (Vx == 0.0 || CF_TABLE) return 0;
-    double L[3][3];
-    law_jacobian(&c->p, vx, vy, Vx, L);
-    for (int k = 0; k < 3; k++) {
-        for (int j = 0; j < 3; j++) J[k][j] = L[k][j];
-        J[k][3] = 0.0;
-    }
-    if (CF_CONTACT_SPIN && I->grid != NULL && (phi != 0.0 || need_phi)) {
-        const cf_strips *g = grid_at(I->grid, c, &c->p, &c->b);
-        double D[12], D0[12];
-        cf_march_jacobian(g, vx, vy, Vx, phi, D);
-        if (phi != 0.0) cf_march_jacobian(g, vx, vy, Vx, 0.0, D0);
-        for (int k = 0; k < 3; k++) {
-            J[k][3] = D[4 * k + 3];
-            if (phi != 0.0)
-                for (int j = 0; j < 3; j++) J[k][j] += D[4 * k + j] - D0[4 * k + j];
-        }
-    }
-    return 1;
-}
-
-/* the output's row of d(outputs)/d(Vx, Vy, Omega_y, Omega_z) where it is analytic (J:
- * contact_jacobian's, have: whether there is one), else 0 */
-static int analytic_row(const cf_core *c, int role, int have, const double J[3][4],
-                        double row[4]) {
-    const double Rx = c->val[R_RX];
-    int k;
-    switch (role - R_OUT) {
-    case O_TX: k = 0; break;
-    case O_TY: k = 1; break;
-    case O_MZ: k = 2; break;
-    case O_VX_SLIP: row[0] = 1.0, row[1] = 0.0, row[2] = -Rx, row[3] = 0.0; return 1;
-    case O_VY_SLIP: row[0] = 0.0, row[1] = 1.0, row[2] = 0.0, row[3] = 0.0; return 1;
-    default: return 0;
-    }
-    if (!have) return 0; /* standstill, or the table: differences */
-    /* chain rule: vx = Vx - Omega_y Rx, vy = Vy, V = Vx, phi = Omega_z */
-    row[0] = J[k][0] + J[k][2];
-    row[1] = J[k][1];
-    row[2] = -Rx * J[k][0];
-    row[3] = J[k][3];
-    return 1;
-}
-
-/* Contact mode: the directional derivative of the outputs (vUnknown) along the inputs
- * (vKnown, direction dvKnown) at the current inputs. Tx, Ty, Mz, vx, vy with respect
- * to Vx, Vy, Omega_y, Omega_z analytic (contact_jacobian); any other pair (P, the
+/* Contact mode: the directional derivative of the outputs (z) along the inputs (u,
+ * direction du) at the current inputs. Tx, Ty, Mz, vx, vy with respect to Vx, Vy,
+ * Omega_y, Omega_z analytic (cf_model_contact_jacobian); any other pair (P, the
  * creepages, the adhesion) by central differences of the outputs along the direction.
  * A derivative that is not finite (inputs near overflow) is an error, never served. */
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference zr[], size_t nz,
-                                        const fmi2ValueReference ur[], size_t nu,
-                                        const fmi2Real du[], fmi2Real dz[]) {
-    INST(fmi2GetDirectionalDerivative);
+cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
+                                    const unsigned *ur, size_t nu, const double *du,
+                                    double *dz) {
     if (CF_MODE != MODE_CONTACT) {
-        say(I, fmi2Error, "fmi2GetDirectionalDerivative: provided by the contact mode only "
-            "(providesDirectionalDerivative is false here)");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: provided by the contact mode only "
+            "(providesDirectionalDerivative is false here)", I->api);
+        return CF_STATUS_ERROR;
     }
-    if ((nz && (zr == NULL || dz == NULL)) || (nu && (ur == NULL || du == NULL))) return fmi2Error;
+    if ((nz && (zr == NULL || dz == NULL)) || (nu && (ur == NULL || du == NULL)))
+        return CF_STATUS_ERROR;
     cf_core *C = &I->c;
     if (!C->built) {
-        say(I, fmi2Error, "fmi2GetDirectionalDerivative: the model is not initialised");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: the model is not initialised",
+            I->api);
+        return CF_STATUS_ERROR;
     }
     if (C->next_bad && any_bad(C)) {
-        say(I, fmi2Error, "fmi2GetDirectionalDerivative: an input is invalid (see setReal)");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: an input is invalid (see setReal)",
+            I->api);
+        return CF_STATUS_ERROR;
     }
-    if (C->dirty && refresh(I) != fmi2OK) return fmi2Error; /* logged there */
+    if (C->dirty && refresh(I) != CF_STATUS_OK) return CF_STATUS_ERROR; /* logged there */
     int only_kin = 1; /* every known among (Vx, Vy, Omega_y, Omega_z) */
     double dir[4] = {0.0, 0.0, 0.0, 0.0};
     for (size_t j = 0; j < nu; j++) {
         if (ur[j] >= CF_N_VARS || CF_VARS[ur[j]].kind != K_INPUT || CF_VARS[ur[j]].type != T_REAL) {
-            say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
-                "input", (unsigned)ur[j]);
-            return fmi2Error;
+            say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: value reference %u is not a "
+                "Real input", I->api, ur[j]);
+            return CF_STATUS_ERROR;
         }
         const int role = CF_VARS[ur[j]].role;
         const int k = role == R_VX ? 0 : role == R_VY ? 1 : role == R_OMEGA_Y ? 2
@@ -1382,26 +1101,27 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         if (k < 0) only_kin = 0;
         else dir[k] += du[j];
         if (!isfinite(du[j])) {
-            say(I, fmi2Error, "fmi2GetDirectionalDerivative: a direction is not finite");
-            return fmi2Error;
+            say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: a direction is not finite",
+                I->api);
+            return CF_STATUS_ERROR;
         }
     }
     /* central differences along the direction for what is not analytic */
     double plus[N_OUT], minus[N_OUT], eps = 0.0, J[3][4];
-    int have_fd = 0, have_J = -1; /* -1: contact_jacobian not yet called */
+    int have_fd = 0, have_J = -1; /* -1: cf_model_contact_jacobian not yet called */
     size_t i;
     for (i = 0; i < nz; i++) {
         if (zr[i] >= CF_N_VARS || CF_VARS[zr[i]].kind != K_OUTPUT ||
             CF_VARS[zr[i]].type != T_REAL) {
-            say(I, fmi2Error, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
-                "output", (unsigned)zr[i]);
-            return fmi2Error;
+            say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: value reference %u is not a "
+                "Real output", I->api, zr[i]);
+            return CF_STATUS_ERROR;
         }
         const int role = CF_VARS[zr[i]].role;
         double row[4];
         if (only_kin && have_J < 0 && role - R_OUT <= O_MZ && role - R_OUT >= O_TX)
-            have_J = contact_jacobian(I, dir[3] != 0.0, J);
-        if (only_kin && analytic_row(C, role, have_J > 0, J, row)) {
+            have_J = cf_model_contact_jacobian(C, I->grid, dir[3] != 0.0, J);
+        if (only_kin && cf_model_analytic_row(C, role, have_J > 0, J, row)) {
             dz[i] = row[0] * dir[0] + row[1] * dir[1] + row[2] * dir[2] + row[3] * dir[3];
             if (!isfinite(dz[i])) goto not_finite;
             continue;
@@ -1421,10 +1141,10 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                                  (sgn ? -eps : eps) * du[j];
                 cf_params p = C->p;
                 cf_body b = C->b;
-                if (contact_outputs(&X, I->grid, &p, &b, sgn ? minus : plus, r, sizeof r)) {
-                    say(I, fmi2Error, "fmi2GetDirectionalDerivative: the outputs are not "
-                        "finite next to the inputs");
-                    return fmi2Error;
+                if (contact_outputs(I, &X, &p, &b, sgn ? minus : plus, r, sizeof r)) {
+                    say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: the outputs are not "
+                        "finite next to the inputs", I->api);
+                    return CF_STATUS_ERROR;
                 }
             }
             have_fd = 1;
@@ -1433,45 +1153,27 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         dz[i] = eps > 0.0 ? (plus[o] - minus[o]) / (2.0 * eps) : 0.0;
         if (!isfinite(dz[i])) goto not_finite;
     }
-    return fmi2OK;
+    return CF_STATUS_OK;
 not_finite:
-    say(I, fmi2Error, "fmi2GetDirectionalDerivative: the derivative of %s is not finite at "
-        "the current inputs", CF_VARS[zr[i]].name);
-    return fmi2Error;
-}
-
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                                       const fmi2Integer order[], const fmi2Real v[]) {
-    INST(fmi2SetRealInputDerivatives);
-    (void)vr, (void)n, (void)order, (void)v;
-    say(I, fmi2Error, "fmi2SetRealInputDerivatives: inputs are held over a step "
-        "(canInterpolateInputs is false)");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
-                                        size_t n, const fmi2Integer order[], fmi2Real v[]) {
-    INST(fmi2GetRealOutputDerivatives);
-    (void)vr, (void)n, (void)order, (void)v;
-    say(I, fmi2Error, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder "
-        "is 0)");
-    return fmi2Error;
+    say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: the derivative of %s is not finite at "
+        "the current inputs", I->api, CF_VARS[zr[i]].name);
+    return CF_STATUS_ERROR;
 }
 
 /* ---- FMU state ------------------------------------------------------------------------ */
 /* a restored core made safe: what no legal state holds is reset (constants, pointers,
  * flags); values are whatever they were (a non-finite one only makes steps decline) */
 static void sanitize(cf_core *c) {
-    set_constants(&c->p, &c->b);
-    if (c->method < -1 || c->method >= N_METHODS) c->method = -1;
+    cf_model_constants(&c->p, &c->b);
     c->method_text[METHOD_TEXT - 1] = '\0';
-    c->p.quasistationary = c->method == 1;
-    if (c->scheme < -1 || c->scheme >= N_SCHEMES) c->scheme = -1;
     c->scheme_text[METHOD_TEXT - 1] = '\0';
+    c->method = c->scheme = -1; /* the texts decide, as at setString */
+    for (int m = 0; m < N_METHODS; m++)
+        if (strcmp(c->method_text, METHOD_NAMES[m]) == 0) c->method = m;
+    for (int m = 0; m < N_SCHEMES; m++)
+        if (strcmp(c->scheme_text, SCHEME_NAMES[m]) == 0) c->scheme = m;
+    c->p.quasistationary = c->method == 1;
     c->p.sdirk = c->scheme == 1;
-    c->built = c->built != 0;
-    c->dirty = c->dirty != 0;
-    if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED) c->phase = PH_STEP;
     c->s.out_sliding = c->s.out_sliding != 0;
     c->s.sliding = c->s.sliding != 0;
     c->vs.out_sliding = c->vs.out_sliding != 0;
@@ -1486,9 +1188,99 @@ static void sanitize(cf_core *c) {
     c->next_bad = top;
 }
 
+/* the same double, NaN included (a state holds what the setter stored) */
+static int same_double(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* all n doubles finite */
+static int all_finite(const double *x, size_t n) {
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(x[i])) return 0;
+    return 1;
+}
+
+/* Why a sanitized core is not a state this FMU could have reached, in the words of the
+ * pythonfmu FMU's check (slave._apply_state), or NULL: its phase and flags, every value
+ * against its declared range with the record of the values held bad (the setters'
+ * check, requirement), the outputs and the model's state finite. A state's envelope
+ * (length, checksum) says nothing of its content: bytes made elsewhere can be intact. */
+static const char *state_problem(const cf_core *c, char *why, size_t n) {
+    char r[40];
+    if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED || (c->built != 0) != c->built ||
+        (c->dirty != 0) != c->dirty || (c->init_tried != 0) != c->init_tried ||
+        (c->built && !c->init_tried)) {
+        snprintf(why, n, "its phase and flags (%d, %d, %d, %d) are not this FMU's", c->phase,
+                 c->built, c->dirty, c->init_tried);
+        return why;
+    }
+    if (!isfinite(c->time)) {
+        py_repr(c->time, r, sizeof r);
+        snprintf(why, n, "its time %s is not a finite float", r);
+        return why;
+    }
+    for (int i = 0; i < CF_N_VARS; i++) {
+        const cf_var *v = &CF_VARS[i];
+        if (v->kind == K_OUTPUT) {
+            if (c->bad[i] || !isfinite(c->var[i])) {
+                py_repr(c->var[i], r, sizeof r);
+                snprintf(why, n, "its output %s = %s is not a finite float", v->name, r);
+                return why;
+            }
+            continue;
+        }
+        int bad;
+        char one[256];
+        if (v->type == T_STRING) {
+            bad = (is_scheme(i) ? c->scheme : c->method) < 0;
+            snprintf(one, sizeof one, "%s = '%s'", v->name, string_text(c, i));
+        } else {
+            if (v->role < R_COUNT && !same_double(c->val[v->role], c->var[i])) {
+                snprintf(why, n, "its values of %s disagree", v->name);
+                return why;
+            }
+            bad = requirement(v, c->var[i]) != NULL;
+            if (bad) bad_text(v, c->var[i], one, sizeof one);
+            else {
+                py_repr(c->var[i], r, sizeof r);
+                snprintf(one, sizeof one, "%s = %s", v->name, r);
+            }
+        }
+        if (bad != (c->bad[i] != 0)) {
+            snprintf(why, n, "its record of invalid values does not match its values (%s, "
+                     "recorded as %s)", one, c->bad[i] ? "invalid" : "valid");
+            return why;
+        }
+        if (bad && c->built && v->kind == K_PARAMETER && v->role != R_MU) {
+            snprintf(why, n, "its model's parameters differ from its values or are invalid "
+                     "(%s)", one);
+            return why;
+        }
+    }
+    if (c->built) { /* the model's state: what its steps and outputs read */
+        const cf_params *p = &c->p;
+        const double law[] = {p->mu, p->P, p->a1, p->creep_full_slip, p->beta_per_creep,
+                              p->M, p->Rx, p->A1, p->A2, p->m_slip, p->c, p->xi_ref,
+                              p->phi_ref, c->b.a2, c->b.p0, c->b.h_max, c->P_law};
+        const double body[] = {c->s.Vx, c->s.vx, c->s.t, c->s.dv, c->s.Tx, c->s.Ty, c->s.Mz,
+                               c->vs.Vx, c->vs.vx, c->vs.Vy, c->vs.Oz, c->vs.t, c->vs.dv,
+                               c->vs.Tx, c->vs.Ty, c->vs.Mz, c->vs.jac_h, c->rb_Vx,
+                               c->rb_Omega_y};
+        const int body_ok = CF_MODE != MODE_BODY ||
+                            (all_finite(body, 7) && (!CF_VECTOR || all_finite(body + 7, 9)));
+        const int rigid_ok = CF_MODE != MODE_RIGID || all_finite(body + 17, 2);
+        const int law_ok = CF_MODE == MODE_RIGID || all_finite(law, CF_MODE == MODE_BODY ? 17 : 13);
+        const int jac_ok = !(CF_MODE == MODE_BODY && CF_VECTOR && c->vs.jac_valid) ||
+                           (isfinite(c->vs.jac_h) && all_finite(c->vs.J, 36));
+        if (!(body_ok && rigid_ok && law_ok && jac_ok && all_finite(c->b.out, N_OUT))) {
+            snprintf(why, n, "its model state cannot be restored (it is not finite)");
+            return why;
+        }
+    }
+    return NULL;
+}
+
 /* The live states: FMI 2.0 forbids passing back a freed state or one of another
  * instance, but a pointer that is not a live state of this instance is refused
- * (fmi2Error, the pythonfmu FMU's words: pythonfmu_shim.c) instead of being read. The
+ * (an error, the pythonfmu FMU's words: pythonfmu_shim.c) instead of being read. The
  * pointer alone is looked up (a freed or foreign one cannot be dereferenced), in a hash
  * set: get, set and free stay O(1) with thousands of states held. */
 static size_t slot_of(const Inst *I, const void *st) {
@@ -1515,14 +1307,14 @@ static void put(Inst *I, cf_core *st) { /* room known to be there */
 static int keep(Inst *I, cf_core *st) {
     if (2 * (I->n_states + 1) > I->cap_states) {
         size_t cap = I->cap_states ? 2 * I->cap_states : 16, old = I->cap_states;
-        cf_core **grown = (cf_core **)I->cb.allocateMemory(cap, sizeof *grown);
+        cf_core **grown = (cf_core **)I->cb.alloc(I->env, cap, sizeof *grown);
         if (grown == NULL) return 0;
         memset(grown, 0, cap * sizeof *grown);
         cf_core **was = I->states;
         I->states = grown, I->cap_states = cap, I->n_states = 0;
         for (size_t i = 0; i < old; i++)
             if (was[i]) put(I, was[i]);
-        if (was) I->cb.freeMemory(was);
+        if (was) I->cb.release(I->env, was);
     }
     put(I, st);
     return 1;
@@ -1545,61 +1337,65 @@ static void forget(Inst *I, const void *st) { /* linear probing's backward-shift
 
 static int live_or_refuse(const Inst *I, const void *st, const char *call) {
     if (live(I, st)) return 1;
-    say(I, fmi2Error, "%s: %p is not an FMU state of this instance (never given, or freed)",
-        call, st);
+    say(I, CF_STATUS_ERROR, "%s%s: %p is not an FMU state of this instance (never given, or "
+        "freed)", I->api, call, (void *)(uintptr_t)st);
     return 0;
 }
 
 /* *state: NULL for a new state, else a live one to overwrite (FMI 2.0); NULL if out of
  * memory or refused (logged) */
-static cf_core *state_to_fill(Inst *I, fmi2FMUstate *state, const char *call) {
+static cf_core *state_to_fill(Inst *I, void **state, const char *call) {
     if (*state != NULL) return live_or_refuse(I, *state, call) ? (cf_core *)*state : NULL;
-    cf_core *s = (cf_core *)I->cb.allocateMemory(1, sizeof(cf_core));
+    cf_core *s = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core));
     if (s != NULL && keep(I, s)) return s;
-    if (s != NULL) I->cb.freeMemory(s);
-    say(I, fmi2Error, "%s: out of memory", call);
+    if (s != NULL) I->cb.release(I->env, s);
+    say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call);
     return NULL;
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    INST(fmi2GetFMUstate);
+cf_status cf_get_state(cf_inst *I, void **state) {
     if (state == NULL) {
-        say(I, fmi2Error, "fmi2GetFMUstate: no place for the state given");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sGetFMUstate: no place for the state given", I->api);
+        return CF_STATUS_ERROR;
     }
-    cf_core *s = state_to_fill(I, state, "fmi2GetFMUstate");
-    if (s == NULL) return fmi2Error;
+    cf_core *s = state_to_fill(I, state, "GetFMUstate");
+    if (s == NULL) return CF_STATUS_ERROR;
     *s = I->c;
     *state = s;
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
-    INST(fmi2SetFMUstate);
+cf_status cf_set_state(cf_inst *I, const void *state) {
     if (state == NULL) {
-        say(I, fmi2Error, "fmi2SetFMUstate: no state given");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sSetFMUstate: no state given", I->api);
+        return CF_STATUS_ERROR;
     }
-    if (!live_or_refuse(I, state, "fmi2SetFMUstate")) return fmi2Error;
-    I->c = *(const cf_core *)state;
-    sanitize(&I->c);
-    attach_table(I, &I->c.p);
+    if (!live_or_refuse(I, state, "SetFMUstate")) return CF_STATUS_ERROR;
+    cf_core c = *(const cf_core *)state;
+    sanitize(&c);
+    char why[512];
+    if (state_problem(&c, why, sizeof why)) { /* slave._set_fmu_state's words */
+        say(I, CF_STATUS_ERROR, "the FMU state given to setFMUstate is refused: %s; the "
+            "instance's state is unchanged", why);
+        return CF_STATUS_ERROR;
+    }
+    I->c = c;
+    cf_model_attach_table(I->table, &I->c.p);
     if (CF_VECTOR && I->c.built) ensure_grid(I, &I->c.p, &I->c.b, &I->c.p); /* its load's */
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    INST(fmi2FreeFMUstate);
+cf_status cf_free_state(cf_inst *I, void **state) {
     if (state == NULL) {
-        say(I, fmi2Error, "fmi2FreeFMUstate: no state given");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sFreeFMUstate: no state given", I->api);
+        return CF_STATUS_ERROR;
     }
-    if (*state == NULL) return fmi2OK; /* the standard: nothing to free */
-    if (!live_or_refuse(I, *state, "fmi2FreeFMUstate")) return fmi2Error;
+    if (*state == NULL) return CF_STATUS_OK; /* the standard: nothing to free */
+    if (!live_or_refuse(I, *state, "FreeFMUstate")) return CF_STATUS_ERROR;
     forget(I, *state);
-    I->cb.freeMemory(*state);
+    I->cb.release(I->env, *state);
     *state = NULL;
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
 /* serialized: MAGIC, format version (u32), GUID length (u32), GUID, payload length
@@ -1617,27 +1413,24 @@ static size_t serialized_size(void) {
     return sizeof MAGIC + 4 + 4 + strlen(CF_GUID) + 8 + sizeof(cf_core) + 8;
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
-    INST(fmi2SerializedFMUstateSize);
+cf_status cf_serialized_size(cf_inst *I, const void *state, size_t *size) {
     if (size == NULL) {
-        say(I, fmi2Error, "fmi2SerializedFMUstateSize: no place for the size given");
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sSerializedFMUstateSize: no place for the size given", I->api);
+        return CF_STATUS_ERROR;
     }
-    if (!live_or_refuse(I, state, "fmi2SerializedFMUstateSize")) return fmi2Error;
+    if (!live_or_refuse(I, state, "SerializedFMUstateSize")) return CF_STATUS_ERROR;
     *size = serialized_size();
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte out[],
-                                 size_t size) {
-    INST(fmi2SerializeFMUstate);
-    if (!live_or_refuse(I, state, "fmi2SerializeFMUstate")) return fmi2Error;
+cf_status cf_serialize(cf_inst *I, const void *state, unsigned char *out, size_t size) {
+    if (!live_or_refuse(I, state, "SerializeFMUstate")) return CF_STATUS_ERROR;
     if (out == NULL || size < serialized_size()) {
-        say(I, fmi2Error, "fmi2SerializeFMUstate: no buffer, or one of %zu bytes (%zu "
-            "needed)", size, serialized_size());
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sSerializeFMUstate: no buffer, or one of %zu bytes (%zu "
+            "needed)", I->api, size, serialized_size());
+        return CF_STATUS_ERROR;
     }
-    unsigned char *p = (unsigned char *)out;
+    unsigned char *p = out;
     const uint32_t version = STATE_VERSION, glen = (uint32_t)strlen(CF_GUID);
     const uint64_t plen = sizeof(cf_core);
     size_t k = 0;
@@ -1649,13 +1442,11 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte o
     memcpy(p + k, state, sizeof(cf_core)), k += sizeof(cf_core);
     const uint64_t sum = fnv1a(p, k);
     memcpy(p + k, &sum, 8);
-    return fmi2OK;
+    return CF_STATUS_OK;
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte in[], size_t size,
-                                   fmi2FMUstate *state) {
-    INST(fmi2DeSerializeFMUstate);
-    const unsigned char *p = (const unsigned char *)in;
+cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void **state) {
+    const unsigned char *p = in;
     const char *why = NULL;
     uint32_t version = 0, glen = 0;
     uint64_t plen = 0, sum = 0;
@@ -1680,13 +1471,21 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte in[], size_t 
         }
     }
     if (why != NULL) {
-        say(I, fmi2Error, "fmi2DeSerializeFMUstate: the bytes are refused: %s", why);
-        return fmi2Error;
+        say(I, CF_STATUS_ERROR, "%sDeSerializeFMUstate: the bytes are refused: %s", I->api, why);
+        return CF_STATUS_ERROR;
     }
-    cf_core *s = state_to_fill(I, state, "fmi2DeSerializeFMUstate");
-    if (s == NULL) return fmi2Error;
-    memcpy(s, p + 16 + glen + 8, sizeof(cf_core));
-    sanitize(s);
+    cf_core c;
+    memcpy(&c, p + 16 + glen + 8, sizeof(cf_core));
+    sanitize(&c);
+    char problem[512];
+    if (state_problem(&c, problem, sizeof problem)) {
+        say(I, CF_STATUS_ERROR, "%sDeSerializeFMUstate: the bytes are refused: %s", I->api,
+            problem);
+        return CF_STATUS_ERROR;
+    }
+    cf_core *s = state_to_fill(I, state, "DeSerializeFMUstate");
+    if (s == NULL) return CF_STATUS_ERROR;
+    *s = c;
     *state = s;
-    return fmi2OK;
+    return CF_STATUS_OK;
 }

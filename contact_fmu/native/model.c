@@ -1,0 +1,241 @@
+/* The native FMU's model numerics outside the kernel (stepper.c): the constants of the
+ * Python integrator and the law at a load into the kernel's parameters, the contact
+ * mode's outputs (fmu/contact_model.py: the thin-layer law's closed form, with a spin
+ * input by the strip march on the law's spin grid, or the creep-force table), the
+ * rigid_body mode's step (fmu/rigid_body.py) and the contact mode's analytic directional
+ * derivatives. No FMI here and no message: the instance layer (instance.c) checks,
+ * words and commits. */
+#include <string.h>
+
+#include "model.h"
+
+/* Python's max(x, c) for a constant c: x unless c is strictly larger */
+static double py_max(double x, double c) { return c > x ? c : x; }
+
+/* the creep-force table's arrays into p (after cf_model_constants) */
+void cf_model_attach_table(const double *table, cf_params *p) {
+    if (!CF_TABLE || table == NULL) return;
+    p->ax1 = table;
+    p->ax2 = p->ax1 + CF_T_N1;
+    p->ax3 = p->ax2 + CF_T_N2;
+    p->coef = p->ax3 + CF_T_N3;
+    p->n1 = CF_T_N1, p->n2 = CF_T_N2, p->n3 = CF_T_N3;
+    p->ext1 = p->ax1[CF_T_N1 - 1], p->ext2 = p->ax2[CF_T_N2 - 1], p->ext3 = p->ax3[CF_T_N3 - 1];
+}
+
+void cf_model_constants(cf_params *p, cf_body *b) {
+    p->v_standstill = CF_V_STANDSTILL;
+    p->v_scale_floor = CF_V_SCALE_FLOOR;
+    p->z_algebraic = CF_Z_ALGEBRAIC;
+    p->capacity_margin = CF_CAPACITY_MARGIN;
+    p->solve_rtol = CF_SOLVE_RTOL;
+    p->expand = CF_EXPAND;
+    p->max_newton = CF_MAX_NEWTON;
+    p->beta_full_slip = CF_BETA_FULL_SLIP;
+    p->beta_series = CF_BETA_SERIES;
+    p->fd_step = CF_FD_STEP;
+    p->line_search_min = CF_LINE_SEARCH_MIN;
+    p->contraction_max = CF_CONTRACTION_MAX;
+    p->contraction_fast = CF_CONTRACTION_FAST;
+    p->newton_iterations = CF_NEWTON_ITERATIONS;
+    p->algebraic_key = CF_ALGEBRAIC_KEY;
+    p->bracket = 1; /* a stage Newton cannot close: bracket and brentq, as Python does */
+    p->max_expansions = CF_MAX_EXPANSIONS;
+    p->gamma = CF_GAMMA;
+    p->law = CF_TABLE ? LAW_TABLE : LAW_LAYER;
+    p->saturation_width = CF_SAT_WIDTH;
+    p->coef = p->ax1 = p->ax2 = p->ax3 = NULL; /* the table's: cf_model_attach_table */
+    p->strips = NULL;
+    p->dyn_vy = p->dyn_spin = 0;
+    p->rz = 0.0;
+    p->Iz = 0.0;
+    b->v_creep_floor = CF_V_CREEP_FLOOR;
+    b->substep_slack = CF_SUBSTEP_SLACK;
+    b->max_substeps = CF_MAX_SUBSTEPS;
+}
+
+/* the law at load P into p and b (its reported a2, p0) */
+void cf_model_law_at_load(const cf_core *c, double P, cf_params *p, cf_body *b) {
+    const double *v = c->val;
+    if (CF_TABLE) { /* the table's coefficients do not depend on P (one load node) */
+        cf_table_law(p, P, v[R_MU], CF_T_KFAC, CF_T_M, CF_T_AMIN, CF_T_A_LE_B, CF_T_ESTAR,
+                     CF_T_G, CF_T_ONSET, &b->a2, &b->p0);
+        return;
+    }
+    cf_layer_law(p, P, v[R_RX], v[R_RY], v[R_K1], v[R_K2], v[R_KB], v[R_KS], v[R_MU], &b->a2,
+                 &b->p0);
+}
+
+/* the spin grid g for the law at its load (p, b: a1, a2, p0 there) with the parameters
+ * of c (mu, kb + ks), built unless it is already for these */
+const cf_strips *cf_model_grid(spin_grid *g, const cf_core *c, const cf_params *law,
+                               const cf_body *b) {
+    const double *v = c->val;
+    const double key[5] = {law->a1, b->a2, b->p0, v[R_MU], v[R_KB] + v[R_KS]};
+    int same = 1;
+    for (int k = 0; k < 5; k++) same = same && g->key[k] == key[k];
+    if (!same) {
+        cf_grid_build(&g->strips, g->x, g->y, g->dist, g->mid, g->cap, g->w, g->inside,
+                      CF_SPIN_NX, CF_SPIN_NY, key[0], key[1], key[2], key[3], key[4], CF_TINY);
+        memcpy(g->key, key, sizeof key);
+    }
+    return &g->strips;
+}
+
+/* LayerContact.forces for one input with spin phi != 0 on the spin grid g: rolling,
+ * cf_layer_forces (the closed form plus the march with the spin less the march without
+ * it); at standstill the same with the sliding field (cf_march_standstill), as numpy. */
+static void spin_forces(const cf_params *p, const cf_strips *g, double vx, double vy,
+                        double phi, double Vx, double T[3]) {
+    if (Vx != 0.0) {
+        cf_layer_forces(p, g, 1, &vx, &vy, &phi, &Vx, T); /* NaN for a non-finite input */
+        return;
+    }
+    double with[3], without[3];
+    cf_law_forces(p, vx, vy, Vx, T);
+    cf_march_standstill(g, vx, vy, phi, with);
+    cf_march_standstill(g, vx, vy, 0.0, without);
+    for (int k = 0; k < 3; k++) T[k] += with[k] - without[k];
+}
+
+/* ContactElement.evaluate: the law at the inputs' load and kinematics, rigid slip of
+ * Eq. (3) at the contact centre (kinematics.rigid_slip), the forces (the closed form,
+ * LayerContact._forces_scalar, or with a spin input Omega_z != 0 LayerContact.forces
+ * by the strip march on the spin grid g, built here for the load) and
+ * kinematics.contact_quantities; p and b hold the law at the load afterwards. The index
+ * into out of the first output served that is not finite (cf_first_nonfinite), or -1. */
+int cf_model_contact_outputs(const cf_core *c, spin_grid *g, cf_params *p, cf_body *b,
+                             double out[N_OUT], unsigned long served) {
+    const double *v = c->val;
+    if (v[R_P] != p->P || v[R_MU] != p->mu) cf_model_law_at_load(c, v[R_P], p, b); /* mu: tunable */
+    const double Vx = v[R_VX], vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY];
+    const double Omega_z = v[R_OMEGA_Z];
+    double T[3], tab[4];
+    const cf_strips *grid = NULL;
+    if (CF_TABLE) {
+        cf_table_forces(p, vx, vy, Omega_z, Vx, tab); /* CreepTable._scalar, spin included */
+        T[0] = tab[0], T[1] = tab[1], T[2] = tab[2];
+    } else if (CF_CONTACT_SPIN && Omega_z != 0.0 && g != NULL) {
+        grid = cf_model_grid(g, c, p, b);
+        spin_forces(p, grid, vx, vy, Omega_z, Vx, T);
+    } else {
+        cf_law_forces(p, vx, vy, Vx, T);
+    }
+    for (int i = 0; i < N_OUT; i++) out[i] = 0.0;
+    out[O_TX] = T[0], out[O_TY] = T[1], out[O_MZ] = T[2];
+    out[O_VX_SLIP] = vx, out[O_VY_SLIP] = vy;
+    const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
+    out[O_XI_X] = vx / V, out[O_XI_Y] = vy / V, out[O_XI_SP] = Omega_z / V;
+    out[O_A1] = p->a1, out[O_A2] = b->a2, out[O_P0] = b->p0;
+    out[O_ADHESION] = CF_TABLE ? tab[3]
+                      : grid ? cf_spin_adhesion(grid, vx, vy, Vx, Omega_z, g->tau, g->slip,
+                                                g->inside)
+                             : cf_adhesion_fraction(p, vx, vy, Vx);
+    /* with spin the creepage alone does not tell gross sliding: no adhesion area left
+     * does (ContactElement.evaluate) */
+    out[O_REGIME] = (Omega_z != 0.0 ? !(out[O_ADHESION] > 0.0) : cf_full_slip(p, vx, vy, Vx))
+                        ? 1.0 : 0.0;
+    return cf_first_nonfinite(out, served);
+}
+
+/* RigidBody.step (rigid_body.py): Eqs. (8)-(9) under held inputs, exact: Vx += h (Fx_ex
+ * - Tx)/M, Omega_y += h (My_ex + Rx Tx)/Iy, into out (the other outputs 0) */
+void cf_model_rigid_step(const cf_core *c, double h, double out[N_OUT]) {
+    const double *v = c->val;
+    const double Tx = v[R_TX];
+    for (int i = 0; i < N_OUT; i++) out[i] = 0.0;
+    out[O_VX] = c->rb_Vx + h * (v[R_FX_EX] - Tx) / v[R_M];
+    out[O_OMEGA_Y] = c->rb_Omega_y + h * (v[R_MY_EX] + v[R_RX] * Tx) / v[R_IY];
+}
+
+/* d(Tx, Ty, Mz, vx, vy)/d(vx, vy, V) of the thin-layer law without spin at (vx, vy, V),
+ * V != 0, analytic: T = mu P h(beta) e, Mz = sign(V) mu P a1 g(beta) e_y with
+ * e = v/|v|, beta = |v| c/|V| (Eqs. 40-43 corrected; g = beta (h - 1)/2, docs/model.md),
+ * so dT = mu P (h' dbeta e + h de), de = (I - e e^T) dv/|v|, dbeta = c e.dv/|V| -
+ * beta dV/V; h/|v| = (h/beta)(c/|V|) from the series below BETA_SERIES. At v = 0 the
+ * limits: dT = mu P h'(0) c dv/|V|, dMz = sign(V) mu P a1 g'(0) c dvy/|V|. */
+static void law_jacobian(const cf_params *p, double vx, double vy, double V, double J[3][3]) {
+    const double muP = p->mu * p->P, c = p->beta_per_creep, aV = fabs(V);
+    const double sg = V > 0.0 ? 1.0 : -1.0, a1 = p->a1;
+    const double s = hypot(vx, vy);
+    if (s == 0.0) {
+        const double d = muP * cf_force_fraction_slope(p, 0.0) * c / aV;
+        const double dg = -0.5; /* g'(0) = (h(0) - 1)/2 */
+        double Z[3][3] = {{d, 0.0, 0.0}, {0.0, d, 0.0}, {0.0, sg * muP * a1 * dg * c / aV, 0.0}};
+        memcpy(J, Z, sizeof Z);
+        return;
+    }
+    const double ex = vx / s, ey = vy / s, beta = s * c / aV;
+    double h = 1.0, dh = 0.0, dg = 0.0; /* g = beta (h - 1)/2 enters as g/|v| (g_s) */
+    if (beta < p->beta_full_slip) {
+        h = cf_force_fraction(p, beta);
+        dh = cf_force_fraction_slope(p, beta);
+        dg = 0.5 * (h - 1.0) + 0.5 * beta * dh;
+    }
+    const double per_beta = beta < p->beta_series
+        ? 16.0 / (3.0 * M_PI) - beta + 2.0 * beta * beta / (3.0 * M_PI)
+        : h / beta;
+    const double h_s = per_beta * c / aV;                       /* h/|v| */
+    const double g_s = beta < p->beta_full_slip ? 0.5 * (h - 1.0) * c / aV : 0.0; /* g/|v| */
+    const double db[3] = {c * ex / aV, c * ey / aV, -beta / V}; /* dbeta/d(vx, vy, V) */
+    const double de[2][3] = {{ey * ey, -ex * ey, 0.0}, {-ex * ey, ex * ex, 0.0}}; /* |v| de */
+    for (int k = 0; k < 3; k++) {
+        J[0][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ex + h_s * de[0][k]);
+        J[1][k] = muP * ((dh != 0.0 ? dh * db[k] : 0.0) * ey + h_s * de[1][k]);
+        J[2][k] = sg * muP * a1 * ((dg != 0.0 ? dg * db[k] : 0.0) * ey + g_s * de[1][k]);
+    }
+}
+
+/* d(Tx, Ty, Mz)/d(vx, vy, V, phi) of what cf_model_contact_outputs computes at the current
+ * inputs (the law at their load in c->p), rolling (V != 0) on the thin-layer law: the
+ * closed form's (law_jacobian) and, with a spin phi != 0, the march with the spin less
+ * the march without it differentiated in forward mode (cf_march_jacobian), whose phi
+ * column is the only one in phi. At phi = 0 the FMU computes the closed form alone, and
+ * the phi column is the march's slope there (the correction's, which vanishes at 0;
+ * marched only where the direction has a component in phi: need_phi). 0 where no
+ * analytic form is had: standstill, the table. */
+int cf_model_contact_jacobian(const cf_core *c, spin_grid *grid, int need_phi, double J[3][4]) {
+    const double *v = c->val, Vx = v[R_VX];
+    const double vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY], phi = v[R_OMEGA_Z];
+    if (Vx == 0.0 || CF_TABLE) return 0;
+    double L[3][3];
+    law_jacobian(&c->p, vx, vy, Vx, L);
+    for (int k = 0; k < 3; k++) {
+        for (int j = 0; j < 3; j++) J[k][j] = L[k][j];
+        J[k][3] = 0.0;
+    }
+    if (CF_CONTACT_SPIN && grid != NULL && (phi != 0.0 || need_phi)) {
+        const cf_strips *g = cf_model_grid(grid, c, &c->p, &c->b);
+        double D[12], D0[12];
+        cf_march_jacobian(g, vx, vy, Vx, phi, D);
+        if (phi != 0.0) cf_march_jacobian(g, vx, vy, Vx, 0.0, D0);
+        for (int k = 0; k < 3; k++) {
+            J[k][3] = D[4 * k + 3];
+            if (phi != 0.0)
+                for (int j = 0; j < 3; j++) J[k][j] += D[4 * k + j] - D0[4 * k + j];
+        }
+    }
+    return 1;
+}
+
+/* the output's row of d(outputs)/d(Vx, Vy, Omega_y, Omega_z) where it is analytic (J:
+ * cf_model_contact_jacobian's, have: whether there is one), else 0 */
+int cf_model_analytic_row(const cf_core *c, int role, int have, double J[3][4], double row[4]) {
+    const double Rx = c->val[R_RX];
+    int k;
+    switch (role - R_OUT) {
+    case O_TX: k = 0; break;
+    case O_TY: k = 1; break;
+    case O_MZ: k = 2; break;
+    case O_VX_SLIP: row[0] = 1.0, row[1] = 0.0, row[2] = -Rx, row[3] = 0.0; return 1;
+    case O_VY_SLIP: row[0] = 0.0, row[1] = 1.0, row[2] = 0.0, row[3] = 0.0; return 1;
+    default: return 0;
+    }
+    if (!have) return 0; /* standstill, or the table: differences */
+    /* chain rule: vx = Vx - Omega_y Rx, vy = Vy, V = Vx, phi = Omega_z */
+    row[0] = J[k][0] + J[k][2];
+    row[1] = J[k][1];
+    row[2] = -Rx * J[k][0];
+    row[3] = J[k][3];
+    return 1;
+}

@@ -1,0 +1,106 @@
+/* The native FMU's model, shared by the instance layer (instance.c) and the model's
+ * numerics (model.c): the variables of the generated cf_model.h (from
+ * contact_fmu/fmu/variables.py) by role, the instance's core (everything an FMU state
+ * holds) and the spin grid, and the model functions model.c defines. Not an interface
+ * of the FMU: neither fmi2.c nor an FMI 3.0 front end includes it (they see instance.h).
+ * Every function here is CF_HIDDEN: the library exports the fmi2* functions only. */
+#ifndef CF_MODEL_H_INTERNAL
+#define CF_MODEL_H_INTERNAL
+
+#include "stepper.h"
+
+/* ---- the variables (cf_model.h, generated from variables.py) ---------------------- */
+enum { K_PARAMETER, K_INPUT, K_OUTPUT };
+enum { T_REAL, T_INTEGER, T_STRING };
+
+/* the parameters and inputs the model reads, by role */
+enum {
+    R_MU, R_RX, R_RY, R_K1, R_K2, R_KB, R_KS, R_M, R_IY, R_VY_RATIO, R_VX0, R_SLIP0,
+    R_H_MAX, R_METHOD, R_P, R_FX_EX, R_MY_EX,
+    R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
+    R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
+    R_SCHEME, /* the integrator's scheme (a String, as R_METHOD) */
+    R_COUNT
+};
+/* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
+enum { MODE_BODY, MODE_CONTACT, MODE_RIGID };
+#define R_OUT 1000 /* outputs: R_OUT + the index in cf_body.out */
+
+typedef struct {
+    const char *name;
+    int kind, type, role;
+    double start;
+    double lo, hi;             /* declared range (-inf, inf where none) */
+    int open_lo;               /* lo itself excluded */
+    const char *lo_req, *hi_req; /* Var.check's requirement texts: "> 0", "<= 1" */
+    double fix;                  /* a value the build fixes (ModelConfig.fixed) ... */
+    const char *fix_req;         /* ... and the requirement text, or NULL */
+} cf_var;
+
+#include "cf_model.h"
+
+#define METHOD_TEXT 64
+
+/* ---- the instance's core ------------------------------------------------------------ */
+enum { PH_INSTANTIATED, PH_INIT, PH_STEP, PH_TERMINATED };
+
+/* Everything an FMU state holds: plain data, no pointer that is not NULL. */
+typedef struct {
+    double val[R_COUNT];          /* parameters and inputs by role */
+    double var[CF_N_VARS];        /* every Real/Integer variable's value, by vr */
+    unsigned bad[CF_N_VARS];      /* 0, or the order in which the value became bad */
+    unsigned next_bad;
+    int method;                   /* index into METHOD_NAMES, -1: not a method */
+    char method_text[METHOD_TEXT]; /* the string set (cut at METHOD_TEXT - 1) */
+    int scheme;                   /* index into SCHEME_NAMES, -1: not a scheme */
+    char scheme_text[METHOD_TEXT]; /* the string set, as method_text */
+    double time;
+    int phase, built;
+    int init_tried;               /* fmi2ExitInitializationMode was called */
+    int dirty;                    /* contact mode: inputs set since the outputs */
+    double rb_Vx, rb_Omega_y;     /* rigid_body mode's state */
+    cf_vstate vs;                 /* body mode with Vy and/or Omega_z as unknowns */
+    double P_law;                 /* the load the law's constants are for */
+    cf_params p;
+    cf_state s;
+    cf_body b;
+} cf_core;
+
+/* the spin grid of the vector path and of the contact mode's spin input (layer._Grid of
+ * SPIN_GRID): a function of the law at its load (a1, a2, p0, mu, kb + ks), rebuilt when
+ * one of them changes (a new load, a tuned mu, a reset), not part of the FMU state */
+#define GRID_N (CF_SPIN_NX * CF_SPIN_NY)
+#define CF_GRID ((CF_VECTOR || CF_CONTACT_SPIN) && !CF_TABLE)
+typedef struct {
+    double key[5];                /* the law it is for: a1, a2, p0, mu, k (NaN: none yet) */
+    cf_strips strips;
+    double x[CF_SPIN_NX], y[CF_SPIN_NY], dist[GRID_N], mid[GRID_N], cap[GRID_N], w[GRID_N];
+    unsigned char inside[GRID_N];
+    double tau[2 * GRID_N];       /* scratch of the adhesion's march */
+    unsigned char slip[GRID_N];
+} spin_grid;
+
+/* ---- the model's numerics (model.c) -------------------------------------------------- */
+/* the Python integrator's constants into p and b (cf_model.h) */
+CF_HIDDEN void cf_model_constants(cf_params *p, cf_body *b);
+/* the creep-force table's arrays (table: axes then patch coefficients) into p */
+CF_HIDDEN void cf_model_attach_table(const double *table, cf_params *p);
+/* the law at load P into p and b (its reported a2, p0) */
+CF_HIDDEN void cf_model_law_at_load(const cf_core *c, double P, cf_params *p, cf_body *b);
+/* the spin grid g for the law at its load, built unless it is already for it */
+CF_HIDDEN const cf_strips *cf_model_grid(spin_grid *g, const cf_core *c, const cf_params *law,
+                                         const cf_body *b);
+/* the contact mode's outputs at c's inputs into out; -1, or the index into out of the
+ * first output served (a bit per index) that is not finite */
+CF_HIDDEN int cf_model_contact_outputs(const cf_core *c, spin_grid *g, cf_params *p, cf_body *b,
+                                       double out[N_OUT], unsigned long served);
+/* the rigid body's step of h under the held inputs into out (Vx, Omega_y; others 0) */
+CF_HIDDEN void cf_model_rigid_step(const cf_core *c, double h, double out[N_OUT]);
+/* d(Tx, Ty, Mz)/d(vx, vy, V, phi) at c's inputs, analytic; 0 where there is none */
+CF_HIDDEN int cf_model_contact_jacobian(const cf_core *c, spin_grid *g, int need_phi,
+                                        double J[3][4]);
+/* an output's row of d(outputs)/d(Vx, Vy, Omega_y, Omega_z) where analytic, else 0 */
+CF_HIDDEN int cf_model_analytic_row(const cf_core *c, int role, int have, double J[3][4],
+                                    double row[4]);
+
+#endif
