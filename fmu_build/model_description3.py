@@ -144,10 +144,10 @@ def model_description(cfg: ModelConfig, identifier: str, token: str) -> bytes:
 
 def build_description(identifier: str, source: str) -> bytes:
     """sources/buildDescription.xml (FMI 3.0): one source file (fmi3.c, which includes the
-    others), C99, linked with the C library's math library."""
+    others), C11, linked with the C library's math library."""
     root = ET.Element("fmiBuildDescription", fmiVersion="3.0")
     config = ET.SubElement(root, "BuildConfiguration", modelIdentifier=identifier)
-    files = ET.SubElement(config, "SourceFileSet", language="C99")
+    files = ET.SubElement(config, "SourceFileSet", language="C11")
     ET.SubElement(files, "SourceFile", name=source)
     ET.SubElement(
         config, "Library", name="m", external="true", description="the C math library (libm)"

@@ -550,6 +550,31 @@ def test_a_c_importer_without_python_runs_fig13_to_the_fmi2_fmus_numbers(fig13_c
     assert got.shape == expected.shape and np.array_equal(got, expected)
 
 
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="no cmake")
+def test_source_fmu_built_by_fmpy_from_its_build_description_gives_the_same_numbers(
+    fig13_case, tmp_path
+):
+    """fmpy's build of a source FMU (cmake, its own CMakeLists and FMI headers, no
+    visibility flag) from sources/buildDescription.xml alone, the shipped binary removed:
+    it exports the FMI 3.0 functions only (fmu2.c's are hidden by fmi3.c itself) and the
+    C importer gets the same doubles from it."""
+    from fmpy.build import build_platform_binary
+
+    unzip, md, spec, expected = fig13_case
+    copy = tmp_path / "fmu"
+    shutil.copytree(unzip, copy)
+    shutil.rmtree(copy / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(str(copy), str(tmp_path / "build"))
+    lib = copy / "binaries" / native_fmu3.PLATFORM / f"{md.coSimulation.modelIdentifier}.so"
+    exported = subprocess.run(
+        ["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True
+    ).stdout
+    assert all(line.split()[-1].startswith("fmi3") for line in exported.splitlines())
+    exe = _compile(tmp_path / "importer3", str(IMPORTER), "-ldl")
+    assert np.array_equal(_rows(_run(exe, lib, md, "run", str(spec))), expected)
+
+
 # the calls mode's answers: FMI 3.0 statuses (0 OK, 2 Discard, 3 Error; 0/1 for an instance)
 CALLS = {
     "token": 0, "eventMode": 0, "modelExchange": 0, "doStep": 0, "setNaN": 3,
