@@ -204,6 +204,23 @@ def test_model_description_is_the_fmi2_fmus_in_fmi3_and_validates(fmus, kind):
     assert len(standard) == 75 and names == standard
 
 
+def test_fmi3_c_compiles_without_warnings(tmp_path):
+    """fmi3.c (with fmu2.c, the full contact FMU's header) under -Wall -Wextra -Werror and
+    the flags it ships with, and under -pedantic -Wmissing-prototypes with no warning in
+    fmi3.c itself: a warning there is a defect left for a user's compiler to find."""
+    src = tmp_path / "sources"
+    src.mkdir()
+    for name in native_fmu3.SOURCES:
+        shutil.copyfile(native_fmu.NATIVE_DIR / name, src / name)
+    (src / native_fmu.HEADER).write_text(native_fmu.header(ModelConfig.full("contact"), "{}"))
+    for extra in (("-Werror",), ("-pedantic", "-Wmissing-prototypes")):
+        flags = (*native_fmu.CFLAGS, "-Wall", "-Wextra", *extra, f"-I{src}")
+        cmd = ["cc", *flags, f"-I{native_fmu.fmi_headers()}", "-o", str(tmp_path / "m.so")]
+        proc = subprocess.run([*cmd, str(src / "fmi3.c"), "-lm"], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        assert not re.search(r"fmi3\.c:\d+:\d+: warning", proc.stderr), proc.stderr[-3000:]
+
+
 def test_command_line_writes_the_fmi3_fmu_beside_the_fmi2_one(capsys, tmp_path):
     """--native --fmi3 writes <name>_native3.fmu (the FMI 2.0 native FMU is
     <name>_native.fmu: both can live in one folder); --fmi3 alone is refused."""
