@@ -204,6 +204,24 @@ def test_model_description_is_the_fmi2_fmus_in_fmi3_and_validates(fmus, kind):
     assert len(standard) == 75 and names == standard
 
 
+def test_binary_needs_no_python_and_an_old_c_library(fmus, tmp_path):
+    """The FMI 3.0 binary needs no Python symbol, and its newest glibc symbol version is
+    the FMI 2.0 native FMU's floor (test_native.GLIBC_FLOOR, 2.17): fmi3.c adds only
+    calloc, free, the printf family and isalnum."""
+    from test_native import GLIBC_FLOOR, glibc_needed
+
+    path3, _ = fmus("fig13")
+    lib = f"binaries/{native_fmu3.PLATFORM}/fig13_native3.so"
+    with zipfile.ZipFile(path3) as z:
+        so = Path(z.extract(lib, tmp_path))
+    undefined = subprocess.run(
+        ["nm", "-D", "--undefined-only", str(so)], capture_output=True, text=True, check=True
+    ).stdout
+    assert "Py" not in undefined and "python" not in undefined.lower() and "fmi2" not in undefined
+    if shutil.which("objdump"):
+        assert glibc_needed(so) <= GLIBC_FLOOR
+
+
 def test_fmi3_c_compiles_without_warnings(tmp_path):
     """fmi3.c (with fmu2.c, the full contact FMU's header) under -Wall -Wextra -Werror and
     the flags it ships with, and under -pedantic -Wmissing-prototypes with no warning in
