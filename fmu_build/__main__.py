@@ -6,6 +6,8 @@ python -m fmu_build --full body                 every variable of a mode (body,
                                                 contact, rigid_body, or all)
 python -m fmu_build --native scenarios/fig13.toml  the native FMU (C only, no Python on
                                                 the target; fmu_build/native_fmu.py)
+python -m fmu_build --native --fmi3 scenarios/fig13.toml  the native FMU as FMI 3.0
+                                                (<name>_native3.fmu; fmu_build/native_fmu3.py)
 
 The last line of the output is the path of the (last) FMU.
 """
@@ -44,6 +46,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--native", action="store_true", help="the native FMU (compiled C only, no Python)"
     )
+    ap.add_argument(
+        "--fmi3", action="store_true", help="with --native: an FMI 3.0 FMU (<name>_native3.fmu)"
+    )
     args = ap.parse_args(argv)
 
     configs = []
@@ -58,6 +63,8 @@ def main(argv: list[str] | None = None) -> int:
         configs += [ModelConfig.full(m) for m in modes]
     if not configs:
         ap.error("nothing to build: give scene files, --all or --full MODE")
+    if args.fmi3 and not args.native:
+        ap.error("--fmi3 is for the native FMU: give --native --fmi3")
     if args.native:
         return _native(configs, args)
     for cfg in configs:
@@ -75,12 +82,13 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _native(configs: list, args: argparse.Namespace) -> int:
-    from . import native_fmu
+    from . import native_fmu, native_fmu3
 
+    builder = native_fmu3.build if args.fmi3 else native_fmu.build
     paths = []
     for cfg in configs:
         try:
-            built = native_fmu.build(cfg, args.out, force=args.force)
+            built = builder(cfg, args.out, force=args.force)
         except native_fmu.NativeUnsupportedError as e:
             print(f"error: {e}", file=sys.stderr)
             return 1
@@ -89,7 +97,8 @@ def _native(configs: list, args: argparse.Namespace) -> int:
             return 1
         state = "cached" if built.cached else "built"
         n = len(cfg.variables)
-        print(f"{cfg.name}: native FMU ({state}; {n} variables; {built.identifier})")
+        kind = "native FMI 3.0 FMU" if args.fmi3 else "native FMU"
+        print(f"{cfg.name}: {kind} ({state}; {n} variables; {built.identifier})")
         paths.append(built.stable)
     print(paths[-1])
     return 0

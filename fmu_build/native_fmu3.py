@@ -1,0 +1,115 @@
+"""The FMI 3.0 native FMU (``python -m fmu_build --native --fmi3``): the same C core as the
+FMI 2.0 native FMU (fmu_build/native_fmu.py), with contact_fmu/native/fmi3.c, a thin
+translation of the FMI 3.0 calls onto fmu2.c's FMI 2.0 entry points, as its one
+translation unit (fmi3.c includes fmu2.c, which includes stepper.c): every rule, check
+and message is fmu2.c's. The binary exports the FMI 3.0 functions only.
+
+The same scenes and modes as the FMI 2.0 native FMU (native_fmu.unsupported refuses the
+others, naming the feature); the same generated header cf_model.h (its CF_GUID is the
+instantiation token) and table resource; a model description of FMI 3.0
+(model_description3) and ``sources/buildDescription.xml``. The file is
+<out>/<name>_native3.fmu (the FMI 2.0 one is <name>_native.fmu), its modelIdentifier
+<name>_native3.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import platform
+import shutil
+import subprocess
+import tempfile
+import uuid
+import zipfile
+from pathlib import Path
+
+from contact_fmu.fmu.config import ModelConfig
+
+from . import CACHE, documentation, model_description3, publish, write_archive
+from . import identifier as model_identifier
+from . import native_fmu as n2
+
+FORMAT = "contact_fmu-native-fmu3-1"
+SOURCE = "fmi3.c"  # the translation unit: it includes fmu2.c (native_fmu.SOURCES)
+SOURCES = (SOURCE, *n2.SOURCES)
+# FMI 3.0's platform tuple of the binary built here (FMI 2.0's is linux64)
+PLATFORM = f"{platform.machine()}-linux"
+
+
+def identity(cfg: ModelConfig) -> str:
+    """The content key: the FMI 2.0 native FMU's (configuration, C sources, header, flags)
+    with fmi3.c and the FMI 3.0 descriptions; the instantiation token follows from it."""
+    h = hashlib.sha256(FORMAT.encode())
+    h.update(n2.identity(cfg).encode())
+    h.update((n2.NATIVE_DIR / SOURCE).read_bytes())
+    h.update(Path(__file__).read_bytes())
+    h.update(Path(model_description3.__file__).read_bytes())
+    return h.hexdigest()
+
+
+def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
+    """fmi3.c (with fmu2.c, stepper.c, cf_core.h and cf_model.h in ``src_dir``) into the
+    library ``target``; CalledProcessError with the compiler's output on failure."""
+    cc = os.environ.get("CC", "cc")
+    cmd = [cc, *n2.CFLAGS, *extra, f"-I{src_dir}", f"-I{n2.fmi_headers()}", "-o", str(target),
+           str(src_dir / SOURCE), "-lm"]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True, text=True)
+    return target
+
+
+def _documentation(cfg: ModelConfig, identifier: str) -> dict[str, bytes]:
+    """The FMI 2.0 native FMU's documentation in FMI 3.0's words and places (the icon in
+    terminalsAndIcons/icon.png)."""
+    files = documentation.files(cfg, identifier, target="native")
+    index = files["documentation/index.html"].decode()
+    for a, b in (("FMI 2.0", "FMI 3.0"), ("fmi2Error", "fmi3Error")):
+        index = index.replace(a, b)
+    files["documentation/index.html"] = index.encode()
+    files["terminalsAndIcons/icon.png"] = files.pop("model.png")
+    return files
+
+
+def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> n2.NativeBuilt:
+    """The FMI 3.0 native FMU of ``cfg`` under ``out_dir`` (built unless cached);
+    NativeUnsupportedError naming the feature where the C kernel does not cover the model.
+    ``guid`` of the result is the instantiation token."""
+    why = n2.unsupported(cfg)
+    if why is not None:
+        raise n2.NativeUnsupportedError(f"no native FMU for scene {cfg.name!r}: {why}")
+    key = identity(cfg)
+    token = "{" + str(uuid.UUID(key[:32])) + "}"
+    identifier = f"{model_identifier(cfg)}_native3"
+    out_dir = Path(out_dir).resolve()
+    target = out_dir / CACHE / f"{cfg.name}-native3-{key[:12]}.fmu"
+    stable = out_dir / f"{identifier}.fmu"
+    if target.is_file() and not force and zipfile.is_zipfile(target):
+        publish(target, stable)
+        return n2.NativeBuilt(target, key, token, identifier, True, stable)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".native3-{cfg.name}-", dir=target.parent))
+    try:
+        src = work / "sources"
+        src.mkdir()
+        for name in SOURCES:
+            shutil.copyfile(n2.NATIVE_DIR / name, src / name)
+        (src / n2.HEADER).write_text(n2.header(cfg, token))
+        lib = compile_binary(src, work / f"{identifier}.so")
+        xml = model_description3.model_description(cfg, identifier, token)
+        files = {"modelDescription.xml": xml}
+        files[f"binaries/{PLATFORM}/{identifier}.so"] = lib.read_bytes()
+        for name in (*SOURCES, n2.HEADER):
+            files[f"sources/{name}"] = (src / name).read_bytes()
+        files["sources/buildDescription.xml"] = model_description3.build_description(
+            identifier, SOURCE
+        )
+        if cfg.has_table:
+            files["resources/table.bin"] = n2.table_bytes(cfg)
+        files.update(_documentation(cfg, identifier))
+        final = work / "final.fmu"
+        write_archive(final, files)
+        os.replace(final, target)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    publish(target, stable)
+    return n2.NativeBuilt(target, key, token, identifier, False, stable)
