@@ -142,13 +142,14 @@ def model_description(cfg: ModelConfig, identifier: str, token: str) -> bytes:
     return minidom.parseString(text).toprettyxml(indent="  ", encoding="UTF-8")
 
 
-def build_description(identifier: str, source: str) -> bytes:
-    """sources/buildDescription.xml (FMI 3.0): one source file (fmi3.c, which includes the
-    others), C11, linked with the C library's math library."""
+def build_description(identifier: str, sources: tuple[str, ...]) -> bytes:
+    """sources/buildDescription.xml (FMI 3.0): the C files (fmi3.c and the instance layer's,
+    each its own translation unit), C11, linked with the C library's math library."""
     root = ET.Element("fmiBuildDescription", fmiVersion="3.0")
     config = ET.SubElement(root, "BuildConfiguration", modelIdentifier=identifier)
     files = ET.SubElement(config, "SourceFileSet", language="C11")
-    ET.SubElement(files, "SourceFile", name=source)
+    for name in sources:
+        ET.SubElement(files, "SourceFile", name=name)
     ET.SubElement(
         config, "Library", name="m", external="true", description="the C math library (libm)"
     )

@@ -60,10 +60,10 @@ FORMAT = "contact_fmu-native-fmu-1"
 NATIVE_DIR = Path(native.__file__).resolve().parent
 # the FMU's C files: each .c its own translation unit (listed in <SourceFiles>), the
 # headers they include; with HEADER (generated) they are the FMU's sources/
-SOURCES = (
-    "fmi2.c", "instance.c", "model.c", "stepper.c",
-    "instance.h", "model.h", "stepper.h", "cf_core.h",
-)  # fmt: skip
+# CORE: what every front end is linked with (the FMI 3.0 FMU's: native_fmu3.SOURCES)
+FRONT_END = "fmi2.c"
+CORE = ("instance.c", "model.c", "stepper.c", "instance.h", "model.h", "stepper.h", "cf_core.h")
+SOURCES = (FRONT_END, *CORE)
 HEADER = "cf_model.h"
 # no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
 CFLAGS = (*native.CFLAGS, "-std=c11", "-D_DEFAULT_SOURCE")
@@ -389,17 +389,19 @@ def identity(cfg: ModelConfig) -> str:
     return h.hexdigest()
 
 
-def c_files() -> tuple[str, ...]:
-    """The translation units among SOURCES (compiled each on its own, linked together)."""
-    return tuple(n for n in SOURCES if n.endswith(".c"))
+def c_files(sources: tuple[str, ...] = SOURCES) -> tuple[str, ...]:
+    """The translation units among ``sources`` (compiled each on its own, linked together)."""
+    return tuple(n for n in sources if n.endswith(".c"))
 
 
-def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
-    """The C files of SOURCES in ``src_dir`` (with the headers and cf_model.h there) into
-    the library ``target``, linked with libm; CalledProcessError with the compiler's
+def compile_binary(
+    src_dir: Path, target: Path, extra: tuple[str, ...] = (), sources: tuple[str, ...] = SOURCES
+) -> Path:
+    """The C files of ``sources`` in ``src_dir`` (with the headers and cf_model.h there)
+    into the library ``target``, linked with libm; CalledProcessError with the compiler's
     output on failure."""
     cc = os.environ.get("CC", "cc")
-    units = [str(src_dir / n) for n in c_files()]
+    units = [str(src_dir / n) for n in c_files(sources)]
     cmd = [cc, *CFLAGS, *extra, f"-I{src_dir}", f"-I{fmi_headers()}", "-o", str(target),
            *units, "-lm"]  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=True, text=True)

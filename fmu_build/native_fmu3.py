@@ -1,8 +1,11 @@
 """The FMI 3.0 native FMU (``python -m fmu_build --native --fmi3``): the same C core as the
-FMI 2.0 native FMU (fmu_build/native_fmu.py), with contact_fmu/native/fmi3.c, a thin
-translation of the FMI 3.0 calls onto fmu2.c's FMI 2.0 entry points, as its one
-translation unit (fmi3.c includes fmu2.c, which includes stepper.c): every rule, check
-and message is fmu2.c's. The binary exports the FMI 3.0 functions only.
+FMI 2.0 native FMU (fmu_build/native_fmu.py, its CORE: the instance layer instance.c,
+model.c, stepper.c and their headers) with the FMI 3.0 front end
+contact_fmu/native/fmi3.c in place of fmi2.c. Each C file is its own translation unit,
+compiled and linked as the FMI 2.0 FMU's are; fmi3.c translates the FMI 3.0 calls onto
+the instance layer, which holds every rule, check and message and words its messages
+with FMI 3.0's call and status names (api "fmi3"). The binary exports the FMI 3.0
+functions only (the sources hide the rest themselves: CF_HIDDEN).
 
 The same scenes and modes as the FMI 2.0 native FMU (native_fmu.unsupported refuses the
 others, naming the feature); the same generated header cf_model.h (its CF_GUID is the
@@ -18,7 +21,6 @@ import hashlib
 import os
 import platform
 import shutil
-import subprocess
 import tempfile
 import uuid
 import zipfile
@@ -31,8 +33,8 @@ from . import identifier as model_identifier
 from . import native_fmu as n2
 
 FORMAT = "contact_fmu-native-fmu3-1"
-SOURCE = "fmi3.c"  # the translation unit: it includes fmu2.c (native_fmu.SOURCES)
-SOURCES = (SOURCE, *n2.SOURCES)
+SOURCE = "fmi3.c"  # the front end, in place of the FMI 2.0 FMU's (native_fmu.FRONT_END)
+SOURCES = (SOURCE, *n2.CORE)
 # FMI 3.0's platform tuple of the binary built here (FMI 2.0's is linux64)
 PLATFORM = f"{platform.machine()}-linux"
 
@@ -49,13 +51,10 @@ def identity(cfg: ModelConfig) -> str:
 
 
 def compile_binary(src_dir: Path, target: Path, extra: tuple[str, ...] = ()) -> Path:
-    """fmi3.c (with fmu2.c, stepper.c, cf_core.h and cf_model.h in ``src_dir``) into the
-    library ``target``; CalledProcessError with the compiler's output on failure."""
-    cc = os.environ.get("CC", "cc")
-    cmd = [cc, *n2.CFLAGS, *extra, f"-I{src_dir}", f"-I{n2.fmi_headers()}", "-o", str(target),
-           str(src_dir / SOURCE), "-lm"]  # fmt: skip
-    subprocess.run(cmd, check=True, capture_output=True, text=True)
-    return target
+    """The C files of SOURCES in ``src_dir`` (with the headers and cf_model.h there) into
+    the library ``target``, as the FMI 2.0 FMU's; CalledProcessError with the compiler's
+    output on failure."""
+    return n2.compile_binary(src_dir, target, extra, sources=SOURCES)
 
 
 def _documentation(cfg: ModelConfig, identifier: str) -> dict[str, bytes]:
@@ -101,7 +100,7 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> n2.Nati
         for name in (*SOURCES, n2.HEADER):
             files[f"sources/{name}"] = (src / name).read_bytes()
         files["sources/buildDescription.xml"] = model_description3.build_description(
-            identifier, SOURCE
+            identifier, n2.c_files(SOURCES)
         )
         if cfg.has_table:
             files["resources/table.bin"] = n2.table_bytes(cfg)

@@ -1,12 +1,12 @@
-"""The FMI 3.0 native FMU (fmu_build --native --fmi3: contact_fmu/native/fmi3.c, a thin
-translation onto fmu2.c's FMI 2.0 entry points in the same library) against the FMI 2.0
-native FMU.
+"""The FMI 3.0 native FMU (fmu_build --native --fmi3: the FMI 3.0 front end
+contact_fmu/native/fmi3.c on the instance layer instance.c, with model.c and stepper.c)
+against the FMI 2.0 native FMU (fmi2.c on the same layer).
 
-Both FMUs run the same compiled C (fmu2.c and stepper.c, the same flags; fmi3.c passes
-every double through unchanged), so every output, derivative and message is the FMI 2.0
-FMU's: outputs are compared exactly, step for step, where both run the same calls with
-the same values. Tests that need a C compiler, cmake or a sanitizer skip only where the
-tool is missing.
+Both FMUs run the same compiled C behind their front ends (the same flags; fmi3.c passes
+every double through unchanged), so every output and derivative is the FMI 2.0 FMU's and
+every message is its message with FMI 3.0's call and status names (FMI2_TO_FMI3): outputs
+are compared exactly, step for step, where both run the same calls with the same values.
+Tests that need a C compiler, cmake or a sanitizer skip only where the tool is missing.
 """
 
 from __future__ import annotations
@@ -43,6 +43,45 @@ F = ex.force_unit()
 H = 1.75e-4
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+
+# The FMI 2.0 names in the instance layer's messages and the FMI 3.0 names the FMI 3.0 FMU
+# says in their place (FMI 3.0 renamed the typed accessors and the FMU state calls, and
+# sets the experiment up at fmi3EnterInitializationMode); statuses by their prefix.
+FMI2_TO_FMI3 = {
+    "fmi2Instantiate": "fmi3InstantiateCoSimulation",
+    "fmi2SetupExperiment": "fmi3EnterInitializationMode",
+    "fmi2EnterInitializationMode": "fmi3EnterInitializationMode",
+    "fmi2ExitInitializationMode": "fmi3ExitInitializationMode",
+    "fmi2Terminate": "fmi3Terminate",
+    "fmi2GetReal": "fmi3GetFloat64",
+    "fmi2SetReal": "fmi3SetFloat64",
+    "fmi2GetInteger": "fmi3GetInt32",
+    "fmi2SetInteger": "fmi3SetInt32",
+    "fmi2GetBoolean": "fmi3GetBoolean",
+    "fmi2SetBoolean": "fmi3SetBoolean",
+    "fmi2GetString": "fmi3GetString",
+    "fmi2SetString": "fmi3SetString",
+    "fmi2GetDirectionalDerivative": "fmi3GetDirectionalDerivative",
+    "fmi2GetFMUstate": "fmi3GetFMUState",
+    "fmi2SetFMUstate": "fmi3SetFMUState",
+    "fmi2FreeFMUstate": "fmi3FreeFMUState",
+    "fmi2SerializedFMUstateSize": "fmi3SerializedFMUStateSize",
+    "fmi2SerializeFMUstate": "fmi3SerializeFMUState",
+    "fmi2DeSerializeFMUstate": "fmi3DeserializeFMUState",
+    "fmi2OK": "fmi3OK",
+    "fmi2Warning": "fmi3Warning",
+    "fmi2Discard": "fmi3Discard",
+    "fmi2Error": "fmi3Error",
+    "fmi2Fatal": "fmi3Fatal",
+}
+
+
+def in_fmi3_words(messages: list[tuple[int, str]]) -> list[tuple[int, str]]:
+    """The FMI 2.0 FMU's messages with each FMI 2.0 name replaced by its FMI 3.0 name
+    (FMI2_TO_FMI3; a name not in it is a KeyError: the mapping is the whole difference)."""
+    return [
+        (s, re.sub(r"\bfmi2\w+", lambda m: FMI2_TO_FMI3[m.group(0)], text)) for s, text in messages
+    ]
 
 
 def _config(kind: str) -> ModelConfig:
@@ -83,12 +122,14 @@ class Instance3:
         )
         self.fmu.instantiate(loggingOn=True, logMessage=self._log)
         self.time = 0.0
+        self.initialised = False
         try:
             self.fmu.enterInitializationMode(startTime=0.0)
             for k, v in (start or {}).items():
                 self.set(k, v)
             if init:
                 self.fmu.exitInitializationMode()
+                self.initialised = True
         except FMICallException:
             self.close()
             raise
@@ -121,13 +162,14 @@ class Instance3:
         except FMICallException as e:
             return int(e.status)
         assert not (event or terminate or early)
-        assert last == t + h  # fmu2.c's time: t + h, the same double
+        assert last == t + h  # the instance layer's time: t + h, the same double
         self.time = last
         return OK
 
     def close(self) -> None:
         try:
-            self.fmu.terminate()
+            if self.initialised:  # terminate ends an initialised model only (an error else)
+                self.fmu.terminate()
         finally:
             self.fmu.freeInstance()
             shutil.rmtree(self.dir, ignore_errors=True)
@@ -188,7 +230,8 @@ def test_model_description_is_the_fmi2_fmus_in_fmi3_and_validates(fmus, kind):
     assert [cs3[a] for a in same] == [cs2[a] for a in same] == ["false", "true"]
     assert cs3["hasEventMode"] == "false"
     [config] = md3.buildConfigurations
-    assert [f for s in config.sourceFileSets for f in s.sourceFiles] == ["fmi3.c"]
+    listed = [f for s in config.sourceFileSets for f in s.sourceFiles]
+    assert listed == ["fmi3.c", "instance.c", "model.c", "stepper.c"]
     with zipfile.ZipFile(path3) as z:
         names = set(z.namelist())
     assert {f"sources/{n}" for n in (*native_fmu3.SOURCES, "cf_model.h")} <= names
@@ -223,9 +266,10 @@ def test_binary_needs_no_python_and_an_old_c_library(fmus, tmp_path):
 
 
 def test_fmi3_c_compiles_without_warnings(tmp_path):
-    """fmi3.c (with fmu2.c, the full contact FMU's header) under -Wall -Wextra -Werror and
-    the flags it ships with, and under -pedantic -Wmissing-prototypes with no warning in
-    fmi3.c itself: a warning there is a defect left for a user's compiler to find."""
+    """fmi3.c with the instance layer, model and stepper (the full contact FMU's header),
+    each its own translation unit, under -Wall -Wextra -Werror and the flags they ship
+    with, and under -pedantic -Wmissing-prototypes with no warning in fmi3.c itself: a
+    warning there is a defect left for a user's compiler to find."""
     src = tmp_path / "sources"
     src.mkdir()
     for name in native_fmu3.SOURCES:
@@ -234,7 +278,8 @@ def test_fmi3_c_compiles_without_warnings(tmp_path):
     for extra in (("-Werror",), ("-pedantic", "-Wmissing-prototypes")):
         flags = (*native_fmu.CFLAGS, "-Wall", "-Wextra", *extra, f"-I{src}")
         cmd = ["cc", *flags, f"-I{native_fmu.fmi_headers()}", "-o", str(tmp_path / "m.so")]
-        proc = subprocess.run([*cmd, str(src / "fmi3.c"), "-lm"], capture_output=True, text=True)
+        units = [str(src / n) for n in native_fmu.c_files(native_fmu3.SOURCES)]
+        proc = subprocess.run([*cmd, *units, "-lm"], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr[-3000:]
         assert not re.search(r"fmi3\.c:\d+:\d+: warning", proc.stderr), proc.stderr[-3000:]
 
@@ -344,12 +389,13 @@ def test_bad_input_gives_the_fmi2_fmus_statuses_and_messages(fmus):
     naming the variable and the value, a step while it is held fmi3Discard with the same
     words, a step not in (0, inf) or not at the FMU's time fmi3Discard, a fixed parameter
     or an output set fmi3Error; corrected, the instance steps on. Statuses, messages and
-    outputs are the FMI 2.0 FMU's, call for call."""
+    outputs are the FMI 2.0 FMU's, call for call, its messages in FMI 3.0's names."""
     path3, path2 = fmus("fig13")
     with Instance3(path3) as a, Instance(path2, "i2") as b:
         calls3, calls2 = _bad_calls(a), _bad_calls(b)
         assert a.outputs() == b.outputs()
-        assert a.messages == b.messages
+        assert a.messages == in_fmi3_words(b.messages)
+        assert any("fmi2" in m for _, m in b.messages)  # the mapping has work to do
     assert calls3 == calls2
     status = dict(calls3)
     assert status["set Fx_ex nan"] == ERROR and status["step held"] == DISCARD
@@ -365,7 +411,8 @@ def test_bad_input_gives_the_fmi2_fmus_statuses_and_messages(fmus):
 
 def test_a_bad_parameter_is_refused_at_initialisation_in_the_fmi2_fmus_words(fmus):
     """mu = 0 (the law needs mu > 0): fmi3Error at the setter and at
-    exitInitializationMode, with the FMI 2.0 FMU's messages; a step then: fmi3Error."""
+    exitInitializationMode, with the FMI 2.0 FMU's messages in FMI 3.0's names; a step
+    then: fmi3Error naming fmi3ExitInitializationMode."""
     path3, path2 = fmus("fig13")
     answers = []
     for cls, path in ((Instance3, path3), (Instance, path2)):
@@ -378,8 +425,9 @@ def test_a_bad_parameter_is_refused_at_initialisation_in_the_fmi2_fmus_words(fmu
                 got.append(e.value.status)
             got.append(inst.step(H))
             answers.append((got, inst.messages))
-    assert answers[0] == answers[1]
-    assert answers[0][0] == [ERROR, ERROR, ERROR]
+    assert answers[0][0] == answers[1][0] == [ERROR, ERROR, ERROR]
+    assert answers[0][1] == in_fmi3_words(answers[1][1])
+    assert "(fmi3ExitInitializationMode failed: " in answers[0][1][-1][1]
     assert any("mu = 0.0 is invalid: must be > 0" in m for _, m in answers[0][1])
 
 
@@ -389,7 +437,8 @@ def test_fmu_state_round_trips_and_damaged_bytes_are_refused(fmus):
     serialized into a fresh instance: the same doubles after the same steps. Bytes that are
     damaged (a flipped byte, truncated, extended), garbage or the FMI 2.0 native FMU's
     state (another instantiation token) are refused with fmi3Error naming the reason (the
-    FMI 2.0 FMU's words), nothing changes, and the instance steps on."""
+    FMI 2.0 FMU's words, the call fmi3DeserializeFMUState), nothing changes, and the
+    instance steps on."""
     path3, path2 = fmus("fig13")
     with Instance(path2, "i2") as b:
         b.set("Fx_ex", F)
@@ -432,7 +481,7 @@ def test_fmu_state_round_trips_and_damaged_bytes_are_refused(fmus):
             assert e.value.status == ERROR, case
             assert a.messages[-1] == (
                 ERROR,
-                f"fmi2DeSerializeFMUstate: the bytes are refused: {reason}",
+                f"fmi3DeserializeFMUState: the bytes are refused: {reason}",
             ), case
             assert a.outputs() == before
             assert a.step(H) == OK
@@ -492,7 +541,7 @@ def test_derivatives_outside_the_contact_mode_are_refused_naming_why(fmus):
 
 # ---- resources ---------------------------------------------------------------------------------
 def test_table_resource_is_found_under_a_path_with_spaces_and_percent_signs(fmus, tmp_path):
-    """FMI 3.0 hands a native resource path; fmi3.c makes the file URI fmu2.c reads,
+    """FMI 3.0 hands a native resource path; fmi3.c makes the file URI the layer reads,
     percent-encoding what a URI cannot hold: the creep-force table loads from a folder
     named "a b%20c" and the scene's first step runs."""
     path3, _ = fmus("rail_traction")
@@ -591,7 +640,8 @@ def test_source_fmu_built_by_fmpy_from_its_build_description_gives_the_same_numb
 ):
     """fmpy's build of a source FMU (cmake, its own CMakeLists and FMI headers, no
     visibility flag) from sources/buildDescription.xml alone, the shipped binary removed:
-    it exports the FMI 3.0 functions only (fmu2.c's are hidden by fmi3.c itself) and the
+    it exports the FMI 3.0 functions only (the instance layer's are hidden by the sources
+    themselves: CF_HIDDEN) and the
     C importer gets the same doubles from it."""
     from fmpy.build import build_platform_binary
 
@@ -626,7 +676,8 @@ CALLS = {
 def test_sanitized_importer_runs_fig13_bad_and_unsupported_calls_and_random_extremes_cleanly(
     fig13_case, tmp_path
 ):
-    """fmi3.c with the FMU's sources and the C importer in one program built with
+    """The FMU's C sources (fmi3.c, instance.c, model.c, stepper.c) and the C importer in
+    one program built with
     AddressSanitizer and UBSan (no recovery): Fig. 13 to the same doubles; the bad calls
     (another token, event mode, model exchange: no instance; a NaN input: fmi3Error, the
     step fmi3Discard, corrected fmi3OK; values not one per value reference; a state got,
@@ -645,7 +696,8 @@ def test_sanitized_importer_runs_fig13_bad_and_unsupported_calls_and_random_extr
         f"-I{unzip / 'sources'}",
     )
     try:
-        exe = _compile(tmp_path / "imp3_asan", *flags, str(IMPORTER), str(unzip / "sources/fmi3.c"))
+        units = sorted(str(u) for u in (unzip / "sources").glob("*.c"))
+        exe = _compile(tmp_path / "imp3_asan", *flags, str(IMPORTER), *units)
     except subprocess.CalledProcessError as e:  # pragma: no cover - gcc without libasan
         pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
     assert np.array_equal(_rows(_run(exe, "-", md, "run", str(spec))), expected)

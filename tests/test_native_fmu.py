@@ -1093,27 +1093,38 @@ def test_native_binary_needs_no_python_and_an_old_c_library(native_fmus, tmp_pat
 SOURCE_KINDS = ("fig13", "full body", "full contact", "full rigid_body", "rail_traction")
 
 
+# the FMI versions: the front end and the count of functions the standard's headers
+# declare for co-simulation (FMI 2.0: 34; FMI 3.0: the 75 of fmi3Functions.h)
+FRONT_ENDS = {"fmi2": ("fmi2.c", 34), "fmi3": ("fmi3.c", 75)}
+
+
+@pytest.mark.parametrize("fmi", FRONT_ENDS)
 @pytest.mark.parametrize("kind", SOURCE_KINDS)
 def test_sources_alone_compile_strictly_and_export_only_the_fmi_functions(
-    scenes, native_fmus, kind, tmp_path
+    scenes, native_fmus, kind, fmi, tmp_path
 ):
     """Each C file of sources/ is its own translation unit: ``cc -shared -fPIC`` of
     sources/*.c with fmpy's FMI headers, under -Wall -Wextra -pedantic -Werror and
     without -fvisibility=hidden (as fmpy's cmake or an importer's own build compiles
-    them), builds a library whose dynamic symbol table defines the 34 functions of FMI
-    2.0 co-simulation and nothing else: the sources hide their own internals (stepper.h's
-    CF_HIDDEN, static), so no cf_* symbol can clash with a host's."""
+    them), builds a library whose dynamic symbol table defines the functions of FMI
+    2.0 co-simulation (34) or, for the FMI 3.0 FMU, of FMI 3.0 (75), and nothing else: the
+    sources hide their own internals (stepper.h's CF_HIDDEN, static), so no cf_* symbol
+    can clash with a host's. Each FMU carries its own front end only (fmi2.c or fmi3.c)
+    with the same instance layer, model and stepper."""
     import fmpy
 
-    path = (
-        native_fmus[kind]
-        if kind in native_fmus
-        else native_fmu.build(ModelConfig.full(kind.removeprefix("full ")), OUT).path
-    )
+    from fmu_build import native_fmu3
+
+    cfg = scenes[kind].config if kind in scenes else ModelConfig.full(kind.removeprefix("full "))
+    if fmi == "fmi2":
+        path = native_fmus[kind] if kind in native_fmus else native_fmu.build(cfg, OUT).path
+    else:
+        path = native_fmu3.build(cfg, OUT).path
+    front, count = FRONT_ENDS[fmi]
     unzip = tmp_path / "fmu"
     fmpy.extract(str(path), str(unzip))
     units = sorted((unzip / "sources").glob("*.c"))
-    assert [u.name for u in units] == sorted(native_fmu.c_files())
+    assert [u.name for u in units] == sorted([front, "instance.c", "model.c", "stepper.c"])
     lib = tmp_path / "built.so"
     cmd = ["cc", "-shared", "-fPIC", "-Wall", "-Wextra", "-pedantic", "-Werror",
            f"-I{native_fmu.fmi_headers()}", *map(str, units), "-lm", "-o", str(lib)]  # fmt: skip
@@ -1123,7 +1134,7 @@ def test_sources_alone_compile_strictly_and_export_only_the_fmi_functions(
         ["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True
     ).stdout.split("\n")
     names = [line.split()[-1] for line in defined if line.strip()]
-    assert len(names) == 34 and all(n.startswith("fmi2") for n in names), names
+    assert len(names) == count and all(n.startswith(fmi) for n in names), names
 
 
 # ---- a C importer, a source build, sanitizers -------------------------------------------------

@@ -1,112 +1,70 @@
-/* The FMI 3.0 co-simulation layer of the native FMU (fmu_build --native --fmi3): a thin
- * translation of each FMI 3.0 call onto the FMI 2.0 entry point of fmu2.c, compiled into
- * the same library (this file includes fmu2.c: one translation unit). Every rule of the
- * FMU (the checks of a value, of a call, of a step, the messages, the FMU state and its
- * serialization) lives in fmu2.c once; here are only the shapes FMI 3.0 changed:
- * - the instance is a small wrapper holding fmu2.c's instance, the importer's instance
- *   environment and its log callback; fmu2.c gets a logger that formats its message and
- *   hands the text to fmi3's logMessage, and calloc/free as its memory callbacks;
- * - the resource path (a native path in FMI 3.0) becomes the file URI fmi2Instantiate
- *   reads;
- * - fmi3EnterInitializationMode = fmi2SetupExperiment + fmi2EnterInitializationMode;
- * - fmi3DoStep = fmi2DoStep; eventHandlingNeeded, terminateSimulation and earlyReturn are
+/* The FMI 3.0 co-simulation front end of the native FMU (fmu_build --native --fmi3): as
+ * fmi2.c for FMI 2.0, each fmi3 function translates its arguments and status and calls
+ * the instance layer (instance.h), which holds every rule, check and message; the layer
+ * names FMI 3.0's calls and statuses in its messages (api "fmi3"). The fmi3Instance is
+ * the cf_inst; the importer's instance environment and logMessage travel as the
+ * instance's front-end bytes (cf_instantiate's env), memory is calloc/free. Here are only
+ * the shapes FMI 3.0 changed:
+ * - the resource path (a native path in FMI 3.0) becomes the file URI the layer reads;
+ * - fmi3EnterInitializationMode = cf_setup_experiment + cf_enter_initialization_mode;
+ * - fmi3DoStep = cf_do_step; eventHandlingNeeded, terminateSimulation and earlyReturn are
  *   always false (no event mode, the FMU never ends a simulation, no early return),
- *   lastSuccessfulTime is fmi2LastSuccessfulTime;
+ *   lastSuccessfulTime is the layer's time (cf_time);
  * - the independent variable time (FMI 3.0 requires one) has the value reference after
- *   the model's (CF3_VR_TIME) and is read as fmi2LastSuccessfulTime;
- * - Float64 = Real, Int32 = Integer, Boolean converted, String as is; every other type
- *   has no variable here; statuses map one to one;
- * - fmi3GetAdjointDerivative: seed^T J from fmi2GetDirectionalDerivative's columns.
+ *   the model's (CF3_VR_TIME) and is read as cf_time;
+ * - Float64 = Real, Int32 = Integer, Boolean and String as is; every other type has no
+ *   variable here; values come one per value reference (every variable is a scalar);
+ * - fmi3GetAdjointDerivative: seed^T J from cf_directional_derivative's columns.
  * The functions FMI 3.0 defines that this FMU does not provide (model exchange, scheduled
- * execution, event mode, clocks, configuration mode) answer fmi3Error with a logged
- * message. fmu2.c's functions stay internal to this library: fmi2Functions.h, which marks
- * them exported, is kept out (its types come in) and they are compiled with hidden
- * visibility, so the binary exports the FMI 3.0 functions only. */
+ * execution, event mode, clocks, configuration mode, output derivatives) answer
+ * fmi3Error with a logged message. */
 #include <ctype.h>
-#include <float.h>
-#include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
-#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi3Functions.h"
+#include "instance.h"
 
-/* fmu2.c without fmi2Functions.h: its types, its version string, no exported names */
-#define fmi2Functions_h
-#include "fmi2FunctionTypes.h"
-#include "fmi2TypesPlatform.h"
-#define fmi2Version "2.0"
-#if defined(__GNUC__)
-#pragma GCC visibility push(hidden)
-#endif
-#include "fmu2.c"
-#if defined(__GNUC__)
-#pragma GCC visibility pop
-#endif
+#define CF3_VR_TIME ((fmi3ValueReference)cf_n_variables())
 
-#define CF3_VR_TIME ((fmi3ValueReference)CF_N_VARS)
+_Static_assert(sizeof(fmi3Int32) == sizeof(int), "Int32 is the layer's int");
+_Static_assert(sizeof(fmi3Byte) == 1, "a byte is a byte");
+_Static_assert(sizeof(fmi3ValueReference) == sizeof(unsigned), "value references");
 
+/* cf_status and fmi3Status share their values (OK 0 ... Fatal 4) */
+static fmi3Status st(cf_status s) { return (fmi3Status)s; }
+
+/* ---- the importer's callbacks for the instance (env: a cf3_env) ---------------------- */
 typedef struct {
-    fmi2Component c; /* fmu2.c's instance, doing the work */
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback log;
-} cf3_instance;
+} cf3_env;
 
-_Static_assert(sizeof(fmi2Integer) == sizeof(fmi3Int32), "Int32 is fmi2Integer");
-_Static_assert(sizeof(fmi2Byte) == sizeof(fmi3Byte), "a byte is a byte");
-
-static fmi3Status st3(fmi2Status s) {
-    switch (s) {
-    case fmi2OK: return fmi3OK;
-    case fmi2Warning: return fmi3Warning;
-    case fmi2Discard: return fmi3Discard;
-    case fmi2Fatal: return fmi3Fatal;
-    default: return fmi3Error; /* fmi2Error; fmi2Pending is never answered */
-    }
+static void log_fmi3(void *env, const char *instance, int status, const char *category,
+                     const char *message) {
+    const cf3_env *e = (const cf3_env *)env;
+    (void)instance; /* FMI 3.0's logMessage has no instance name: the environment is it */
+    if (e->log != NULL) e->log(e->env, (fmi3Status)status, category, message);
 }
 
-static const char *category3(fmi3Status s) {
-    switch (s) {
-    case fmi3Warning: return "logStatusWarning";
-    case fmi3Discard: return "logStatusDiscard";
-    case fmi3Error: return "logStatusError";
-    case fmi3Fatal: return "logStatusFatal";
-    default: return "logAll";
-    }
+static void *alloc_fmi3(void *env, size_t n, size_t size) {
+    (void)env;
+    return calloc(n, size);
 }
 
-/* fmu2.c's logger: its format and arguments become the text of fmi3's logMessage */
-static void logger3(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
-                    fmi2String category, fmi2String fmt, ...) {
-    const cf3_instance *W = (const cf3_instance *)env;
-    (void)name;
-    if (W == NULL || W->log == NULL || fmt == NULL) return;
-    char msg[4096];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    W->log(W->env, st3(status), category, msg);
+static void release_fmi3(void *env, void *p) {
+    (void)env;
+    free(p);
 }
 
-/* a refusal of this layer's own, in the words fmu2.c would use */
-static fmi3Status refuse(const cf3_instance *W, const char *fmt, ...) {
-    if (W == NULL || W->log == NULL) return fmi3Error;
-    char msg[512];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    W->log(W->env, fmi3Error, category3(fmi3Error), msg);
-    return fmi3Error;
-}
+static const cf_callbacks CALLBACKS = {log_fmi3, alloc_fmi3, release_fmi3};
 
 static fmi3Status worst(fmi3Status a, fmi3Status b) { return a > b ? a : b; }
 
-/* the file URI of a native resource path (FMI 3.0) for fmi2Instantiate; NULL for none */
+/* the file URI of a native resource path (FMI 3.0) for the layer; NULL for none */
 static char *resource_uri(const char *path) {
     if (path == NULL) return NULL;
     const size_t n = strlen(path);
@@ -124,14 +82,36 @@ static char *resource_uri(const char *path) {
 }
 
 #define INST3()                                                                          \
-    cf3_instance *W = (cf3_instance *)instance;                                          \
-    if (W == NULL) return fmi3Error
+    cf_inst *I = (cf_inst *)instance;                                                    \
+    if (I == NULL) return fmi3Error
+
+/* a refusal of this front end's own, logged as the layer logs its refusals */
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static fmi3Status refuse(const cf_inst *I, const char *fmt, ...) {
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    cf_log(I, CF_STATUS_ERROR, "%s", msg);
+    return fmi3Error;
+}
+#define REFUSE(...) refuse(I, __VA_ARGS__)
 
 /* the values come one per value reference: every variable is a scalar */
 #define SCALARS(fn)                                                                      \
     if (nValues != nValueReferences)                                                     \
-    return refuse(W, "%s: %zu values for %zu value references (every variable is a "   \
+    return REFUSE("%s: %zu values for %zu value references (every variable is a "       \
                   "scalar)", fn, nValues, nValueReferences)
+
+/* a refused instantiation, logged before there is an instance */
+static void refuse_instance(fmi3String name, fmi3InstanceEnvironment env,
+                            fmi3LogMessageCallback log, const char *message) {
+    cf3_env e = {env, log};
+    cf_log_to(&CALLBACKS, &e, name, CF_STATUS_ERROR, "%s", message);
+}
 
 /* ---- common functions ------------------------------------------------------------------ */
 const char *fmi3GetVersion(void) { return fmi3Version; }
@@ -139,7 +119,9 @@ const char *fmi3GetVersion(void) { return fmi3Version; }
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                const fmi3String categories[]) {
     INST3();
-    return st3(fmi2SetDebugLogging(W->c, loggingOn, nCategories, categories));
+    (void)nCategories, (void)categories;
+    cf_set_debug_logging(I, loggingOn);
+    return fmi3OK;
 }
 
 fmi3Instance fmi3InstantiateCoSimulation(
@@ -149,32 +131,25 @@ fmi3Instance fmi3InstantiateCoSimulation(
     size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
     fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate) {
     /* no early return and no intermediate update: nothing to do for those requests */
-    (void)earlyReturnAllowed, (void)requiredIntermediateVariables;
+    (void)visible, (void)earlyReturnAllowed, (void)requiredIntermediateVariables;
     (void)nRequiredIntermediateVariables, (void)intermediateUpdate;
-    cf3_instance probe = {NULL, instanceEnvironment, logMessage};
     if (eventModeUsed) {
-        refuse(&probe, "fmi3InstantiateCoSimulation: this FMU has no event mode "
-               "(hasEventMode is false)");
+        refuse_instance(instanceName, instanceEnvironment, logMessage,
+                        "fmi3InstantiateCoSimulation: this FMU has no event mode "
+                        "(hasEventMode is false)");
         return NULL;
     }
-    cf3_instance *W = (cf3_instance *)calloc(1, sizeof *W);
     char *uri = resource_uri(resourcePath);
-    if (W == NULL || (resourcePath != NULL && uri == NULL)) {
-        free(W);
-        free(uri);
-        refuse(&probe, "fmi3InstantiateCoSimulation: out of memory");
+    if (resourcePath != NULL && uri == NULL) {
+        refuse_instance(instanceName, instanceEnvironment, logMessage,
+                        "fmi3InstantiateCoSimulation: out of memory");
         return NULL;
     }
-    *W = probe;
-    const fmi2CallbackFunctions cb = {logger3, calloc, free, NULL, W};
-    W->c = fmi2Instantiate(instanceName, fmi2CoSimulation, instantiationToken, uri, &cb,
-                           visible, loggingOn);
+    cf3_env env = {instanceEnvironment, logMessage}; /* copied into the instance */
+    cf_inst *I = cf_instantiate("fmi3", instanceName, instantiationToken, uri, loggingOn,
+                                &CALLBACKS, &env, sizeof env);
     free(uri);
-    if (W->c == NULL) { /* refused, logged by fmi2Instantiate */
-        free(W);
-        return NULL;
-    }
-    return W;
+    return I; /* NULL: refused, logged by cf_instantiate */
 }
 
 fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName,
@@ -183,10 +158,9 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName,
                                           fmi3Boolean loggingOn,
                                           fmi3InstanceEnvironment instanceEnvironment,
                                           fmi3LogMessageCallback logMessage) {
-    (void)instanceName, (void)instantiationToken, (void)resourcePath, (void)visible;
-    (void)loggingOn;
-    const cf3_instance probe = {NULL, instanceEnvironment, logMessage};
-    refuse(&probe, "fmi3InstantiateModelExchange: this FMU is for co-simulation only");
+    (void)instantiationToken, (void)resourcePath, (void)visible, (void)loggingOn;
+    refuse_instance(instanceName, instanceEnvironment, logMessage,
+                    "fmi3InstantiateModelExchange: this FMU is for co-simulation only");
     return NULL;
 }
 
@@ -195,48 +169,43 @@ fmi3Instance fmi3InstantiateScheduledExecution(
     fmi3Boolean visible, fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
     fmi3LogMessageCallback logMessage, fmi3ClockUpdateCallback clockUpdate,
     fmi3LockPreemptionCallback lockPreemption, fmi3UnlockPreemptionCallback unlockPreemption) {
-    (void)instanceName, (void)instantiationToken, (void)resourcePath, (void)visible;
-    (void)loggingOn, (void)clockUpdate, (void)lockPreemption, (void)unlockPreemption;
-    const cf3_instance probe = {NULL, instanceEnvironment, logMessage};
-    refuse(&probe, "fmi3InstantiateScheduledExecution: this FMU is for co-simulation only");
+    (void)instantiationToken, (void)resourcePath, (void)visible, (void)loggingOn;
+    (void)clockUpdate, (void)lockPreemption, (void)unlockPreemption;
+    refuse_instance(instanceName, instanceEnvironment, logMessage,
+                    "fmi3InstantiateScheduledExecution: this FMU is for co-simulation only");
     return NULL;
 }
 
-void fmi3FreeInstance(fmi3Instance instance) {
-    cf3_instance *W = (cf3_instance *)instance;
-    if (W == NULL) return;
-    fmi2FreeInstance(W->c);
-    free(W);
-}
+void fmi3FreeInstance(fmi3Instance instance) { cf_free_instance((cf_inst *)instance); }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
                                        fmi3Float64 tolerance, fmi3Float64 startTime,
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
     INST3();
-    const fmi3Status s = st3(fmi2SetupExperiment(W->c, toleranceDefined, tolerance, startTime,
-                                                 stopTimeDefined, stopTime));
+    (void)toleranceDefined, (void)tolerance, (void)stopTimeDefined, (void)stopTime;
+    const fmi3Status s = st(cf_setup_experiment(I, startTime));
     if (s > fmi3Warning) return s;
-    return worst(s, st3(fmi2EnterInitializationMode(W->c)));
+    return worst(s, st(cf_enter_initialization_mode(I)));
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     INST3();
-    return st3(fmi2ExitInitializationMode(W->c));
+    return st(cf_exit_initialization_mode(I));
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     INST3();
-    return refuse(W, "fmi3EnterEventMode: this FMU has no event mode (hasEventMode is false)");
+    return REFUSE("fmi3EnterEventMode: this FMU has no event mode (hasEventMode is false)");
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
     INST3();
-    return st3(fmi2Terminate(W->c));
+    return st(cf_terminate(I));
 }
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
     INST3();
-    return st3(fmi2Reset(W->c));
+    return st(cf_reset(I));
 }
 
 /* ---- getting and setting values -------------------------------------------------------- */
@@ -251,12 +220,13 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
     INST3();
     SCALARS("fmi3GetFloat64");
     if (!has_time(valueReferences, nValueReferences))
-        return st3(fmi2GetReal(W->c, valueReferences, nValueReferences, values));
-    fmi3Status s = fmi3OK; /* one at a time: time is fmi2LastSuccessfulTime */
-    for (size_t i = 0; i < nValueReferences && s < fmi3Error; i++)
-        s = worst(s, st3(valueReferences[i] == CF3_VR_TIME
-                             ? fmi2GetRealStatus(W->c, fmi2LastSuccessfulTime, &values[i])
-                             : fmi2GetReal(W->c, &valueReferences[i], 1, &values[i])));
+        return st(cf_get_real(I, valueReferences, nValueReferences, values));
+    if (values == NULL) return fmi3Error;
+    fmi3Status s = fmi3OK; /* one at a time: time is the layer's time */
+    for (size_t i = 0; i < nValueReferences && s < fmi3Error; i++) {
+        if (valueReferences[i] == CF3_VR_TIME) values[i] = cf_time(I);
+        else s = worst(s, st(cf_get_real(I, &valueReferences[i], 1, &values[i])));
+    }
     return s;
 }
 
@@ -265,73 +235,61 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
     INST3();
     SCALARS("fmi3SetFloat64");
     if (has_time(valueReferences, nValueReferences))
-        return refuse(W, "fmi3SetFloat64: time (value reference %u) is the independent "
+        return REFUSE("fmi3SetFloat64: time (value reference %u) is the independent "
                       "variable: doStep advances it", (unsigned)CF3_VR_TIME);
-    return st3(fmi2SetReal(W->c, valueReferences, nValueReferences, values));
+    return st(cf_set_real(I, valueReferences, nValueReferences, values));
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Int32 values[], size_t nValues) {
     INST3();
     SCALARS("fmi3GetInt32");
-    return st3(fmi2GetInteger(W->c, valueReferences, nValueReferences, (fmi2Integer *)values));
+    return st(cf_get_integer(I, valueReferences, nValueReferences, (int *)values));
 }
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Int32 values[], size_t nValues) {
     INST3();
     SCALARS("fmi3SetInt32");
-    return st3(fmi2SetInteger(W->c, valueReferences, nValueReferences,
-                              (const fmi2Integer *)values));
+    return st(cf_set_integer(I, valueReferences, nValueReferences, (const int *)values));
 }
 
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, fmi3Boolean values[], size_t nValues) {
     INST3();
     SCALARS("fmi3GetBoolean");
-    if (nValueReferences > 0 && (valueReferences == NULL || values == NULL)) return fmi3Error;
-    for (size_t i = 0; i < nValueReferences; i++) { /* fmi3Boolean is bool, fmi2's int */
-        fmi2Boolean b = fmi2False;
-        const fmi3Status s = st3(fmi2GetBoolean(W->c, &valueReferences[i], 1, &b));
-        if (s > fmi3Warning) return s;
-        values[i] = b != fmi2False;
-    }
-    return fmi3OK;
+    (void)values; /* none here: any value reference is refused */
+    return st(cf_get_boolean(I, valueReferences, nValueReferences));
 }
 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Boolean values[], size_t nValues) {
     INST3();
     SCALARS("fmi3SetBoolean");
-    if (nValueReferences > 0 && (valueReferences == NULL || values == NULL)) return fmi3Error;
-    for (size_t i = 0; i < nValueReferences; i++) {
-        const fmi2Boolean b = values[i] ? fmi2True : fmi2False;
-        const fmi3Status s = st3(fmi2SetBoolean(W->c, &valueReferences[i], 1, &b));
-        if (s > fmi3Warning) return s;
-    }
-    return fmi3OK;
+    (void)values;
+    return st(cf_set_boolean(I, valueReferences, nValueReferences));
 }
 
 fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                          size_t nValueReferences, fmi3String values[], size_t nValues) {
     INST3();
     SCALARS("fmi3GetString");
-    return st3(fmi2GetString(W->c, valueReferences, nValueReferences, values));
+    return st(cf_get_string(I, valueReferences, nValueReferences, values));
 }
 
 fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                          size_t nValueReferences, const fmi3String values[], size_t nValues) {
     INST3();
     SCALARS("fmi3SetString");
-    return st3(fmi2SetString(W->c, valueReferences, nValueReferences, values));
+    return st(cf_set_string(I, valueReferences, nValueReferences, values));
 }
 
 /* the types this FMU has no variable of: an empty call is fine, any value reference is
- * refused in fmu2.c's words (vr_ok) */
-static fmi3Status no_variable(const cf3_instance *W, const char *fn,
-                              const fmi3ValueReference vr[], size_t n) {
+ * refused in the layer's words (its check of a value reference's type) */
+static fmi3Status no_variable(const cf_inst *I, const char *fn, const fmi3ValueReference vr[],
+                              size_t n) {
     if (n == 0) return fmi3OK;
-    return refuse(W, "%s: value reference %u is not a variable of this type", fn,
+    return REFUSE("%s: value reference %u is not a variable of this type", fn,
                   vr ? (unsigned)vr[0] : 0u);
 }
 
@@ -340,7 +298,7 @@ static fmi3Status no_variable(const cf3_instance *W, const char *fn,
                     size_t nValueReferences, CONST T values[], size_t nValues) {            \
         INST3();                                                                           \
         (void)values, (void)nValues;                                                       \
-        return no_variable(W, #NAME, valueReferences, nValueReferences);                   \
+        return no_variable(I, #NAME, valueReferences, nValueReferences);                   \
     }
 NO_VARIABLE(fmi3GetFloat32, fmi3Float32, )
 NO_VARIABLE(fmi3GetInt8, fmi3Int8, )
@@ -364,7 +322,7 @@ fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueRe
                          size_t nValues) {
     INST3();
     (void)valueSizes, (void)values, (void)nValues;
-    return no_variable(W, "fmi3GetBinary", valueReferences, nValueReferences);
+    return no_variable(I, "fmi3GetBinary", valueReferences, nValueReferences);
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
@@ -372,25 +330,25 @@ fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueRe
                          const fmi3Binary values[], size_t nValues) {
     INST3();
     (void)valueSizes, (void)values, (void)nValues;
-    return no_variable(W, "fmi3SetBinary", valueReferences, nValueReferences);
+    return no_variable(I, "fmi3SetBinary", valueReferences, nValueReferences);
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Clock values[]) {
     INST3();
     (void)values;
-    return no_variable(W, "fmi3GetClock", valueReferences, nValueReferences);
+    return no_variable(I, "fmi3GetClock", valueReferences, nValueReferences);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Clock values[]) {
     INST3();
     (void)values;
-    return no_variable(W, "fmi3SetClock", valueReferences, nValueReferences);
+    return no_variable(I, "fmi3SetClock", valueReferences, nValueReferences);
 }
 
 /* ---- what this FMU does not provide ---------------------------------------------------- */
-#define NOT_PROVIDED(fn, why) return refuse(W, "%s: not provided (%s)", fn, why)
+#define NOT_PROVIDED(fn, why) return REFUSE("%s: not provided (%s)", fn, why)
 #define NO_CLOCKS "this FMU has no clocks"
 #define NO_ME "this FMU is for co-simulation only"
 #define NO_EVENTS "this FMU has no event mode (hasEventMode is false)"
@@ -586,36 +544,35 @@ fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference 
 /* ---- FMU state: one to one -------------------------------------------------------------- */
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     INST3();
-    return st3(fmi2GetFMUstate(W->c, FMUState));
+    return st(cf_get_state(I, FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
     INST3();
-    return st3(fmi2SetFMUstate(W->c, FMUState));
+    return st(cf_set_state(I, FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     INST3();
-    return st3(fmi2FreeFMUstate(W->c, FMUState));
+    return st(cf_free_state(I, FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState,
                                       size_t *size) {
     INST3();
-    return st3(fmi2SerializedFMUstateSize(W->c, FMUState, size));
+    return st(cf_serialized_size(I, FMUState, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
                                  fmi3Byte serializedState[], size_t size) {
     INST3();
-    return st3(fmi2SerializeFMUstate(W->c, FMUState, (fmi2Byte *)serializedState, size));
+    return st(cf_serialize(I, FMUState, (unsigned char *)serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[],
                                    size_t size, fmi3FMUState *FMUState) {
     INST3();
-    return st3(fmi2DeSerializeFMUstate(W->c, (const fmi2Byte *)serializedState, size,
-                                       FMUState));
+    return st(cf_deserialize(I, (const unsigned char *)serializedState, size, FMUState));
 }
 
 /* ---- derivatives ----------------------------------------------------------------------- */
@@ -625,14 +582,14 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
                                         fmi3Float64 sensitivity[], size_t nSensitivity) {
     INST3();
     if (nSeed != nKnowns || nSensitivity != nUnknowns)
-        return refuse(W, "fmi3GetDirectionalDerivative: %zu seeds for %zu knowns, %zu "
+        return REFUSE("fmi3GetDirectionalDerivative: %zu seeds for %zu knowns, %zu "
                       "sensitivities for %zu unknowns (every variable is a scalar)", nSeed,
                       nKnowns, nSensitivity, nUnknowns);
-    return st3(fmi2GetDirectionalDerivative(W->c, unknowns, nUnknowns, knowns, nKnowns, seed,
-                                            sensitivity));
+    return st(cf_directional_derivative(I, unknowns, nUnknowns, knowns, nKnowns, seed,
+                                        sensitivity));
 }
 
-/* seed^T J: for each known, the column of J along it (fmi2GetDirectionalDerivative with a
+/* seed^T J: for each known, the column of J along it (cf_directional_derivative with a
  * unit direction) against the seed */
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
                                     size_t nUnknowns, const fmi3ValueReference knowns[],
@@ -640,19 +597,19 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
                                     fmi3Float64 sensitivity[], size_t nSensitivity) {
     INST3();
     if (nSeed != nUnknowns || nSensitivity != nKnowns)
-        return refuse(W, "fmi3GetAdjointDerivative: %zu seeds for %zu unknowns, %zu "
+        return REFUSE("fmi3GetAdjointDerivative: %zu seeds for %zu unknowns, %zu "
                       "sensitivities for %zu knowns (every variable is a scalar)", nSeed,
                       nUnknowns, nSensitivity, nKnowns);
     if ((nUnknowns && (unknowns == NULL || seed == NULL)) ||
         (nKnowns && (knowns == NULL || sensitivity == NULL)))
         return fmi3Error;
     double *column = (double *)calloc(nUnknowns ? nUnknowns : 1, sizeof(double));
-    if (column == NULL) return refuse(W, "fmi3GetAdjointDerivative: out of memory");
-    const fmi2Real one = 1.0;
+    if (column == NULL) return REFUSE("fmi3GetAdjointDerivative: out of memory");
+    const double one = 1.0;
     fmi3Status s = fmi3OK;
     for (size_t j = 0; j < nKnowns && s < fmi3Error; j++) {
-        s = worst(s, st3(fmi2GetDirectionalDerivative(W->c, unknowns, nUnknowns, &knowns[j],
-                                                      1, &one, column)));
+        s = worst(s, st(cf_directional_derivative(I, unknowns, nUnknowns, &knowns[j], 1, &one,
+                                                  column)));
         double sum = 0.0;
         for (size_t i = 0; i < nUnknowns; i++) sum += seed[i] * column[i];
         sensitivity[j] = sum;
@@ -667,9 +624,8 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance,
                                     size_t nValueReferences, const fmi3Int32 orders[],
                                     fmi3Float64 values[], size_t nValues) {
     INST3();
-    SCALARS("fmi3GetOutputDerivatives");
-    return st3(fmi2GetRealOutputDerivatives(W->c, valueReferences, nValueReferences,
-                                            (const fmi2Integer *)orders, values));
+    (void)valueReferences, (void)nValueReferences, (void)orders, (void)values, (void)nValues;
+    NOT_PROVIDED("fmi3GetOutputDerivatives", "maxOutputDerivativeOrder is 0");
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
@@ -678,12 +634,11 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
                       fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
     INST3();
+    (void)noSetFMUStatePriorToCurrentPoint;
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
-    if (terminateSimulation) *terminateSimulation = fmi3False; /* fmi2Terminated is false */
+    if (terminateSimulation) *terminateSimulation = fmi3False; /* never ends a simulation */
     if (earlyReturn) *earlyReturn = fmi3False;
-    const fmi3Status s = st3(fmi2DoStep(W->c, currentCommunicationPoint, communicationStepSize,
-                                        noSetFMUStatePriorToCurrentPoint));
-    if (lastSuccessfulTime)
-        fmi2GetRealStatus(W->c, fmi2LastSuccessfulTime, lastSuccessfulTime);
+    const fmi3Status s = st(cf_do_step(I, currentCommunicationPoint, communicationStepSize));
+    if (lastSuccessfulTime) *lastSuccessfulTime = cf_time(I);
     return s;
 }

@@ -62,6 +62,7 @@ struct cf_inst {
     cf_callbacks cb;
     void *env;                    /* the front end's bytes (cf_instantiate), after this */
     const char *api;              /* "fmi2": the prefix of call names in messages */
+    int v3;                       /* api "fmi3": FMI 3.0's call names (call_name) */
     char *name;
     int logging;
     cf_core c;
@@ -139,6 +140,41 @@ static const char *category(cf_status s) {
 }
 
 /* a message to the importer's logger (never as its format) */
+/* The FMI calls that messages name, after the api prefix: FMI 2.0's name and FMI 3.0's
+ * (FMI 3.0 renamed the typed accessors and the FMU state calls, instantiates a
+ * co-simulation instance by its own call and sets the experiment up at
+ * EnterInitializationMode). */
+typedef enum {
+    C_INSTANTIATE, C_SETUP_EXPERIMENT, C_ENTER_INIT, C_TERMINATE,
+    C_GET_REAL, C_GET_INTEGER, C_GET_BOOLEAN, C_GET_STRING,
+    C_SET_REAL, C_SET_INTEGER, C_SET_BOOLEAN, C_SET_STRING, C_DIRECTIONAL,
+    C_GET_STATE, C_SET_STATE, C_FREE_STATE, C_STATE_SIZE, C_SERIALIZE, C_DESERIALIZE,
+    N_CALLS
+} call_id;
+static const char *const CALL_NAMES[N_CALLS][2] = {
+    [C_INSTANTIATE] = {"Instantiate", "InstantiateCoSimulation"},
+    [C_SETUP_EXPERIMENT] = {"SetupExperiment", "EnterInitializationMode"},
+    [C_ENTER_INIT] = {"EnterInitializationMode", "EnterInitializationMode"},
+    [C_TERMINATE] = {"Terminate", "Terminate"},
+    [C_GET_REAL] = {"GetReal", "GetFloat64"},
+    [C_GET_INTEGER] = {"GetInteger", "GetInt32"},
+    [C_GET_BOOLEAN] = {"GetBoolean", "GetBoolean"},
+    [C_GET_STRING] = {"GetString", "GetString"},
+    [C_SET_REAL] = {"SetReal", "SetFloat64"},
+    [C_SET_INTEGER] = {"SetInteger", "SetInt32"},
+    [C_SET_BOOLEAN] = {"SetBoolean", "SetBoolean"},
+    [C_SET_STRING] = {"SetString", "SetString"},
+    [C_DIRECTIONAL] = {"GetDirectionalDerivative", "GetDirectionalDerivative"},
+    [C_GET_STATE] = {"GetFMUstate", "GetFMUState"},
+    [C_SET_STATE] = {"SetFMUstate", "SetFMUState"},
+    [C_FREE_STATE] = {"FreeFMUstate", "FreeFMUState"},
+    [C_STATE_SIZE] = {"SerializedFMUstateSize", "SerializedFMUStateSize"},
+    [C_SERIALIZE] = {"SerializeFMUstate", "SerializeFMUState"},
+    [C_DESERIALIZE] = {"DeSerializeFMUstate", "DeserializeFMUState"},
+};
+
+static const char *call_name(const Inst *I, call_id k) { return CALL_NAMES[k][I->v3]; }
+
 static void vsay(const Inst *I, cf_status status, const char *fmt, va_list ap) {
     if (I == NULL || I->cb.log == NULL) return;
     if (status == CF_STATUS_OK && !I->logging) return;
@@ -559,8 +595,8 @@ static cf_status fmu_step(Inst *I, double t, double h) {
         if (c->init_tried) bad_list(I, list, sizeof list); /* the values that stop it */
         REPRS();
         if (c->phase == PH_TERMINATED)
-            say(I, CF_STATUS_ERROR, "doStep at t = %s refused: called after %sTerminate", rt,
-                I->api);
+            say(I, CF_STATUS_ERROR, "doStep at t = %s refused: called after %s%s", rt,
+                I->api, call_name(I, C_TERMINATE));
         else
             say(I, CF_STATUS_ERROR, "doStep at t = %s refused: called before the model is "
                 "initialised (%sExitInitializationMode %s%s)", rt, I->api,
@@ -709,7 +745,8 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
     const char *name = "/table.bin";
     if (k && path[k - 1] == '/') name++;
     if (k + strlen(name) + 1 > sizeof path) {
-        say(probe, CF_STATUS_ERROR, "%sInstantiate: the resource path is too long", I->api);
+        say(probe, CF_STATUS_ERROR, "%s%s: the resource path is too long",
+            I->api, call_name(I, C_INSTANTIATE));
         return 0;
     }
     strcat(path, name);
@@ -717,8 +754,8 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
     const size_t size = 8 + 12 + 8 + 8 * n_data + 8;
     FILE *f = fopen(path, "rb");
     if (f == NULL) {
-        say(probe, CF_STATUS_ERROR, "%sInstantiate: the creep-force table %s cannot be opened",
-            I->api, path);
+        say(probe, CF_STATUS_ERROR, "%s%s: the creep-force table %s cannot be opened",
+            I->api, call_name(I, C_INSTANTIATE), path);
         return 0;
     }
     unsigned char *buf = (unsigned char *)I->cb.alloc(I->env, size + 1, 1);
@@ -738,15 +775,16 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
         else if (crc32_of(buf, size - 8) != sum) why = "damaged: its checksum does not match";
     }
     if (why) {
-        say(probe, CF_STATUS_ERROR, "%sInstantiate: the creep-force table %s is refused: %s",
-            I->api, path, why);
+        say(probe, CF_STATUS_ERROR, "%s%s: the creep-force table %s is refused: %s",
+            I->api, call_name(I, C_INSTANTIATE), path, why);
         if (buf) I->cb.release(I->env, buf);
         return 0;
     }
     I->table = (double *)I->cb.alloc(I->env, n_data, sizeof(double));
     if (I->table) memcpy(I->table, buf + 28, 8 * n_data);
     I->cb.release(I->env, buf);
-    if (I->table == NULL) say(probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", I->api);
+    if (I->table == NULL) say(probe, CF_STATUS_ERROR, "%s%s: out of memory",
+        I->api, call_name(I, C_INSTANTIATE));
     return I->table != NULL;
 }
 
@@ -757,6 +795,7 @@ static void probe_for(Inst *probe, const cf_callbacks *cb, void *env, const char
     probe->cb = *cb;
     probe->env = env;
     probe->api = api;
+    probe->v3 = api != NULL && strcmp(api, "fmi3") == 0;
     probe->name = (char *)(name ? name : "");
 }
 
@@ -778,7 +817,8 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
     Inst probe;
     probe_for(&probe, cb, env, api, name);
     if (guid == NULL || strcmp(guid, CF_GUID) != 0) {
-        say(&probe, CF_STATUS_ERROR, "%sInstantiate: GUID %s is not this FMU's (%s)", api,
+        say(&probe, CF_STATUS_ERROR, "%s%s: GUID %s is not this FMU's (%s)", api,
+            call_name(&probe, C_INSTANTIATE),
             guid ? guid : "(null)", CF_GUID);
         return NULL;
     }
@@ -787,7 +827,7 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
                         sizeof(max_align_t);
     Inst *I = (Inst *)cb->alloc(env, 1, head + env_size);
     if (I == NULL) {
-        say(&probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", api);
+        say(&probe, CF_STATUS_ERROR, "%s%s: out of memory", api, call_name(&probe, C_INSTANTIATE));
         return NULL;
     }
     memset(I, 0, sizeof *I);
@@ -795,11 +835,12 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
     I->env = env_size ? (void *)((unsigned char *)I + head) : env;
     if (env_size) memcpy(I->env, env, env_size);
     I->api = api;
+    I->v3 = probe.v3;
     size_t len = strlen(probe.name) + 1;
     I->name = (char *)I->cb.alloc(I->env, len, 1);
     if (I->name == NULL) {
         cb->release(env, I);
-        say(&probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", api);
+        say(&probe, CF_STATUS_ERROR, "%s%s: out of memory", api, call_name(&probe, C_INSTANTIATE));
         return NULL;
     }
     memcpy(I->name, probe.name, len);
@@ -813,7 +854,8 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
         if (I->grid == NULL) {
             I->cb.release(I->env, I->name);
             cb->release(env, I);
-            say(&probe, CF_STATUS_ERROR, "%sInstantiate: out of memory", api);
+            say(&probe, CF_STATUS_ERROR, "%s%s: out of memory",
+                api, call_name(&probe, C_INSTANTIATE));
             return NULL;
         }
         for (int k = 0; k < 5; k++) I->grid->key[k] = NAN;
@@ -840,7 +882,8 @@ void cf_free_instance(cf_inst *I) {
 /* ---- phases ------------------------------------------------------------------------- */
 cf_status cf_setup_experiment(cf_inst *I, double start) {
     if (I->c.built) {
-        say(I, CF_STATUS_ERROR, "%sSetupExperiment after initialisation is ignored", I->api);
+        say(I, CF_STATUS_ERROR, "%s%s after initialisation is ignored",
+            I->api, call_name(I, C_SETUP_EXPERIMENT));
         return CF_STATUS_ERROR;
     }
     if (isfinite(start)) {
@@ -861,7 +904,7 @@ cf_status cf_enter_initialization_mode(cf_inst *I) {
 cf_status cf_exit_initialization_mode(cf_inst *I) {
     if (I->c.phase == PH_INSTANTIATED) { /* FMI: only in initialisation mode */
         say(I, CF_STATUS_ERROR, "exitInitializationMode refused: called before "
-            "%sEnterInitializationMode", I->api);
+            "%s%s", I->api, call_name(I, C_ENTER_INIT));
         return CF_STATUS_ERROR;
     }
     I->c.init_tried = 1;
@@ -886,16 +929,18 @@ cf_status cf_terminate(cf_inst *I) {
     return CF_STATUS_OK;
 }
 
+unsigned cf_n_variables(void) { return CF_N_VARS; }
+
 cf_status cf_reset(cf_inst *I) {
     start_values(I);
     return CF_STATUS_OK;
 }
 
 /* ---- variables ----------------------------------------------------------------------- */
-static int vr_ok(const Inst *I, unsigned vr, int type, const char *call) {
+static int vr_ok(const Inst *I, unsigned vr, int type, call_id call) {
     if (vr < CF_N_VARS && CF_VARS[vr].type == type) return 1;
     say(I, CF_STATUS_ERROR, "%s%s: value reference %u is not a variable of this type", I->api,
-        call, vr);
+        call_name(I, call), vr);
     return 0;
 }
 
@@ -913,7 +958,7 @@ cf_status cf_get_real(cf_inst *I, const unsigned *vr, size_t n, double *v) {
     cf_status status = CF_STATUS_OK;
     if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_REAL, "GetReal")) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[i], T_REAL, C_GET_REAL)) return CF_STATUS_ERROR;
         v[i] = I->c.var[vr[i]];
         if (held_bad(I, vr[i]) != CF_STATUS_OK) status = CF_STATUS_ERROR;
     }
@@ -925,7 +970,7 @@ cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
     cf_status status = CF_STATUS_OK;
     if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_INTEGER, "GetInteger")) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[i], T_INTEGER, C_GET_INTEGER)) return CF_STATUS_ERROR;
         double x = I->c.var[vr[i]];
         v[i] = x > 0.5 ? 1 : 0; /* the only Integer: regime, 0 or 1 */
     }
@@ -934,7 +979,8 @@ cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
 
 cf_status cf_get_boolean(cf_inst *I, const unsigned *vr, size_t n) {
     if (n == 0) return CF_STATUS_OK;
-    say(I, CF_STATUS_ERROR, "%sGetBoolean: this FMU has no Boolean variable (vr %u)", I->api,
+    say(I, CF_STATUS_ERROR, "%s%s: this FMU has no Boolean variable (vr %u)", I->api,
+        call_name(I, C_GET_BOOLEAN),
         vr ? vr[0] : 0u);
     return CF_STATUS_ERROR;
 }
@@ -942,7 +988,7 @@ cf_status cf_get_boolean(cf_inst *I, const unsigned *vr, size_t n) {
 cf_status cf_get_string(cf_inst *I, const unsigned *vr, size_t n, const char **v) {
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_STRING, "GetString")) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[i], T_STRING, C_GET_STRING)) return CF_STATUS_ERROR;
         char *out = is_scheme((int)vr[i]) ? I->scheme_out : I->method_out;
         snprintf(out, METHOD_TEXT, "%s", string_text(&I->c, (int)vr[i]));
         v[i] = out;
@@ -978,7 +1024,7 @@ cf_status cf_set_real(cf_inst *I, const unsigned *vr, size_t n, const double *v)
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (!vr_ok(I, vr[k], T_REAL, "SetReal")) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[k], T_REAL, C_SET_REAL)) return CF_STATUS_ERROR;
         const int i = (int)vr[k];
         const cf_var *var = &CF_VARS[i];
         char r[40] = "";
@@ -1008,7 +1054,7 @@ cf_status cf_set_real(cf_inst *I, const unsigned *vr, size_t n, const double *v)
 
 cf_status cf_set_integer(cf_inst *I, const unsigned *vr, size_t n, const int *v) {
     for (size_t k = 0; k < n; k++) {
-        if (vr == NULL || !vr_ok(I, vr[k], T_INTEGER, "SetInteger")) return CF_STATUS_ERROR;
+        if (vr == NULL || !vr_ok(I, vr[k], T_INTEGER, C_SET_INTEGER)) return CF_STATUS_ERROR;
         char r[24];
         snprintf(r, sizeof r, "%d", v ? v[k] : 0);
         settable(I, (int)vr[k], r); /* the only Integer is an output */
@@ -1019,7 +1065,8 @@ cf_status cf_set_integer(cf_inst *I, const unsigned *vr, size_t n, const int *v)
 
 cf_status cf_set_boolean(cf_inst *I, const unsigned *vr, size_t n) {
     if (n == 0) return CF_STATUS_OK;
-    say(I, CF_STATUS_ERROR, "%sSetBoolean: this FMU has no Boolean variable (vr %u)", I->api,
+    say(I, CF_STATUS_ERROR, "%s%s: this FMU has no Boolean variable (vr %u)", I->api,
+        call_name(I, C_SET_BOOLEAN),
         vr ? vr[0] : 0u);
     return CF_STATUS_ERROR;
 }
@@ -1028,7 +1075,7 @@ cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n, const char *co
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (!vr_ok(I, vr[k], T_STRING, "SetString")) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[k], T_STRING, C_SET_STRING)) return CF_STATUS_ERROR;
         const char *s = v[k] ? v[k] : "";
         char shown[METHOD_TEXT + 2];
         snprintf(shown, sizeof shown, "'%s'", s);
@@ -1069,21 +1116,21 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
                                     const unsigned *ur, size_t nu, const double *du,
                                     double *dz) {
     if (CF_MODE != MODE_CONTACT) {
-        say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: provided by the contact mode only "
-            "(providesDirectionalDerivative is false here)", I->api);
+        say(I, CF_STATUS_ERROR, "%s%s: provided by the contact mode only "
+            "(providesDirectionalDerivative is false here)", I->api, call_name(I, C_DIRECTIONAL));
         return CF_STATUS_ERROR;
     }
     if ((nz && (zr == NULL || dz == NULL)) || (nu && (ur == NULL || du == NULL)))
         return CF_STATUS_ERROR;
     cf_core *C = &I->c;
     if (!C->built) {
-        say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: the model is not initialised",
-            I->api);
+        say(I, CF_STATUS_ERROR, "%s%s: the model is not initialised",
+            I->api, call_name(I, C_DIRECTIONAL));
         return CF_STATUS_ERROR;
     }
     if (C->next_bad && any_bad(C)) {
-        say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: an input is invalid (see setReal)",
-            I->api);
+        say(I, CF_STATUS_ERROR, "%s%s: an input is invalid (see setReal)",
+            I->api, call_name(I, C_DIRECTIONAL));
         return CF_STATUS_ERROR;
     }
     if (C->dirty && refresh(I) != CF_STATUS_OK) return CF_STATUS_ERROR; /* logged there */
@@ -1091,8 +1138,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
     double dir[4] = {0.0, 0.0, 0.0, 0.0};
     for (size_t j = 0; j < nu; j++) {
         if (ur[j] >= CF_N_VARS || CF_VARS[ur[j]].kind != K_INPUT || CF_VARS[ur[j]].type != T_REAL) {
-            say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: value reference %u is not a "
-                "Real input", I->api, ur[j]);
+            say(I, CF_STATUS_ERROR, "%s%s: value reference %u is not a "
+                "Real input", I->api, call_name(I, C_DIRECTIONAL), ur[j]);
             return CF_STATUS_ERROR;
         }
         const int role = CF_VARS[ur[j]].role;
@@ -1101,8 +1148,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
         if (k < 0) only_kin = 0;
         else dir[k] += du[j];
         if (!isfinite(du[j])) {
-            say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: a direction is not finite",
-                I->api);
+            say(I, CF_STATUS_ERROR, "%s%s: a direction is not finite",
+                I->api, call_name(I, C_DIRECTIONAL));
             return CF_STATUS_ERROR;
         }
     }
@@ -1113,8 +1160,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
     for (i = 0; i < nz; i++) {
         if (zr[i] >= CF_N_VARS || CF_VARS[zr[i]].kind != K_OUTPUT ||
             CF_VARS[zr[i]].type != T_REAL) {
-            say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: value reference %u is not a "
-                "Real output", I->api, zr[i]);
+            say(I, CF_STATUS_ERROR, "%s%s: value reference %u is not a "
+                "Real output", I->api, call_name(I, C_DIRECTIONAL), zr[i]);
             return CF_STATUS_ERROR;
         }
         const int role = CF_VARS[zr[i]].role;
@@ -1142,8 +1189,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
                 cf_params p = C->p;
                 cf_body b = C->b;
                 if (contact_outputs(I, &X, &p, &b, sgn ? minus : plus, r, sizeof r)) {
-                    say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: the outputs are not "
-                        "finite next to the inputs", I->api);
+                    say(I, CF_STATUS_ERROR, "%s%s: the outputs are not "
+                        "finite next to the inputs", I->api, call_name(I, C_DIRECTIONAL));
                     return CF_STATUS_ERROR;
                 }
             }
@@ -1155,8 +1202,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
     }
     return CF_STATUS_OK;
 not_finite:
-    say(I, CF_STATUS_ERROR, "%sGetDirectionalDerivative: the derivative of %s is not finite at "
-        "the current inputs", I->api, CF_VARS[zr[i]].name);
+    say(I, CF_STATUS_ERROR, "%s%s: the derivative of %s is not finite at "
+        "the current inputs", I->api, call_name(I, C_DIRECTIONAL), CF_VARS[zr[i]].name);
     return CF_STATUS_ERROR;
 }
 
@@ -1335,30 +1382,31 @@ static void forget(Inst *I, const void *st) { /* linear probing's backward-shift
     I->n_states--;
 }
 
-static int live_or_refuse(const Inst *I, const void *st, const char *call) {
+static int live_or_refuse(const Inst *I, const void *st, call_id call) {
     if (live(I, st)) return 1;
     say(I, CF_STATUS_ERROR, "%s%s: %p is not an FMU state of this instance (never given, or "
-        "freed)", I->api, call, (void *)(uintptr_t)st);
+        "freed)", I->api, call_name(I, call), (void *)(uintptr_t)st);
     return 0;
 }
 
 /* *state: NULL for a new state, else a live one to overwrite (FMI 2.0); NULL if out of
  * memory or refused (logged) */
-static cf_core *state_to_fill(Inst *I, void **state, const char *call) {
+static cf_core *state_to_fill(Inst *I, void **state, call_id call) {
     if (*state != NULL) return live_or_refuse(I, *state, call) ? (cf_core *)*state : NULL;
     cf_core *s = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core));
     if (s != NULL && keep(I, s)) return s;
     if (s != NULL) I->cb.release(I->env, s);
-    say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call);
+    say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, call));
     return NULL;
 }
 
 cf_status cf_get_state(cf_inst *I, void **state) {
     if (state == NULL) {
-        say(I, CF_STATUS_ERROR, "%sGetFMUstate: no place for the state given", I->api);
+        say(I, CF_STATUS_ERROR, "%s%s: no place for the state given",
+            I->api, call_name(I, C_GET_STATE));
         return CF_STATUS_ERROR;
     }
-    cf_core *s = state_to_fill(I, state, "GetFMUstate");
+    cf_core *s = state_to_fill(I, state, C_GET_STATE);
     if (s == NULL) return CF_STATUS_ERROR;
     *s = I->c;
     *state = s;
@@ -1367,10 +1415,10 @@ cf_status cf_get_state(cf_inst *I, void **state) {
 
 cf_status cf_set_state(cf_inst *I, const void *state) {
     if (state == NULL) {
-        say(I, CF_STATUS_ERROR, "%sSetFMUstate: no state given", I->api);
+        say(I, CF_STATUS_ERROR, "%s%s: no state given", I->api, call_name(I, C_SET_STATE));
         return CF_STATUS_ERROR;
     }
-    if (!live_or_refuse(I, state, "SetFMUstate")) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, state, C_SET_STATE)) return CF_STATUS_ERROR;
     cf_core c = *(const cf_core *)state;
     sanitize(&c);
     char why[512];
@@ -1387,11 +1435,11 @@ cf_status cf_set_state(cf_inst *I, const void *state) {
 
 cf_status cf_free_state(cf_inst *I, void **state) {
     if (state == NULL) {
-        say(I, CF_STATUS_ERROR, "%sFreeFMUstate: no state given", I->api);
+        say(I, CF_STATUS_ERROR, "%s%s: no state given", I->api, call_name(I, C_FREE_STATE));
         return CF_STATUS_ERROR;
     }
     if (*state == NULL) return CF_STATUS_OK; /* the standard: nothing to free */
-    if (!live_or_refuse(I, *state, "FreeFMUstate")) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, *state, C_FREE_STATE)) return CF_STATUS_ERROR;
     forget(I, *state);
     I->cb.release(I->env, *state);
     *state = NULL;
@@ -1415,19 +1463,20 @@ static size_t serialized_size(void) {
 
 cf_status cf_serialized_size(cf_inst *I, const void *state, size_t *size) {
     if (size == NULL) {
-        say(I, CF_STATUS_ERROR, "%sSerializedFMUstateSize: no place for the size given", I->api);
+        say(I, CF_STATUS_ERROR, "%s%s: no place for the size given",
+            I->api, call_name(I, C_STATE_SIZE));
         return CF_STATUS_ERROR;
     }
-    if (!live_or_refuse(I, state, "SerializedFMUstateSize")) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, state, C_STATE_SIZE)) return CF_STATUS_ERROR;
     *size = serialized_size();
     return CF_STATUS_OK;
 }
 
 cf_status cf_serialize(cf_inst *I, const void *state, unsigned char *out, size_t size) {
-    if (!live_or_refuse(I, state, "SerializeFMUstate")) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, state, C_SERIALIZE)) return CF_STATUS_ERROR;
     if (out == NULL || size < serialized_size()) {
-        say(I, CF_STATUS_ERROR, "%sSerializeFMUstate: no buffer, or one of %zu bytes (%zu "
-            "needed)", I->api, size, serialized_size());
+        say(I, CF_STATUS_ERROR, "%s%s: no buffer, or one of %zu bytes (%zu "
+            "needed)", I->api, call_name(I, C_SERIALIZE), size, serialized_size());
         return CF_STATUS_ERROR;
     }
     unsigned char *p = out;
@@ -1471,7 +1520,8 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
         }
     }
     if (why != NULL) {
-        say(I, CF_STATUS_ERROR, "%sDeSerializeFMUstate: the bytes are refused: %s", I->api, why);
+        say(I, CF_STATUS_ERROR, "%s%s: the bytes are refused: %s",
+            I->api, call_name(I, C_DESERIALIZE), why);
         return CF_STATUS_ERROR;
     }
     cf_core c;
@@ -1479,11 +1529,12 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
     sanitize(&c);
     char problem[512];
     if (state_problem(&c, problem, sizeof problem)) {
-        say(I, CF_STATUS_ERROR, "%sDeSerializeFMUstate: the bytes are refused: %s", I->api,
+        say(I, CF_STATUS_ERROR, "%s%s: the bytes are refused: %s",
+            I->api, call_name(I, C_DESERIALIZE),
             problem);
         return CF_STATUS_ERROR;
     }
-    cf_core *s = state_to_fill(I, state, "DeSerializeFMUstate");
+    cf_core *s = state_to_fill(I, state, C_DESERIALIZE);
     if (s == NULL) return CF_STATUS_ERROR;
     *s = c;
     *state = s;

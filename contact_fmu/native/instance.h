@@ -65,6 +65,8 @@ CF_HIDDEN void cf_log(const cf_inst *I, cf_status status, const char *fmt, ...);
 CF_HIDDEN void cf_log_to(const cf_callbacks *cb, void *env, const char *name, cf_status status,
                          const char *fmt, ...);
 CF_HIDDEN void cf_set_debug_logging(cf_inst *I, int on);
+/* the number of the model's variables: its value references are 0 ... n - 1 */
+CF_HIDDEN unsigned cf_n_variables(void);
 
 /* ---- phases ----------------------------------------------------------------------------- */
 CF_HIDDEN cf_status cf_setup_experiment(cf_inst *I, double start_time);
