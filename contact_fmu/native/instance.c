@@ -1,5 +1,6 @@
 /* The native FMU's instance layer (instance.h): one instance of contact_fmu's model
- * whatever FMI version calls it; fmi2.c is the FMI 2.0 front end on it. The model is the
+ * whatever FMI version calls it; fmi2.c is the FMI 2.0 front end on it, fmi3.c the FMI 3.0
+ * one. The model is the
  * body mode on the compiled stepper (stepper.c), the contact mode (fmu/contact_model.py:
  * the thin-layer law, with a spin input by the strip march on the law's spin grid, and
  * its analytic directional derivatives) or the rigid_body mode (fmu/rigid_body.py), with

@@ -6,7 +6,7 @@
  * admission of a step, the wording of every message (the pythonfmu FMU's, word for
  * word: tests/test_native_fmu.py), the FMU states (one format, one registry of the live
  * states an instance handed out), their serialisation, the creep-force table resource
- * (a file URI) and its CRC. A front end (fmi2.c for FMI 2.0; an FMI 3.0 one alike)
+ * (a file URI) and its CRC. A front end (fmi2.c for FMI 2.0, fmi3.c for FMI 3.0)
  * translates its arguments and statuses and calls these functions, a few lines each.
  *
  * The functions mirror the FMI 2.0 co-simulation calls with version-neutral names and
@@ -14,9 +14,11 @@
  * pointers; each answers a cf_status whose values are FMI 2.0's and FMI 3.0's (OK 0,
  * Warning 1, Discard 2, Error 3, Fatal 4). A refusal is logged before the call returns,
  * through the front end's logger; no function answers CF_FATAL. A NULL instance is the
- * front end's to refuse. Messages that name an FMI call or status name FMI 2.0's with
- * the API prefix given at instantiation in place of "fmi2" ("fmi2SetReal: ...",
- * "doStep answers fmi2Discard ..."; a front end may give "fmi3"); categories are those
+ * front end's to refuse. Messages that name an FMI call or status begin the name with
+ * the API prefix given at instantiation, "fmi2" or "fmi3", and name the call as that
+ * version does ("fmi2SetReal: ..." / "fmi3SetFloat64: ...", "fmi2DeSerializeFMUstate" /
+ * "fmi3DeserializeFMUState", "doStep answers fmi2Discard" / "fmi3Discard": instance.c's
+ * table of call names); categories are those
  * of the model description's LogCategories
  * (logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll). */
 #ifndef CF_INSTANCE_H
@@ -51,8 +53,8 @@ typedef struct cf_inst cf_inst;
 /* ---- lifetime ------------------------------------------------------------------------- */
 /* A new instance at the start values; NULL with the reason logged (a GUID that is not
  * this FMU's, a creep-force table that cannot be read from resource_uri, no memory).
- * api: the prefix of the call names in messages ("fmi2"), a string that outlives the
- * instance; logging: whether CF_STATUS_OK messages are logged. */
+ * api: the prefix of the call and status names in messages, "fmi2" or "fmi3" (FMI 3.0's
+ * call names), a string that outlives the instance; logging: whether CF_STATUS_OK messages are logged. */
 CF_HIDDEN cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
                                   const char *resource_uri, int logging,
                                   const cf_callbacks *cb, void *env, size_t env_size);
