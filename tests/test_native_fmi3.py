@@ -406,6 +406,9 @@ def test_bad_input_gives_the_fmi2_fmus_statuses_and_messages(fmus):
     assert any(text in m for s, m in a.messages if s == ERROR)
     assert any(text in m for s, m in a.messages if s == DISCARD)
     assert any("P = -5.0 is invalid: must be > 0" in m for _, m in a.messages)
+    assert any(
+        m.endswith("; doStep answers fmi3Discard until it is corrected") for _, m in a.messages
+    )
     assert all(s < FATAL for s, _ in a.messages)
 
 
