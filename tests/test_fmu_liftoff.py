@@ -21,7 +21,7 @@ import fmu_build
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load
-from contact_fmu.scenario.instance import ERROR, OK, Instance
+from contact_fmu.scenario.instance import DISCARD, ERROR, OK, Instance
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -167,3 +167,31 @@ def test_tiny_mass_keeps_the_momentum_balance(target):
         dO = b.get("Omega_y") - O0
         assert abs(Iy * dO - My * h) <= mu * P * Rx * h + Iy * 4e-16 * abs(O0) * 4
         assert abs(b.get("Tx")) <= mu * P
+
+
+def test_transient_phase_refuses_lift_off_naming_it():
+    """The transient phase's traction field lives on the contact ellipse: at P = 0 its
+    step answers fmi2Discard (state unchanged, the steady phase takes lift-off), and the
+    next step in contact is OK."""
+    with Instance(build("pythonfmu", "fig12_transient"), "t") as b:
+        assert b.step(1e-4) == OK
+        before = b.outputs()
+        b.set("P", 0.0)
+        assert b.step(1e-4) == DISCARD
+        assert "P = 0.0 is invalid: must be > 0 in the transient phase" in b.messages[-1][1]
+        assert b.outputs() == before
+        b.set("P", 1000.0)
+        assert b.step(1e-4) == OK
+
+
+def test_native_force_element_slopes_vanish_at_lift_off():
+    """The native contact FMU's directional derivatives in the kinematics at P = 0: the
+    forces are 0 at every Vx, Vy, Omega_y, so is every slope (the analytic form had
+    mu P times an infinite beta per creepage: NaN, answered fmi2Error)."""
+    with Instance(build("native", "full-contact"), "dd") as c:
+        vr = {n: v.valueReference for n, v in c.vars.items()}
+        c.set("Omega_y", 0.9 * c.get("Vx") / c.get("Rx"))
+        c.set("P", 0.0)
+        for name in ("Vx", "Vy", "Omega_y"):
+            got = c.fmu.getDirectionalDerivative([vr["Tx"], vr["Ty"], vr["Mz"]], [vr[name]], [1.0])
+            assert list(got) == [0.0, 0.0, 0.0]
