@@ -15,7 +15,8 @@ the scene's data on a path that does not go through the FMU, its adapter or fmpy
   ``refine`` times more internal steps than the FMU takes (h_max / refine);
 - ``traction``: contact mode; the resultant of the traction field marched strip by
   strip (``LayerContact.traction``) on an ``nx`` x ``ny`` grid, integrated numerically:
-  independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates;
+  independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates (0 at
+  P = 0: no contact, no field);
 - ``halfspace``: contact mode, half-space law; direct solves of the steady-rolling
   problem (``HalfSpaceContact`` of the scene's [halfspace] declaration, on the solver
   grid of the table) at the sampled points: independent of the creep-force table the
@@ -204,8 +205,11 @@ def by_traction(scene: Scene, ref: Reference, case: Case, refine: int = 1) -> di
         if u["Omega_z"][i] != 0.0:
             raise ValueError(f"{scene.name}: source 'traction' is without spin")
         vx, vy = rigid_slip(u["Vx"][i], u["Omega_y"][i], u["Vy"][i], p["Rx"])
-        field = _law(p, u["P"][i]).traction(vx, vy, u["Vx"][i], nx, ny)
-        for name, value in zip(("Tx", "Ty", "Mz"), field.resultant(), strict=True):
+        if u["P"][i] == 0.0:  # lift-off: no contact, no field
+            resultant = (0.0, 0.0, 0.0)
+        else:
+            resultant = _law(p, u["P"][i]).traction(vx, vy, u["Vx"][i], nx, ny).resultant()
+        for name, value in zip(("Tx", "Ty", "Mz"), resultant, strict=True):
             rows[name].append(value)
         rows["xi_x"].append(vx / abs(u["Vx"][i]))  # for plots; not compared
     out = {"time": scene.grid[k], "xi_x": np.asarray(rows["xi_x"])}
