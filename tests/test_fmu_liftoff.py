@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
@@ -195,3 +196,27 @@ def test_native_force_element_slopes_vanish_at_lift_off():
         for name in ("Vx", "Vy", "Omega_y"):
             got = c.fmu.getDirectionalDerivative([vr["Tx"], vr["Ty"], vr["Mz"]], [vr[name]], [1.0])
             assert list(got) == [0.0, 0.0, 0.0]
+
+
+def test_scene_may_ramp_its_load_from_zero(tmp_path):
+    """A scene whose P ramps from 0 (the wheel set down) loads, builds and runs: at P = 0
+    Tx = 0, then abs(Tx) <= mu P of the load held over each step."""
+    from contact_fmu.scenario import runner
+
+    text = (ROOT / "scenarios" / "liftoff.toml").read_text()
+    start = text.index("P = [")
+    end = text.index("]\n", start) + 2
+    text = text[:start] + "P = { ramp = { start = 0.0, duration = 1.0e-3, height = 1000.0 } }\n"
+    text += (ROOT / "scenarios" / "liftoff.toml").read_text()[end:]
+    text = text.replace("stop_time = 5.0e-3", "stop_time = 2.0e-3")
+    path = tmp_path / "setdown.toml"
+    path.write_text(text.replace("references/", str(ROOT / "scenarios" / "references") + "/"))
+    scene = load(path)
+    (res,) = runner.simulate(fmu_build.build(scene.config, OUT).path, scene)
+    assert res.error is None
+    P = np.asarray(res.columns["P"], float)
+    Tx = np.asarray(res.columns["Tx"], float)
+    assert P[0] == 0.0 and Tx[0] == 0.0
+    held = np.maximum(P, np.r_[P[:1], P[:-1]])  # the load of the step ending at t_k
+    assert np.all(np.abs(Tx) <= 0.3 * held * (1 + 1e-12))
+    assert np.max(np.abs(Tx)) == pytest.approx(300.0, rel=1e-12)  # sliding at full load
