@@ -149,8 +149,11 @@ class RollingBody(BodyState):
         self.law = self.law.with_load(P)
 
     def set_load(self, P: float) -> None:
-        """Change the normal load P (N): the contact ellipse follows (Eq. 34)."""
-        self.law = self.law.with_load(positive("P", P))
+        """Change the normal load P (N): the contact ellipse follows (Eq. 34); P = 0 is
+        lift-off (no contact, ``_free_step``)."""
+        if not P >= 0.0:
+            raise InputError("P", P, ">= 0 (lift-off, no contact, is P = 0)")
+        self.law = self.law.with_load(finite("P", P))
 
     def set_mu(self, mu: float) -> None:
         """Change the coefficient of friction (takes effect from the next step; the
@@ -246,6 +249,9 @@ class RollingBody(BodyState):
         c1, c2 = STAGE_TIMES[self.scheme]
         L1 = self._bounded(_checked(load_at(t_n + c1 * h)))
         L2 = self._bounded(_checked(load_at(t_n + c2 * h)))
+        if self.law.P == 0.0:
+            self._free_step(h, L1, L2)
+            return
         admissible = self._admissible(L1) and self._admissible(L2)
         if self.method == "quasistationary" and not admissible:
             self.sliding = True
@@ -270,6 +276,39 @@ class RollingBody(BodyState):
         if self.method == "quasistationary":
             self._update_regime(L2)
 
+    def _free_step(self, h: float, L1: Loads, L2: Loads) -> None:
+        """A step without contact (P = 0, lift-off): Eqs. (8)-(11) with T = 0, the loads
+        at the stages weighted as the scheme's quadrature (b = (1/2, 1/2) for Lobatto
+        IIIC, (1 - gamma, gamma) for SDIRK2; exact for held loads): Vx += h Fx_ex/M,
+        Omega_y += h My_ex/Iy, so the slip vx = Vx - Omega_y Rx moves by h (Fx_ex/M -
+        Rx My_ex/Iy), Eq. (20) with T = 0 divided by M A2. The slip is carried: it is
+        the body's kinematics, and it meets the contact when P returns (docs/model.md,
+        "Lift-off"). Iy = 0 (eta = inf) takes no moment without contact (Omega_y would
+        jump); with My_ex = 0 Omega_y is held, the Iy -> 0+ limit."""
+        b = self.body
+        w1, w2 = (0.5, 0.5) if self.scheme == "lobatto3c" else (1.0 - GAMMA, GAMMA)
+        Fx = w1 * L1.Fx_ex + w2 * L2.Fx_ex
+        My = w1 * L1.My_ex + w2 * L2.My_ex
+        if b.Iy == 0.0 and (L1.My_ex != 0.0 or L2.My_ex != 0.0):
+            raise StageSolveError(
+                "eta = inf (Iy = 0) admits no gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = "
+                f"{abs(self._target_x(L2)):.6g} N reaches mu P = 0 N"
+            )
+        Vn, vn = float(self.y[0]), float(self.y[1])
+        dV = h * Fx / b.M
+        vx = vn + dV - (h * b.Rx * My / b.Iy if b.Iy > 0.0 else 0.0)
+        y = self.y.copy()
+        y[0], y[1] = Vn + dV, vx
+        if self.lateral.dynamic_vy:
+            y[2] += h * (w1 * L1.Fy_ex + w2 * L2.Fy_ex) / b.M
+        if self.lateral.dynamic_spin:
+            y[3] += h * (w1 * L1.Mz_ex + w2 * L2.Mz_ex) / b.Iz
+        self.y = self._apply_ratios(y)
+        self._dv = (vx - vn) / h
+        self.out = ContactOutputs(0.0, 0.0, 0.0, _saturated(self.law, self.y))
+        if self.method == "quasistationary":  # Eq. (26) has no root without contact
+            self.sliding = True
+
     def _update_regime(self, L: Loads) -> None:
         """Quasistationary method: leave gross sliding when the slip law is unsaturated
         and the loads are admissible again (Eq. 27); enter it when they are not."""
@@ -280,7 +319,11 @@ class RollingBody(BodyState):
             self.sliding = True
 
     def _bounded(self, L: Loads) -> Loads:
-        """Loads within LOAD_LIMIT mu P (|Fx_ex|, |My_ex|/Rx), or InputError."""
+        """Loads within LOAD_LIMIT mu P (|Fx_ex|, |My_ex|/Rx), or InputError; any finite
+        loads at P = 0 (the step without contact, ``_free_step``, is exact: no
+        cancellation to bound)."""
+        if self.law.P == 0.0:
+            return L
         cap = LOAD_LIMIT * self.law.mu * self.law.P
         if abs(L.Fx_ex) > cap:
             raise InputError("Fx_ex", L.Fx_ex, f"<= {LOAD_LIMIT:g} mu P = {cap:.6g} N in magnitude")
@@ -381,14 +424,20 @@ class RollingBody(BodyState):
         V2b = Vn + 0.5 * h * (G1 + G2) / b.M
         scale = float(self._scale(V2b)[0])
         m = 0.0 if algebraic else b.m_slip
+        k = m / b.M
         slope = self.law.mu * self.law.P / scale  # dT/dv at the saturation scale
         if m == 0.0 or h * slope / m > Z_ALGEBRAIC:
+            # T(v2) = Fe2 with Vx = V2b + k (v2 - vn): the slip's mass m (v2 - v1)/h drops
+            # out, not Eq. (8)'s share of the slip's change, k = M A2/M = A2 (a tiny M
+            # makes k ~ 1 and the stage stiff: Vx, not Omega_y, takes up the slip's jump)
             v2 = newton_increasing(
-                lambda v: _shift(self._law_x(v, V2b, 0.0, scale), Fe2), vn + self._dv * h, scale
+                lambda v: _shift(self._law_x(v, V2b + k * (v - vn), k, scale), Fe2),
+                vn + self._dv * h,
+                scale,
             )
-            T = self._law(v2, V2b)
-            return self._state(V2b, v2), np.array([Fe2, float(T[1]), float(T[2])])
-        k = m / b.M
+            V2 = V2b + k * (v2 - vn)
+            T = self._law(v2, V2)
+            return self._state(V2, v2), np.array([Fe2, float(T[1]), float(T[2])])
 
         def g(v2: float) -> tuple[float, float]:
             T2, d2 = self._law_x(v2, V2b + k * (v2 - vn), k, scale)

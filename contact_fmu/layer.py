@@ -200,14 +200,21 @@ class LayerContact:
         }
 
     def __post_init__(self) -> None:
-        for name in ("P", "Rx", "Ry", "mu"):
+        for name in ("Rx", "Ry", "mu"):
             positive(name, getattr(self, name))
+        nonnegative("P", self.P)  # P = 0: lift-off, no contact (``lifted``)
         for name in ("k1", "k2", "kb", "ks"):
             nonnegative(name, getattr(self, name))
         if self.k1 + self.k2 <= 0.0:
             raise InputError("k1 + k2", self.k1 + self.k2, "> 0 (a Winkler layer carries the load)")
         if self.kb + self.ks <= 0.0:
             raise InputError("kb + ks", self.kb + self.ks, "> 0 (tangential layer compliance)")
+
+    @property
+    def lifted(self) -> bool:
+        """P = 0: the body has lifted off, there is no contact and every force is zero
+        (the P -> 0+ limit of Eqs. 34-43: T = mu P h(beta) v/|v| with |h| <= 1)."""
+        return self.P == 0.0
 
     # ---- normal contact, Eqs. (32)-(34) -------------------------------------------
     @cached_property
@@ -237,7 +244,10 @@ class LayerContact:
 
     @cached_property
     def creep_full_slip(self) -> float:
-        """|v|/|Vx| at which full slip sets in (beta = 2): 2 mu p0 (kb + ks)/a1."""
+        """|v|/|Vx| at which full slip sets in (beta = 2): 2 mu p0 (kb + ks)/a1; 0 at
+        P = 0, its limit (p0/a1 ~ P^(1/4), Eq. 34): any slip is full slip."""
+        if self.lifted:
+            return 0.0
         return BETA_FULL_SLIP * self.mu * self.p0 * self.k / self.a1
 
     @cached_property
@@ -295,6 +305,11 @@ class LayerContact:
         """
         if isinstance(vx, float) and isinstance(vy, float) and isinstance(Vx, float) and phi == 0.0:
             return self._forces_scalar(vx, vy, Vx)
+        if self.lifted:  # no contact: zero forces of the inputs' shape
+            z = np.zeros(np.broadcast(*(np.asarray(a, float) for a in (vx, vy, phi, Vx))).shape)
+            if z.ndim == 0:
+                return 0.0, 0.0, 0.0
+            return z, z.copy(), z.copy()
         v = (vx, vy, phi, Vx)
         scalar = all(np.ndim(a) == 0 for a in v)  # floats with spin: one input, floats out
         lib, args = _rolling_inputs(tuple(map(np.atleast_1d, v)) if scalar else v, Vx_at=3)
@@ -344,7 +359,7 @@ class LayerContact:
     def _forces_scalar(self, vx: float, vy: float, Vx: float) -> tuple[float, float, float]:
         """``forces`` without spin for floats, in math instead of numpy (same formulas)."""
         speed = math.hypot(vx, vy)
-        if speed == 0.0:
+        if speed == 0.0 or self.lifted:
             return 0.0, 0.0, 0.0
         beta = math.inf if Vx == 0.0 else speed * self._beta_per_creep / abs(Vx)
         h = _force_fraction_scalar(beta)
@@ -361,8 +376,10 @@ class LayerContact:
         dTx/dvx = mu P (h' c e_x^2/|Vx| + (h/s) e_y^2),
         dTx/dvy = mu P e_x e_y (h' c/|Vx| - h/s), dTx/dVx = -mu P h' beta e_x/Vx,
         with h/s = (h/beta) c/|Vx| from a series at small beta (no underflow as s -> 0).
-        For the integrator's Newton iterations; Vx != 0.
+        For the integrator's Newton iterations; Vx != 0. At P = 0 (no contact) all zero.
         """
+        if self.lifted:
+            return 0.0, 0.0, 0.0, 0.0
         muP, c = self.mu * self.P, self._beta_per_creep
         aV = abs(Vx)
         s = math.hypot(vx, vy)
@@ -380,7 +397,10 @@ class LayerContact:
 
     @cached_property
     def _beta_per_creep(self) -> float:
-        """beta per unit creepage |v|/|Vx|: a1 / (mu p0 (kb + ks))."""
+        """beta per unit creepage |v|/|Vx|: a1 / (mu p0 (kb + ks)); inf at P = 0 (its
+        limit, ~ P^(-1/4))."""
+        if self.lifted:
+            return math.inf
         return BETA_FULL_SLIP / self.creep_full_slip
 
     def inverse_creep(self, Tx: float, xi_y: float = 0.0) -> float:
@@ -411,7 +431,11 @@ class LayerContact:
     ) -> FloatArray:
         """Adhesion area over contact area (-). Closed form without spin; with spin
         phi = Omega_z (rad/s), the area of the non-slipping nodes of the strip solution
-        on the SPIN_GRID grid (first order in the cell size)."""
+        on the SPIN_GRID grid (first order in the cell size). 0 at P = 0: no contact,
+        nothing adheres (the limit at any slip: full slip)."""
+        if self.lifted:
+            z = np.zeros(np.broadcast(*(np.asarray(a, float) for a in (vx, vy, Vx))).shape)
+            return 0.0 if z.ndim == 0 else z
         if phi != 0.0:
             f = self.traction(float(vx), float(vy), float(Vx), *SPIN_GRID, phi=float(phi))
             stuck = f.inside & ~f.slip
@@ -441,6 +465,8 @@ class LayerContact:
         """
         for name, val in (("vx", vx), ("vy", vy), ("Vx", Vx), ("phi", phi)):
             finite(name, val)
+        if self.lifted:
+            raise InputError("P", self.P, "> 0 for a traction field (P = 0: no contact)")
         grid = self._grid(nx, ny)
         tau, slip = grid.march(self, *(np.array([float(a)]) for a in (vx, vy, Vx, phi)))
         s = math.copysign(1.0, Vx) if Vx != 0.0 else 0.0
@@ -463,6 +489,8 @@ class LayerContact:
         )
 
     def _grid(self, nx: int, ny: int) -> _Grid:
+        if self.lifted:
+            raise InputError("P", self.P, "> 0 for a strip grid (P = 0: no contact)")
         nx, ny = int(nx), int(ny)
         if nx < 2 or ny < 1:
             raise InputError("nx, ny", (nx, ny), "nx >= 2 and ny >= 1")

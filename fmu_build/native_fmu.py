@@ -193,7 +193,7 @@ def header(cfg: ModelConfig, guid: str) -> str:
         start = v.start if v.causality[cfg.mode] == fv.OUTPUT else cfg.start(v)
         lo_req = hi_req = "NULL"
         if lo is not None:  # Var.check's texts
-            lo_req = _cstr(f"{'>' if v.open_min else '>='} {lo:g}")
+            lo_req = _cstr(v.lower_requirement())
         if hi is not None:
             hi_req = _cstr(f"<= {hi:g}")
         rows.append(

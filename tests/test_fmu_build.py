@@ -31,7 +31,8 @@ def built() -> dict[str, fmu_build.Built]:
 
 def test_scene_set_is_the_one_the_issue_asks_for():
     assert set(SCENES) == {"fig13", "fig12", "railway", "brake", "sweep", "rail_creep",
-                           "rail_traction", "fig12_transient", "cornering"}  # fmt: skip
+                           "rail_traction", "fig12_transient", "cornering", "liftoff",
+                           "liftoff_contact"}  # fmt: skip
 
 
 def test_every_built_fmu_passes_fmpy_validate(built):

@@ -111,7 +111,7 @@ def test_halfspace_fmu_has_no_layer_parameters_and_a_fixed_rolling_radius():
         assert cfg.fixed == {"Rx": 0.46}
         rx = fv.BY_NAME["Rx"]
         assert cfg.bounds(rx) == (0.46, 0.46) and cfg.start(rx) == 0.46
-        assert cfg.bounds(fv.BY_NAME["mu"]) == (0.0, None)  # mu stays free
+        assert cfg.bounds(fv.BY_NAME["mu"]) == (fv.MU_MIN, None)  # mu stays free
         assert cfg.check("Rx", 0.46) is None and cfg.check("mu", 0.2) is None
         assert "the value this FMU's creep-force table was built for" in cfg.check("Rx", 0.5)
 
@@ -302,7 +302,7 @@ def test_other_rolling_radius_is_refused_until_corrected(built, name):
     ("name", "value", "fragment"),
     [
         ("P", 150e3, "P = 150000.0 is invalid: must be within the load range [80000, 120000] N"),
-        ("P", 0.0, "P = 0.0 is invalid: must be > 0"),
+        ("P", -1.0, "P = -1.0 is invalid: must be >= 0 (lift-off, no contact, is P = 0)"),
         ("Vy", math.nan, "Vy = nan is invalid: must be finite"),
     ],
 )
@@ -330,7 +330,7 @@ def test_bad_mu_is_refused_until_corrected(built):
         for call in (lambda: inst.set("mu", -0.3), inst.initialise):
             with pytest.raises(FMICallException):
                 call()
-        assert any("mu = -0.3 is invalid: must be > 0" in m for _, m in inst.messages)
+        assert any("mu = -0.3 is invalid: must be >= 1e-09" in m for _, m in inst.messages)
         inst.set("mu", 0.3)
         inst.initialise()
         assert inst.step(1e-3) == OK

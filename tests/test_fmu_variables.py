@@ -62,10 +62,11 @@ def test_defaults_are_the_parameter_set_of_the_papers_figures():
 def test_var_check_names_the_requirement():
     mu, P, k1 = fv.BY_NAME["mu"], fv.BY_NAME["P"], fv.BY_NAME["k1"]
     assert mu.check(0.3) is None
-    assert mu.check(0.0) == "> 0"  # open lower bound
+    assert mu.check(0.0) == f">= {fv.MU_MIN:g}" and mu.check(fv.MU_MIN) is None
     assert mu.check(math.nan) == "finite"
     assert P.check(math.inf) == "finite"
-    assert P.check(-1.0) == "> 0"
+    assert P.check(0.0) is None  # lift-off
+    assert P.check(-1.0) == ">= 0 (lift-off, no contact, is P = 0)"
     assert k1.check(0.0) is None and k1.check(-1e-13) == ">= 0"
     assert fv.BY_NAME["method"].check("full") is None
 
@@ -117,7 +118,7 @@ def test_contact_outputs_declare_their_direct_dependencies():
         ({"methods": ("implicit",)}, "method", "one of"),
         ({"outputs": ("Vy",)}, "outputs", "one of"),  # no lateral dof without vy
         ({"inputs": ("Fx_ex",)}, "inputs", "to include P"),
-        ({"starts": {"mu": -0.3}}, "mu", "> 0"),
+        ({"starts": {"mu": -0.3}}, "mu", f">= {fv.MU_MIN:g}"),
         ({"starts": {"Iz": 1e-3}}, "Iz", "a variable of this body-mode model"),
     ],
 )

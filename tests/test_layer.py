@@ -362,7 +362,7 @@ def test_adhesion_fraction_with_spin_is_continuous_symmetric_and_vanishes():
 # ---- bad input --------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "name,value",
-    [("P", 0.0), ("P", -1.0), ("mu", 0.0), ("Rx", math.nan), ("k1", -1e-12), ("ks", math.inf)],
+    [("P", -5e-324), ("P", -1.0), ("mu", 0.0), ("Rx", math.nan), ("k1", -1e-12), ("ks", math.inf)],
 )
 def test_bad_parameters_name_the_variable(name, value):
     kw = dict(P=C.P, Rx=C.Rx, Ry=C.Ry, k1=C.k1, k2=C.k2, kb=C.kb, ks=C.ks, mu=C.mu)

@@ -381,8 +381,8 @@ def steps(inst: Instance, n: int, h: float = 1.75e-4) -> None:
         ("P", math.nan, "finite"),
         ("My_ex", 6e306, None),  # finite: the step itself fails (the drive overflows)
         ("Fx_ex", 1.2e308, None),
-        ("P", 0.0, "> 0"),
-        ("P", -5.0, "> 0"),
+        ("P", -5e-324, ">= 0 (lift-off, no contact, is P = 0)"),  # P = 0 is lift-off
+        ("P", -5.0, ">= 0 (lift-off, no contact, is P = 0)"),
     ],
 )
 def test_bad_input_gives_discard_a_named_message_and_recovery(fig13, name, value, requirement):
@@ -436,8 +436,8 @@ def test_a_step_not_at_the_fmu_time_gives_discard(fig13):
 @pytest.mark.parametrize(
     ("name", "value", "good", "fragment"),
     [
-        ("mu", 0.0, ex.mu, "mu = 0.0 is invalid: must be > 0"),
-        ("mu", -0.3, ex.mu, "mu = -0.3 is invalid: must be > 0"),
+        ("mu", 0.0, ex.mu, "mu = 0.0 is invalid: must be >= 1e-09"),
+        ("mu", -0.3, ex.mu, "mu = -0.3 is invalid: must be >= 1e-09"),
         ("Rx", math.nan, ex.Rx, "Rx = nan is invalid: must be finite"),
         ("h_max", 0.0, H / 4, "h_max = 0.0 is invalid: must be > 0"),
         ("M", math.inf, ex.M, "M = inf is invalid: must be finite"),

@@ -160,6 +160,7 @@ class TransientBodyModel(BodyModel):
         return min(max(substeps(h, self.h_max), by_cells), MAX_SUBSTEPS)
 
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
+        _in_contact(inputs["P"])
         note = super().step(h, inputs)
         self.recorder.capture_due(self.stepper.t, self.stepper.field_arrays)
         return note
@@ -195,6 +196,16 @@ def make_stepper(
     )
 
 
+def _in_contact(P: float) -> float:
+    """P > 0, or InputError: the traction field (its grid over the ellipse, Eq. 34) needs
+    a contact; lift-off (P = 0) is the steady phase's (docs/model.md, "Lift-off")."""
+    if P == 0.0:
+        raise InputError(
+            "P", P, "> 0 in the transient phase (lift-off, P = 0, is the steady phase's)"
+        )
+    return P
+
+
 def build(
     cfg: ModelConfig,
     params: Mapping[str, Any],
@@ -203,7 +214,7 @@ def build(
     data_dir: Path | None = None,
 ) -> TransientBodyModel:
     """The transient body model from the FMU's parameters and inputs at t0 (s)."""
-    P = inputs["P"]
+    P = _in_contact(inputs["P"])
     stepper = make_stepper(cfg, params, P, t0, data_dir)
     within_range(stepper.outputs(), start=True)
     recorder = FieldRecorder(str(params["field_file"]), parse_times(params["field_times"]))

@@ -47,6 +47,13 @@ UNITS: dict[str, dict[str, int]] = {
 # numbers (tests/test_native.py keeps them equal).
 SPEED_MAX = 1e4  # m/s
 RATE_MAX = 1e7  # rad/s
+# Smallest coefficient of friction. Measured friction coefficients reach 1e-3 with
+# lubricated rolling and 1e-4 to 1e-5 only in superlubric laboratory contacts; 1e-9 lies
+# four decades below any of them. Below it the model stops being computable: mu = 5e-324
+# underflows the onset of full slip 2 mu p0 (kb + ks)/a1 to 0 (beta per creepage, its
+# inverse, divides by it), and mu P, the unit of every force and of the load limit
+# (1e9 mu P), would be smaller than the load P itself.
+MU_MIN = 1e-9
 
 # Contact-mode inputs that the contact forces depend on directly (direct feedthrough).
 _KIN = ("P", "Vx", "Vy", "Omega_y", "Omega_z")
@@ -86,8 +93,9 @@ class Var:
     ``causality`` maps each mode that has the variable to "parameter", "input" or
     "output". ``min``/``max`` are inclusive bounds written to the model description;
     ``open_min`` excludes the lower bound itself (FMI has no exclusive bound, so the
-    FMU checks it and the description says so). ``needs`` names a CONDITIONS entry
-    that must hold in body mode. ``feedthrough``: the contact-mode inputs an output
+    FMU checks it and the description says so); ``below`` adds to the requirement a
+    value below min violates what min means (P: lift-off is P = 0). ``needs`` names a
+    CONDITIONS entry that must hold in body mode. ``feedthrough``: the contact-mode inputs an output
     depends on directly (ModelStructure/Outputs dependencies). ``laws``: the contact
     laws whose models have the variable (None: every law); the half-space law's
     geometry and materials are structural, so the layer law's Ry, k1, k2, kb, ks are
@@ -103,6 +111,7 @@ class Var:
     min: float | None = None
     max: float | None = None
     open_min: bool = False
+    below: str | None = None
     type: str = "Real"
     needs: str | None = None
     feedthrough: tuple[str, ...] = field(default=())
@@ -118,6 +127,11 @@ class Var:
             return None, None
         return self.min, self.max
 
+    def lower_requirement(self) -> str:
+        """The requirement of the lower bound, as the checks word it: "> 0", ">= 0 (...)"."""
+        req = f"{'>' if self.open_min else '>='} {self.min:g}"
+        return req if self.below is None else f"{req} ({self.below})"
+
     def check(self, value: object) -> str | None:
         """None if ``value`` is admissible, else the requirement it violates."""
         if self.type == "String":
@@ -131,7 +145,7 @@ class Var:
         if self.type == "Integer" and v != int(v):
             return "an integer"
         if self.min is not None and (v < self.min or (self.open_min and v == self.min)):
-            return f"{'>' if self.open_min else '>='} {self.min:g}"
+            return self.lower_requirement()
         if self.max is not None and v > self.max:
             return f"<= {self.max:g}"
         return None
@@ -151,11 +165,10 @@ VARIABLES: tuple[Var, ...] = (
     _p(
         "mu",
         "1",
-        "Coefficient of friction (> 0); tunable: a new value between steps (a wet or "
-        "contaminated patch) applies from the next step, the bound becomes mu P",
+        f"Coefficient of friction (>= {MU_MIN:g}); tunable: a new value between steps (a wet "
+        "or contaminated patch) applies from the next step, the bound becomes mu P",
         0.3,
-        min=0.0,
-        open_min=True,
+        min=MU_MIN,
         tunable=True,
     ),
     _p(
@@ -371,12 +384,13 @@ VARIABLES: tuple[Var, ...] = (
     Var(
         "P",
         "N",
-        "Normal load (> 0, <= 1e9 N)",
+        "Normal load (>= 0, <= 1e9 N); P = 0 is lift-off: no contact, zero tangential "
+        "forces and moment, the body moves under the external loads alone",
         {"body": INPUT, "contact": INPUT},
         1000.0,
         min=0.0,
         max=1e9,
-        open_min=True,
+        below="lift-off, no contact, is P = 0",
     ),
     Var(
         "Fx_ex",

@@ -317,9 +317,9 @@ class TableLaw(CreepTable):
     def __post_init__(self) -> None:
         if self.friction is not None:
             positive("mu", self.friction)
-        positive("P", self.P)
+        nonnegative("P", self.P)  # P = 0: lift-off, no contact (any table)
         lo, hi = self.load_range
-        if not (lo * (1.0 - LOAD_RTOL) <= self.P <= hi * (1.0 + LOAD_RTOL)):
+        if self.P != 0.0 and not (lo * (1.0 - LOAD_RTOL) <= self.P <= hi * (1.0 + LOAD_RTOL)):
             raise InputError(
                 "P",
                 self.P,

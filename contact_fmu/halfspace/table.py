@@ -262,7 +262,7 @@ class CreepTable:
         return tuple(np.ascontiguousarray(a, dtype=float) for a in self.data.axes)
 
     def __post_init__(self) -> None:
-        positive("P", self.P)
+        nonnegative("P", self.P)  # P = 0: lift-off, no contact (``lifted``)
         if self._coef is None:
             object.__setattr__(self, "_coef", self._coefficients_at(self.P))
 
@@ -279,14 +279,20 @@ class CreepTable:
     def with_load(self, P: float) -> CreepTable:
         if P == self.P:
             return self
-        return replace(self, P=positive("P", P), _coef=None)
+        return replace(self, P=nonnegative("P", P), _coef=None)
+
+    @property
+    def lifted(self) -> bool:
+        """P = 0: lift-off, no contact; every force, the contact ellipse and the
+        adhesion are zero (the limit P -> 0+: |T| <= mu P)."""
+        return self.P == 0.0
 
     def _weights(self, P: float) -> FloatArray:
         """Interpolation weights of the load nodes at P (log P, clamped to the nodes)."""
         nodes = np.log(self.data.P)
         if len(nodes) == 1:
             return np.ones(1)
-        lp = float(np.clip(math.log(P), nodes[0], nodes[-1]))
+        lp = float(np.clip(math.log(P), nodes[0], nodes[-1])) if P > 0.0 else float(nodes[0])
         spl = make_interp_spline(nodes, np.eye(len(nodes)), k=min(3, len(nodes) - 1))
         return np.asarray(spl(lp), float)
 
@@ -310,28 +316,32 @@ class CreepTable:
 
     @property
     def a1(self) -> float:
-        return self.hertz.a1
+        return 0.0 if self.lifted else self.hertz.a1
 
     @property
     def a2(self) -> float:
-        return self.hertz.a2
+        return 0.0 if self.lifted else self.hertz.a2
 
     @property
     def p0(self) -> float:
-        return self.hertz.p0
+        return 0.0 if self.lifted else self.hertz.p0
 
     @property
     def c(self) -> float:
-        return self.hertz.c
+        return 0.0 if self.lifted else self.hertz.c
 
     @cached_property
     def xi_ref(self) -> float:
-        """mu P/(G c^2) (-): the unit of the normalised creepages."""
+        """mu P/(G c^2) (-): the unit of the normalised creepages (0 at P = 0)."""
+        if self.lifted:
+            return 0.0
         return self.mu * self.P / (self.data.G * self.c**2)
 
     @cached_property
     def phi_ref(self) -> float:
-        """mu P/(G c^3) (1/m): the unit of the normalised spin."""
+        """mu P/(G c^3) (1/m): the unit of the normalised spin (0 at P = 0)."""
+        if self.lifted:
+            return 0.0
         return self.xi_ref / self.c
 
     @cached_property
@@ -407,6 +417,8 @@ class CreepTable:
 
     def _scalar(self, vx: float, vy: float, phi: float, Vx: float) -> tuple[float, ...]:
         """The same rules as the array path, for scalar arguments (math + one dot)."""
+        if self.lifted:  # no contact
+            return 0.0, 0.0, 0.0, 0.0
         sV = -1.0 if Vx < 0.0 else 1.0
         aV = abs(Vx)
         d1, d2, d3 = sV * vx / self.xi_ref, vy / self.xi_ref, sV * phi / self.phi_ref
@@ -449,6 +461,8 @@ class CreepTable:
         LayerContact.tx_slope). Exact derivatives of the Hermite patch, the radial
         saturation and the clamp; on a cell face or the box face the one-sided value of
         the cell the point falls in. Vx != 0."""
+        if self.lifted:
+            return 0.0, 0.0, 0.0, 0.0
         vx, vy, Vx = float(vx), float(vy), float(Vx)
         if Vx == 0.0:
             raise InputError("Vx", Vx, "!= 0 for the slope")
@@ -529,6 +543,9 @@ class CreepTable:
         ):
             Tx, Ty, Mz, _ = self._scalar(float(vx), float(vy), float(phi), float(Vx))
             return Tx, Ty, Mz
+        if self.lifted:
+            z = np.zeros(np.broadcast(*(np.asarray(a, float) for a in (vx, vy, phi, Vx))).shape)
+            return z, z.copy(), z.copy()
         x, sV = self._normalised(vx, vy, phi, Vx)
         f = self._finish(self._evaluate(x))
         muP = self.mu * self.P
@@ -545,6 +562,8 @@ class CreepTable:
             isinstance(a, (float, int)) or (isinstance(a, np.generic)) for a in (vx, vy, phi, Vx)
         ):
             return self._scalar(float(vx), float(vy), float(phi), float(Vx))[3]
+        if self.lifted:
+            return np.zeros(np.broadcast(*(np.asarray(a, float) for a in (vx, vy, phi, Vx))).shape)
         x, _ = self._normalised(vx, vy, phi, Vx)
         return self._finish(self._evaluate(x))[..., 3]
 

@@ -72,7 +72,7 @@ class Params(ctypes.Structure):
         ("contraction_max", ctypes.c_double), ("contraction_fast", ctypes.c_double),
         ("newton_iterations", ctypes.c_int), ("algebraic_key", ctypes.c_double),
         ("bracket", ctypes.c_int), ("max_expansions", ctypes.c_int),
-        ("gamma", ctypes.c_double), ("sdirk", ctypes.c_int),
+        ("gamma", ctypes.c_double), ("sdirk", ctypes.c_int), ("Iy", ctypes.c_double),
     ]  # fmt: skip
 
 
@@ -280,6 +280,7 @@ class Kernel:
             for k, v in self._constants.items():
                 setattr(p, k, v)
             p.M, p.Rx, p.A1, p.A2, p.m_slip = body.M, body.Rx, body.A1, body.A2, body.m_slip
+            p.Iy = body.Iy
             for k, v in law.native_fields().items():  # the law's (arrays kept by the law)
                 setattr(p, k, v)
             self._path(p, rb)
@@ -340,7 +341,8 @@ class VectorKernel(Kernel):
         p.Iz = rb.body.Iz if rb.body.Iz is not None else 0.0
         p.quasistationary = self._qs
         strips = getattr(rb.law, "native_strips", None)
-        p.strips = None if strips is None else ctypes.addressof(strips())
+        lifted = getattr(rb.law, "lifted", False)  # P = 0: no grid, no law (free step)
+        p.strips = None if strips is None or lifted else ctypes.addressof(strips())
 
     def advance(self, rb: Any, h: float, loads: Any, n: int) -> bool:
         self.write(rb)

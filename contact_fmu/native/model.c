@@ -197,6 +197,10 @@ static void law_jacobian(const cf_params *p, double vx, double vy, double V, dou
 int cf_model_contact_jacobian(const cf_core *c, spin_grid *grid, int need_phi, double J[3][4]) {
     const double *v = c->val, Vx = v[R_VX];
     const double vx = Vx - v[R_OMEGA_Y] * v[R_RX], vy = v[R_VY], phi = v[R_OMEGA_Z];
+    if (v[R_P] == 0.0) { /* lift-off: T = Mz = 0 at any kinematics, every derivative 0 */
+        memset(J, 0, 3 * sizeof J[0]);
+        return 1;
+    }
     if (Vx == 0.0 || CF_TABLE) return 0;
     double L[3][3];
     law_jacobian(&c->p, vx, vy, Vx, L);

@@ -53,6 +53,10 @@ static void forces_at(const cf_params *p, const double y[4], double T[3], march_
 static double py_min(double x, double c) { return c < x ? c : x; }
 static double py_max(double x, double c) { return c > x ? c : x; }
 
+/* P = 0: lift-off, no contact (LayerContact.lifted): every force, slope and the adhesion
+ * are zero, and the steps are free_step's */
+static int lifted(const cf_params *p) { return p->P == 0.0; }
+
 /* ---- layer.py ------------------------------------------------------------------- */
 /* m = (1 - b^2/4)^(1/2), common to H(b) of Eq. (42), corrected, and its slope */
 static double m_of(double b) { return sqrt(1.0 - 0.25 * b * b); }
@@ -79,7 +83,7 @@ static double force_fraction_slope(const cf_params *p, double beta) {
 /* LayerContact._forces_scalar: (Tx, Ty, Mz) */
 static void forces(const cf_params *p, double vx, double vy, double Vx, double T[3]) {
     double speed = hypot(vx, vy);
-    if (speed == 0.0) {
+    if (speed == 0.0 || lifted(p)) {
         T[0] = T[1] = T[2] = 0.0;
         return;
     }
@@ -95,6 +99,10 @@ static void forces(const cf_params *p, double vx, double vy, double Vx, double T
 
 /* LayerContact.tx_slope: Tx, dTx/dvx, dTx/dvy, dTx/dVx */
 static void tx_slope(const cf_params *p, double vx, double vy, double Vx, double r[4]) {
+    if (lifted(p)) {
+        r[0] = r[1] = r[2] = r[3] = 0.0;
+        return;
+    }
     double muP = p->mu * p->P, c = p->beta_per_creep;
     double aV = fabs(Vx);
     double s = hypot(vx, vy);
@@ -165,6 +173,10 @@ static double saturate(double m, double w) {
 /* CreepTable._scalar: (Tx, Ty, Mz, adhesion) */
 static void table_scalar(const cf_params *p, double vx, double vy, double phi, double Vx,
                          double out[4]) {
+    if (lifted(p)) { /* CreepTable.lifted */
+        out[0] = out[1] = out[2] = out[3] = 0.0;
+        return;
+    }
     double sV = Vx < 0.0 ? -1.0 : 1.0, aV = fabs(Vx);
     double d[3] = {sV * vx / p->xi_ref, vy / p->xi_ref, sV * phi / p->phi_ref};
     double X[3] = {p->ext1, p->ext2, p->ext3};
@@ -204,6 +216,10 @@ static void table_scalar(const cf_params *p, double vx, double vy, double phi, d
 
 /* CreepTable.tx_slope: Tx, dTx/dvx, dTx/dvy, dTx/dVx (Vx != 0) */
 static void table_tx_slope(const cf_params *p, double vx, double vy, double Vx, double r[4]) {
+    if (lifted(p)) {
+        r[0] = r[1] = r[2] = r[3] = 0.0;
+        return;
+    }
     double sV = Vx < 0.0 ? -1.0 : 1.0, aV = fabs(Vx), xr = p->xi_ref;
     double d[2] = {sV * vx / xr, vy / xr}, ext[2] = {p->ext1, p->ext2};
     double lam = INFINITY;
@@ -309,7 +325,7 @@ typedef struct {
 
 static void residual_algebraic(const stage *s, double v, double f[2]) {
     double o[2];
-    law_x(s->p, v, s->V2b, 0.0, o);
+    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, o);
     f[0] = o[0] - s->Fe2;
     f[1] = o[1];
 }
@@ -481,18 +497,19 @@ static int lobatto_scalar(const cf_params *p, cf_state *y, double h, double Fx, 
     s.V2b = Vn + 0.5 * h * (G1 + G2) / p->M;
     s.scale = p->creep_full_slip * py_max(fabs(s.V2b), p->v_scale_floor);
     s.m = algebraic ? 0.0 : p->m_slip;
+    s.k = s.m / p->M;
     double slope = p->mu * p->P / s.scale;
     double v2;
-    if (s.m == 0.0 || h * slope / s.m > p->z_algebraic) {
+    if (s.m == 0.0 || h * slope / s.m > p->z_algebraic) { /* Vx = V2b + k (v2 - vn) */
         if (newton_increasing(&s, residual_algebraic, vn + y->dv * h, s.scale, &v2))
             return CF_FALLBACK;
-        law(p, v2, s.V2b, T);
+        const double V2 = s.V2b + s.k * (v2 - vn);
+        law(p, v2, V2, T);
         T[0] = Fe2;
-        y->Vx = s.V2b;
+        y->Vx = V2;
         y->vx = v2;
         return CF_OK;
     }
-    s.k = s.m / p->M;
     if (newton_increasing(&s, residual_lobatto, vn + y->dv * h, s.scale, &v2))
         return CF_FALLBACK;
     double V2 = s.V2b + s.k * (v2 - vn);
@@ -542,8 +559,40 @@ static int sdirk_scalar(const cf_params *p, cf_state *y, double h, double Fx, do
     return CF_OK;
 }
 
+/* RollingBody._free_step, held loads: the step without contact (P = 0), Eqs. (8)-(9)
+ * with T = 0 and the scheme's quadrature weights (exact for held loads); Iy = 0 takes
+ * no moment (CF_FALLBACK: Python raises), Omega_y held without one. The state Y =
+ * (Vx, vx, Vy, Omega_z); dyn_vy, dyn_spin: Vy, Omega_z by Eqs. (10)-(11), else the
+ * held ratios. The slip rate into *dv. */
+static int free_step(const cf_params *p, double Y[4], double h, const double L[4], int dyn_vy,
+                     int dyn_spin, double *dv) {
+    const double w1 = p->sdirk ? 1.0 - p->gamma : 0.5, w2 = p->sdirk ? p->gamma : 0.5;
+    const double Fx = w1 * L[0] + w2 * L[0], My = w1 * L[2] + w2 * L[2];
+    if (p->Iy == 0.0 && L[2] != 0.0) return CF_FALLBACK;
+    const double Vn = Y[0], vn = Y[1];
+    const double dV = h * Fx / p->M;
+    const double vx = vn + dV - (p->Iy > 0.0 ? h * p->Rx * My / p->Iy : 0.0);
+    Y[0] = Vn + dV, Y[1] = vx;
+    if (dyn_vy) Y[2] += h * (w1 * L[1] + w2 * L[1]) / p->M;
+    else Y[2] = p->ry * Y[0];
+    if (dyn_spin) Y[3] += h * (w1 * L[3] + w2 * L[3]) / p->Iz;
+    else Y[3] = p->rz * Y[0];
+    *dv = (vx - vn) / h;
+    return CF_OK;
+}
+
 /* RollingBody._step */
 static int step(const cf_params *p, cf_state *y, double h, double Fx, double My) {
+    if (lifted(p)) {
+        double Y[4] = {y->Vx, y->vx, 0.0, 0.0}, dv;
+        const double L[4] = {Fx, 0.0, My, 0.0};
+        if (free_step(p, Y, h, L, 0, 0, &dv)) return CF_FALLBACK;
+        y->Vx = Y[0], y->vx = Y[1], y->dv = dv;
+        y->Tx = y->Ty = y->Mz = 0.0;
+        y->out_sliding = saturated(p, y->Vx, y->vx);
+        if (p->quasistationary) y->sliding = 1;
+        return CF_OK;
+    }
     int ok = admissible(p, Fx, My);
     if (p->quasistationary && !ok) y->sliding = 1;
     else if (p->m_slip == 0.0 && !ok) return CF_FALLBACK; /* Python raises */
@@ -621,12 +670,13 @@ void cf_layer_law(cf_params *p, double P, double Rx, double Ry, double k1, doubl
     const double a1 = sqrt(2.0 * Rx * delta);
     *a2 = sqrt(2.0 * Ry * delta);
     *p0 = delta / kn;
-    const double cfs = p->beta_full_slip * mu * *p0 * (kb + ks) / a1;
+    /* P = 0 (lift-off): the limits, 0 and inf (LayerContact.creep_full_slip) */
+    const double cfs = P == 0.0 ? 0.0 : p->beta_full_slip * mu * *p0 * (kb + ks) / a1;
     p->mu = mu;
     p->P = P;
     p->a1 = a1;
     p->creep_full_slip = cfs;
-    p->beta_per_creep = p->beta_full_slip / cfs;
+    p->beta_per_creep = P == 0.0 ? INFINITY : p->beta_full_slip / cfs;
 }
 
 /* The half-space creep-force table (halfspace/table.py, TableLaw) at load P and friction
@@ -642,15 +692,15 @@ void cf_table_law(cf_params *p, double P, double mu, double kfac, double m, doub
     const double minor = major * sqrt(1.0 - m);
     const double a1 = a_le_b ? major : minor;
     *a2 = a_le_b ? minor : major;
-    *p0 = 3.0 * P / (2.0 * M_PI * a1 * *a2);
+    *p0 = P == 0.0 ? 0.0 : 3.0 * P / (2.0 * M_PI * a1 * *a2); /* P = 0: no contact */
     const double c = sqrt(a1 * *a2);
-    const double xi_ref = mu * P / (G * pow(c, 2.0));
+    const double xi_ref = P == 0.0 ? 0.0 : mu * P / (G * pow(c, 2.0));
     p->mu = mu;
     p->P = P;
     p->a1 = a1;
     p->c = c;
     p->xi_ref = xi_ref;
-    p->phi_ref = xi_ref / c;
+    p->phi_ref = P == 0.0 ? 0.0 : xi_ref / c;
     p->creep_full_slip = 1.0 * onset * xi_ref; /* np.dot([1.0], onset) * xi_ref */
 }
 
@@ -661,6 +711,7 @@ void cf_body_inertia(cf_params *p, double M, double Rx, double Iy) {
     p->A1 = Iy == 0.0 ? 1.0 : MR2 / (MR2 + Iy);
     p->A2 = Iy / (MR2 + Iy);
     p->m_slip = M * p->A2;
+    p->Iy = Iy;
 }
 
 /* RollingBody.__init__'s forces at the initial state (vy = ry Vx, no spin) and the
@@ -676,6 +727,7 @@ void cf_initial_forces(const cf_params *p, cf_state *y) {
 
 /* LayerContact.adhesion_fraction, float path without spin */
 static double adhesion_fraction(const cf_params *p, double vx, double vy, double Vx) {
+    if (lifted(p)) return 0.0; /* no contact: nothing adheres */
     double s = hypot(vx, vy);
     if (s == 0.0) return 1.0;
     if (Vx == 0.0 || s * p->beta_per_creep >= p->beta_full_slip * fabs(Vx)) return 0.0;
@@ -736,9 +788,10 @@ int cf_body_admit(const cf_params *p, const cf_body *b, double h, int *n) {
     *n = 1;
     if (b->P != p->P || !isfinite(b->P)) return CF_STEP_LAW;
     if (!cf_step_size_ok(h) || !(b->h_max > 0.0)) return CF_STEP_SIZE;
-    const double cap = cf_load_cap(p);
-    if (!(fabs(b->Fx_ex) <= cap)) return CF_STEP_FX_LIMIT;
-    if (!(fabs(b->My_ex) <= cap * p->Rx)) return CF_STEP_MY_LIMIT;
+    const double cap = cf_load_cap(p); /* none at P = 0: free_step is exact */
+    if (!(fabs(b->Fx_ex) <= cap) && !(lifted(p) && isfinite(b->Fx_ex))) return CF_STEP_FX_LIMIT;
+    if (!(fabs(b->My_ex) <= cap * p->Rx) && !(lifted(p) && isfinite(b->My_ex)))
+        return CF_STEP_MY_LIMIT;
     const double q = ceil(h / b->h_max * (1.0 - b->substep_slack));
     *n = q < b->max_substeps ? (q < 1.0 ? 1 : (int)q) : b->max_substeps;
     return q < b->max_substeps ? CF_OK : CF_STEP_CAPPED; /* NaN q: capped */
@@ -921,9 +974,13 @@ int cf_layer_forces(const cf_params *p, const cf_strips *g, int n, const double 
         double *T = out + 3 * (size_t)k;
         const double in[4] = {vx[k], vy[k], phi[k], Vx[k]};
         /* CF_FALLBACK, NaN forces: a non-finite input, standstill, spin without a grid */
-        if (!finite_all(in, 4) || Vx[k] == 0.0 || (phi[k] != 0.0 && g == NULL)) {
+        if (!finite_all(in, 4) || Vx[k] == 0.0 || (phi[k] != 0.0 && g == NULL && !lifted(p))) {
             T[0] = T[1] = T[2] = NAN;
             status = CF_FALLBACK;
+            continue;
+        }
+        if (lifted(p)) { /* no contact */
+            T[0] = T[1] = T[2] = 0.0;
             continue;
         }
         forces(p, vx[k], vy[k], Vx[k], T);
@@ -1054,8 +1111,13 @@ static void law_at(const cf_params *p, const double y[4], double V, double T[3],
     /* a non-finite state (a step that overflowed) has no forces: NaN, which every
      * caller's check turns into "not covered"; a spin without a spin grid likewise */
     const cf_strips *g = (const cf_strips *)p->strips;
-    if (!finite_all(y, 4) || !isfinite(V) || (p->law == LAW_LAYER && y[3] != 0.0 && !g)) {
+    if (!finite_all(y, 4) || !isfinite(V) ||
+        (p->law == LAW_LAYER && y[3] != 0.0 && !g && !lifted(p))) {
         T[0] = T[1] = T[2] = NAN;
+        return;
+    }
+    if (lifted(p)) { /* no contact */
+        T[0] = T[1] = T[2] = 0.0;
         return;
     }
     if (p->law == LAW_TABLE) {
@@ -1396,6 +1458,15 @@ static int sdirk_vstep(const cf_params *p, cf_vstate *w, double h, const double 
  * the Lobatto stages, or (algebraic) the quasistationary stage T(u2) = F2 with the
  * masses of the unknowns zero (its Newton matrix kept under p->algebraic_key) */
 static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], int algebraic) {
+    if (lifted(p)) { /* RollingBody._free_step */
+        double Y[4] = {w->Vx, w->vx, w->Vy, w->Oz}, dv;
+        if (free_step(p, Y, h, L, p->dyn_vy, p->dyn_spin, &dv)) return CF_FALLBACK;
+        w->Vx = Y[0], w->vx = Y[1], w->Vy = Y[2], w->Oz = Y[3], w->dv = dv;
+        w->Tx = w->Ty = w->Mz = 0.0;
+        w->out_sliding = full_slip(p, Y[1], Y[2], Y[0]);
+        if (p->quasistationary) w->sliding = 1;
+        return CF_OK;
+    }
     if (p->sdirk) return sdirk_vstep(p, w, h, L, algebraic);
     const double Fx = L[0], Fy = L[1], My = L[2], Mz = L[3];
     march_cache cache = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
@@ -1461,6 +1532,7 @@ static int vstep(const cf_params *p, cf_vstate *w, double h, const double L[4], 
  * are not admissible, the algebraic stage while rolling (else the Lobatto stages with the
  * masses), then _update_regime */
 static int qs_step(const cf_params *p, cf_vstate *w, double h, const double L[4]) {
+    if (lifted(p)) return vstep(p, w, h, L, 0); /* free_step, sliding set */
     const int adm = vadmissible(p, L);
     if (!adm) w->sliding = 1;
     if (vstep(p, w, h, L, !w->sliding)) return CF_FALLBACK;
@@ -1481,7 +1553,8 @@ static int vstate_finite(const cf_vstate *y) {
 }
 
 int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
-    if (p->law == LAW_LAYER && p->strips == NULL) return CF_FALLBACK; /* no spin grid */
+    if (p->law == LAW_LAYER && p->strips == NULL && !lifted(p))
+        return CF_FALLBACK; /* no spin grid (none needed without contact) */
     if (!(h > 0.0 && h <= DBL_MAX) || n < 1 || !(h / n > 0.0) || !finite_all(L, 4) ||
         !vstate_finite(y))
         return CF_FALLBACK;
@@ -1594,7 +1667,7 @@ double cf_spin_adhesion(const cf_strips *g, double vx, double vy, double Vx, dou
             area += g->w[e];
             if (!slip[e]) stuck += g->w[e];
         }
-    return stuck / area;
+    return area > 0.0 ? stuck / area : 0.0; /* no area (P = 0): nothing adheres */
 }
 
 /* RollingBody.outputs() on the vector path into b->out: kinematics, forces and
@@ -1609,7 +1682,7 @@ void cf_vbody_outputs(const cf_params *p, const cf_vstate *y, cf_body *b, double
         double t[4];
         table_scalar(p, vx, Vy, Oz, Vx, t);
         o[O_ADHESION] = t[3];
-    } else if (Oz == 0.0 || p->strips == NULL) {
+    } else if (Oz == 0.0 || p->strips == NULL || lifted(p)) {
         o[O_ADHESION] = adhesion_fraction(p, vx, Vy, Vx);
     } else {
         o[O_ADHESION] = cf_spin_adhesion((const cf_strips *)p->strips, vx, Vy, Vx, Oz, tau, slip,
@@ -1633,9 +1706,11 @@ int cf_body_check(const cf_params *p, cf_state *y, const cf_vpath *v, cf_body *b
     if (capped != NULL) *capped = why == CF_STEP_CAPPED;
     if (why != CF_OK && !(why == CF_STEP_CAPPED && capped != NULL)) return why;
     const double L[4] = {b->Fx_ex, v ? v->Fy_ex : 0.0, b->My_ex, v ? v->Mz_ex : 0.0};
-    /* RollingBody._step: an eta = inf body (m_slip = 0) has no gross sliding */
-    if (p->m_slip == 0.0 && !p->quasistationary &&
-        !(v != NULL ? vadmissible(p, L) : admissible(p, L[0], L[2])))
+    /* RollingBody._step: an eta = inf body (m_slip = 0) has no gross sliding; without
+     * contact (P = 0, _free_step) an Iy = 0 body takes no moment */
+    if (lifted(p) ? p->Iy == 0.0 && L[2] != 0.0
+                  : p->m_slip == 0.0 && !p->quasistationary &&
+                        !(v != NULL ? vadmissible(p, L) : admissible(p, L[0], L[2])))
         return CF_STEP_NO_SLIDING;
     if (v != NULL) {
         if (cf_advance_vector(p, v->y, h, L, n) != CF_OK) return CF_STEP_NO_ROOT;

@@ -91,6 +91,7 @@ typedef struct {
      * 1 - 1/sqrt(2) (integrator.GAMMA) */
     double gamma;
     int sdirk;
+    double Iy; /* kg m^2: the body's inertia (cf_body_inertia), for the free step at P = 0 */
 } cf_params;
 
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };

@@ -8,11 +8,15 @@ the scene's data on a path that does not go through the FMU, its adapter or fmpy
   transient, with regime = 0; where Vy follows Eq. (10), also Ty = Fy_ex (Eq. 29);
 - ``full_slip``: Coulomb's law in gross sliding, Tx = sign mu P and regime = 1, over a
   window the scene asserts to be sliding;
+- ``sliding_motion``: Eqs. (8)-(9) with that force (Tx = 0 at P = 0, lift-off) over
+  the held inputs: Vx and Omega_y summed step by step, over a run the scene asserts to
+  slide throughout;
 - ``simulate``: the pure-numerics stepper of ``simulate.simulate`` (RollingBody) with
   ``refine`` times more internal steps than the FMU takes (h_max / refine);
 - ``traction``: contact mode; the resultant of the traction field marched strip by
   strip (``LayerContact.traction``) on an ``nx`` x ``ny`` grid, integrated numerically:
-  independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates;
+  independent of the closed form H(beta) of Eqs. (40)-(43) the FMU evaluates (0 at
+  P = 0: no contact, no field);
 - ``halfspace``: contact mode, half-space law; direct solves of the steady-rolling
   problem (``HalfSpaceContact`` of the scene's [halfspace] declaration, on the solver
   grid of the table) at the sampled points: independent of the creep-force table the
@@ -201,8 +205,11 @@ def by_traction(scene: Scene, ref: Reference, case: Case, refine: int = 1) -> di
         if u["Omega_z"][i] != 0.0:
             raise ValueError(f"{scene.name}: source 'traction' is without spin")
         vx, vy = rigid_slip(u["Vx"][i], u["Omega_y"][i], u["Vy"][i], p["Rx"])
-        field = _law(p, u["P"][i]).traction(vx, vy, u["Vx"][i], nx, ny)
-        for name, value in zip(("Tx", "Ty", "Mz"), field.resultant(), strict=True):
+        if u["P"][i] == 0.0:  # lift-off: no contact, no field
+            resultant = (0.0, 0.0, 0.0)
+        else:
+            resultant = _law(p, u["P"][i]).traction(vx, vy, u["Vx"][i], nx, ny).resultant()
+        for name, value in zip(("Tx", "Ty", "Mz"), resultant, strict=True):
             rows[name].append(value)
         rows["xi_x"].append(vx / abs(u["Vx"][i]))  # for plots; not compared
     out = {"time": scene.grid[k], "xi_x": np.asarray(rows["xi_x"])}
@@ -291,9 +298,26 @@ def _creepage(contact, Tx: float) -> tuple[float, float]:
     return math.copysign(xi, Tx), contact.solve(xi).adhesion_fraction
 
 
+def sliding_motion(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
+    """Eqs. (8)-(9) in gross sliding, Tx = sign mu P (P = 0, lift-off: Tx = 0), with the
+    held inputs constant over each step: Vx and Omega_y change by h (Fx_ex - Tx)/M and
+    h (My_ex + Rx Tx)/Iy per step, summed from the initial state (no law, no stepper)."""
+    p, u = case.parameters, _held_inputs(scene, case)
+    sign = float(ref.options["sign"])
+    Tx = sign * p["mu"] * u["P"]
+    h = np.diff(scene.grid)
+    Vx = p["Vx0"] + np.concatenate([[0.0], np.cumsum(h * (u["Fx_ex"] - Tx)[1:] / p["M"])])
+    dO = h * (u["My_ex"] + p["Rx"] * Tx)[1:] / p["Iy"]
+    Omega_y = spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]) + np.concatenate([[0.0], np.cumsum(dO)])
+    k = _samples(scene, ref)
+    return {"time": scene.grid[k], "Tx": Tx[k], "Vx": Vx[k], "Omega_y": Omega_y[k],
+            "regime": np.ones(k.size)}  # fmt: skip
+
+
 SOURCES: dict[str, Callable[[Scene, Reference, Case], dict[str, FloatArray]]] = {
     "quasistationary": quasistationary,
     "full_slip": full_slip,
+    "sliding_motion": sliding_motion,
     "simulate": by_simulation,
     "traction": by_traction,
     "halfspace": by_halfspace,

@@ -24,6 +24,30 @@ def _state_via_bytes(edit: list | None = None, damage: list | None = None) -> li
 
 KNOWN: dict[str, list[list[dict]]] = {
     "fig13": [
+        [*INIT, _step(1e-4), _set("mu", 5e-324), _step(1e-4)],  # Fatal: ZeroDivisionError
+        [
+            {"op": "setup"},
+            {"op": "enter"},
+            _set("M", 1e-300),
+            {"op": "exit"},
+            _step(1.75e-4),
+            _step(4.03e-9),
+            _step(1.75e-5),
+            _step(1.75e-5),
+            _set("Fx_ex", -38.2284),
+            _step(1e-12),  # at t = 0.00021000403
+            {"op": "get"},
+        ],  # Omega_y jumped 1.9e7 times mu P Rx h/Iy with OK  # fmt: skip
+        [
+            *INIT,
+            _step(1e-4),
+            _set("P", 0.0),
+            _step(1e-4),
+            {"op": "get"},
+            _set("P", 1000.0),
+            _step(1e-4),
+            {"op": "get"},
+        ],  # lift-off was refused  # fmt: skip
         [*INIT, _set("My_ex", 6e306), _step(1e-4)],  # SIGSEGV in the compiled march
         [
             {"op": "setup"},

@@ -181,6 +181,7 @@ def runs(draw, kind: Kind) -> list[dict]:
                 + ["set_input"] * 3
                 + ["get", "set_param", "set_output", "state", "state", "serial", "craft"]
                 + ["roundtrip", "badfix", "terminate", "reset", "march", "march", "unload"]
+                + ["liftoff"]
                 + (["foreign"] * 2 if foreign else [])
             )
         )
@@ -194,6 +195,13 @@ def runs(draw, kind: Kind) -> list[dict]:
             P = kind.start("P") * draw(_uniform(0.1, 0.7))
             ops += [{"op": "set", "name": "P", "value": P}, {"op": "step", "h": hh}]
             ops += [{"op": "step", "h": hh}] * draw(st.integers(0, 10)) + [{"op": "get"}]
+        elif what == "liftoff" and "P" in inputs:  # P = 0, stepped, set back (re-contact)
+            hh = draw(st.floats(-6.0, -3.0).map(lambda e: 10.0**e))
+            ops += [{"op": "set", "name": "P", "value": 0.0}, {"op": "step", "h": hh}]
+            ops += [{"op": "step", "h": hh}] * draw(st.integers(0, 5)) + [{"op": "get"}]
+            back = kind.start("P") * draw(st.sampled_from([1e-6, 1e-3, 0.3, 1.0]))
+            ops += [{"op": "set", "name": "P", "value": back}, {"op": "step", "h": hh}]
+            ops += [{"op": "step", "h": hh}] * draw(st.integers(0, 5)) + [{"op": "get"}]
         elif what == "set_input" and inputs:
             name = draw(st.sampled_from(inputs))
             ops.append({"op": "set", "name": name, "value": draw(value(kind, name))})
