@@ -45,6 +45,7 @@ import tempfile
 import uuid
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -411,35 +412,56 @@ def compile_binary(
 def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeBuilt:
     """The native FMU of ``cfg`` under ``out_dir`` (built unless cached); NativeUnsupportedError
     naming the feature where the C kernel does not cover the model."""
+
+    def described(identifier: str, guid: str) -> dict[str, bytes]:
+        xml = model_description.patch(_skeleton(cfg, identifier, guid), cfg)
+        return {"modelDescription.xml": xml,
+                **documentation.files(cfg, identifier, target="native")}  # fmt: skip
+
+    return assemble(cfg, out_dir, force, "native", identity, SOURCES, PLATFORM, described)
+
+
+def assemble(
+    cfg: ModelConfig,
+    out_dir: str | Path,
+    force: bool,
+    suffix: str,
+    identity_of: Callable[[ModelConfig], str],
+    sources: tuple[str, ...],
+    platform: str,
+    described: Callable[[str, str], dict[str, bytes]],
+) -> NativeBuilt:
+    """A native FMU of either FMI version: <out>/<name>_<suffix>.fmu from ``sources`` (the
+    front end and CORE) and the generated header, compiled for ``platform``, with the
+    files ``described(identifier, guid)`` gives (model description, documentation); cached
+    under its content key ``identity_of(cfg)``."""
     why = unsupported(cfg)
     if why is not None:
         raise NativeUnsupportedError(f"no native FMU for scene {cfg.name!r}: {why}")
-    key = identity(cfg)
+    key = identity_of(cfg)
     guid = "{" + str(uuid.UUID(key[:32])) + "}"
-    identifier = f"{model_identifier(cfg)}_native"
+    identifier = f"{model_identifier(cfg)}_{suffix}"
     out_dir = Path(out_dir).resolve()
-    target = out_dir / CACHE / f"{cfg.name}-native-{key[:12]}.fmu"
+    target = out_dir / CACHE / f"{cfg.name}-{suffix}-{key[:12]}.fmu"
     stable = out_dir / f"{identifier}.fmu"
     if target.is_file() and not force and zipfile.is_zipfile(target):
         publish(target, stable)
         return NativeBuilt(target, key, guid, identifier, True, stable)
     target.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".native-{cfg.name}-", dir=target.parent))
+    work = Path(tempfile.mkdtemp(prefix=f".{suffix}-{cfg.name}-", dir=target.parent))
     try:
         src = work / "sources"
         src.mkdir()
-        for name in SOURCES:
+        for name in sources:
             shutil.copyfile(NATIVE_DIR / name, src / name)
         (src / HEADER).write_text(header(cfg, guid))
-        lib = compile_binary(src, work / f"{identifier}.so")
-        xml = model_description.patch(_skeleton(cfg, identifier, guid), cfg)
-        files = {"modelDescription.xml": xml}
-        files[f"binaries/{PLATFORM}/{identifier}.so"] = lib.read_bytes()
-        for name in (*SOURCES, HEADER):
+        lib = compile_binary(src, work / f"{identifier}.so", sources=sources)
+        files = {f"binaries/{platform}/{identifier}.so": lib.read_bytes()}
+        for name in (*sources, HEADER):
             files[f"sources/{name}"] = (src / name).read_bytes()
         if cfg.has_table:
             files["resources/table.bin"] = table_bytes(cfg)
-        files.update(documentation.files(cfg, identifier, target="native"))
+        files.update(described(identifier, guid))
         final = work / "final.fmu"
         write_archive(final, files)
         os.replace(final, target)

@@ -18,18 +18,12 @@ instantiation token) and table resource; a model description of FMI 3.0
 from __future__ import annotations
 
 import hashlib
-import os
 import platform
-import shutil
-import tempfile
-import uuid
-import zipfile
 from pathlib import Path
 
 from contact_fmu.fmu.config import ModelConfig
 
-from . import CACHE, documentation, model_description3, publish, write_archive
-from . import identifier as model_identifier
+from . import documentation, model_description3
 from . import native_fmu as n2
 
 FORMAT = "contact_fmu-native-fmu3-1"
@@ -73,42 +67,14 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> n2.Nati
     """The FMI 3.0 native FMU of ``cfg`` under ``out_dir`` (built unless cached);
     NativeUnsupportedError naming the feature where the C kernel does not cover the model.
     ``guid`` of the result is the instantiation token."""
-    why = n2.unsupported(cfg)
-    if why is not None:
-        raise n2.NativeUnsupportedError(f"no native FMU for scene {cfg.name!r}: {why}")
-    key = identity(cfg)
-    token = "{" + str(uuid.UUID(key[:32])) + "}"
-    identifier = f"{model_identifier(cfg)}_native3"
-    out_dir = Path(out_dir).resolve()
-    target = out_dir / CACHE / f"{cfg.name}-native3-{key[:12]}.fmu"
-    stable = out_dir / f"{identifier}.fmu"
-    if target.is_file() and not force and zipfile.is_zipfile(target):
-        publish(target, stable)
-        return n2.NativeBuilt(target, key, token, identifier, True, stable)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".native3-{cfg.name}-", dir=target.parent))
-    try:
-        src = work / "sources"
-        src.mkdir()
-        for name in SOURCES:
-            shutil.copyfile(n2.NATIVE_DIR / name, src / name)
-        (src / n2.HEADER).write_text(n2.header(cfg, token))
-        lib = compile_binary(src, work / f"{identifier}.so")
-        xml = model_description3.model_description(cfg, identifier, token)
-        files = {"modelDescription.xml": xml}
-        files[f"binaries/{PLATFORM}/{identifier}.so"] = lib.read_bytes()
-        for name in (*SOURCES, n2.HEADER):
-            files[f"sources/{name}"] = (src / name).read_bytes()
-        files["sources/buildDescription.xml"] = model_description3.build_description(
-            identifier, n2.c_files(SOURCES)
-        )
-        if cfg.has_table:
-            files["resources/table.bin"] = n2.table_bytes(cfg)
-        files.update(_documentation(cfg, identifier))
-        final = work / "final.fmu"
-        write_archive(final, files)
-        os.replace(final, target)
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
-    publish(target, stable)
-    return n2.NativeBuilt(target, key, token, identifier, False, stable)
+
+    def described(identifier: str, token: str) -> dict[str, bytes]:
+        return {
+            "modelDescription.xml": model_description3.model_description(cfg, identifier, token),
+            "sources/buildDescription.xml": model_description3.build_description(
+                identifier, n2.c_files(SOURCES)
+            ),
+            **_documentation(cfg, identifier),
+        }
+
+    return n2.assemble(cfg, out_dir, force, "native3", identity, SOURCES, PLATFORM, described)
