@@ -358,7 +358,7 @@ def law_rates(repeats: int) -> list[dict]:
 
 
 def _halfspace_rates(repeats: int, rng) -> list[dict]:
-    """The half-space creep-force table (issue 4), if present: a small table of the
+    """The half-space creep-force table, if present: a small table of the
     railway contact (12 x 12 elements, 13 x 13 x 9 nodes, as its tests build it)."""
     try:
         from contact_fmu.halfspace.railway import wheel_on_rail

@@ -195,7 +195,7 @@ def test_build_command_line(built, tmp_path):
 
 
 def test_law_data_files_travel_in_the_fmu_and_in_its_key(tmp_path, monkeypatch):
-    """The hook for table-based laws (issue 4): a law's data files are vendored."""
+    """The hook for table-based laws: a law's data files are vendored."""
     from contact_fmu.fmu import config
 
     cfg = CONFIGS["sweep"]

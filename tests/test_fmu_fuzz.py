@@ -1,4 +1,4 @@
-"""Randomised hostile-input runs of every kind of FMU we build (issue 19, "Must show").
+"""Randomised hostile-input runs of every kind of FMU we build ("Must show").
 
 hypothesis draws runs of FMI calls (``fmu_fuzz.strategies``); each run goes to a
 persistent worker subprocess per FMU (``fmu_fuzz.pool``), so that a crash is counted

@@ -1,4 +1,4 @@
-"""The FMU with phase = "transient" (issue 5): the thin-layer traction field as state.
+"""The FMU with phase = "transient": the thin-layer traction field as state.
 
 Built from the fig12_transient scene and driven call by call through fmpy (the scene
 itself runs against its stored references in tests/test_scenarios.py). Checked here:

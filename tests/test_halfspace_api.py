@@ -1,4 +1,4 @@
-"""Inputs as users give them (issue 20): the contact ellipse given directly, grids of
+"""Inputs as users give them: the contact ellipse given directly, grids of
 mx x my elements with one rule for both axes, forces prescribed instead of creepages
 (steady rolling and Cattaneo's shift)."""
 

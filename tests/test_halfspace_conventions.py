@@ -1,4 +1,4 @@
-"""CONTACT's conventions (issue 20): the mapping of contact_fmu.halfspace.conventions
+"""CONTACT's conventions: the mapping of contact_fmu.halfspace.conventions
 reproduces Kalker's linear theory written in CONTACT's units and signs (references.md:
 Fx = -G c^2 C11 xi, Fy = -G c^2 (C22 eta + c C23 phi), force on body 1, mm and N,
 spin in rad/mm)."""

@@ -1,4 +1,4 @@
-"""Kalker's creep coefficients of the linear theory (issue 20): HalfSpaceContact.
+"""Kalker's creep coefficients of the linear theory: HalfSpaceContact.
 creep_coefficients against the small-creepage slopes of full solves on the same grid
 and against Kalker's published table.
 

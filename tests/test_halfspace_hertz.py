@@ -1,4 +1,4 @@
-"""Hertz contact of elastic half-spaces and the numerical normal problem (issue 4).
+"""Hertz contact of elastic half-spaces and the numerical normal problem.
 
 References independent of the code under test: the closed-form circular Hertz
 solution (Johnson 1985, Eqs. 4.22-4.23), the Boussinesq potential of the Hertz

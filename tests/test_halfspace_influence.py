@@ -1,4 +1,4 @@
-"""Influence coefficients of rectangular elements and their FFT convolution (issue 4).
+"""Influence coefficients of rectangular elements and their FFT convolution.
 
 The closed-form rectangle integrals are checked against scipy quadrature of the
 point-load kernels of Love/Johnson (Cerruti: Johnson Eq. 3.86; Boussinesq: Eq. 3.19),

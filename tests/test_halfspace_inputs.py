@@ -1,5 +1,5 @@
 """Bad arguments to the public calls of contact_fmu.halfspace answer InputError naming
-the argument (issue 20), never a TypeError from inside numpy, a NaN in the outputs or a
+the argument, never a TypeError from inside numpy, a NaN in the outputs or a
 changed state. Randomised over wrong types and values with hypothesis."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Line contact (issue 20): the public plane-strain call reproduces Carter (1926)."""
+"""Line contact: the public plane-strain call reproduces Carter (1926)."""
 
 from __future__ import annotations
 

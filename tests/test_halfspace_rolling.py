@@ -1,4 +1,4 @@
-"""Steady rolling with the exact half-space theory (issue 4): classical results and
+"""Steady rolling with the exact half-space theory: classical results and
 invariants.
 
 References: Carter (1926) and Kalker's creep coefficients (references.md), the

@@ -1,4 +1,4 @@
-"""The creep-force table (issue 4): accuracy against direct solves, the invariants it
+"""The creep-force table: accuracy against direct solves, the invariants it
 enforces by construction, smoothness, the .npz round trip, and its use as a
 ContactLaw in the integrator (Eqs. 26 and 29).
 

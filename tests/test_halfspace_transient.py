@@ -1,8 +1,8 @@
-"""Kalker's transient rolling on the half-space and the body on it (issue 5, half-space
+"""Kalker's transient rolling on the half-space and the body on it (half-space
 part): contact_fmu.halfspace.transient.
 
 References used as expected values (none computed by the code under test):
-- the steady half-space solver (``rolling.solve_rolling``, issue 4) on the same grid:
+- the steady half-space solver (``rolling.solve_rolling``) on the same grid:
   the stationary state of steps of one element (Kalker 1970);
 - Cattaneo-Mindlin for two equal spheres, nu = 0 (Johnson 1985, sec. 7.2): a tangential
   shift delta at rest gives Q/(mu P) = 1 - (1 - delta/delta_s)^(3/2), delta_s =

@@ -1,4 +1,4 @@
-"""Half-space law (issue 4): creep-force curves and adhesion areas of the railway wheel
+"""Half-space law: creep-force curves and adhesion areas of the railway wheel
 on rail, and the grid convergence of the solver.
 
 Model: contact_fmu.halfspace (exact half-space theory, steady rolling; Hertz pressure;

@@ -33,7 +33,7 @@ NX, NY = 64, 33
 # Steps per transit time 2 a1/Vx: two per cell (the eta = 10.9 oscillation, 0.3
 # contact lengths, gets about 40 steps per period; step error < 1e-3, see the docs).
 STEPS_PER_TRANSIT = 128
-# Settling band of the transient: 1 % of the quasistationary force (issue 5).
+# Settling band of the transient: 1 % of the quasistationary force.
 SETTLE_TOL = 0.01
 # Rolled distances (contact lengths 2 a1) of the field snapshots.
 SNAPSHOTS = (0.25, 0.5, 1.0, 2.0, 4.0)

@@ -1,4 +1,4 @@
-"""Body mode, phase "transient": the body on the thin-layer traction field (issue 5).
+"""Body mode, phase "transient": the body on the thin-layer traction field.
 
 The stepper is ``transient.TransientRollingBody``: the traction field of Eq. (15) with
 its time-derivative term on a material grid of nx cells along the contact and ny

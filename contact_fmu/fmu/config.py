@@ -5,7 +5,7 @@ writes it into the generated FMU script, and the adapter reads it back. Values t
 later issues add to the scene schema are listed in ``PLANNED`` and refused here with a
 clear error until implemented.
 
-``phase = "transient"`` (issue 5): the body-mode FMU carries the traction field of the
+``phase = "transient"``: the body-mode FMU carries the traction field of the
 thin-layer law as its state (``transient.TransientRollingBody``) instead of the steady
 creep law; its grid and step are parameters (nx, ny, cells_per_step), and it can write
 the field to a file at chosen times (field_file, field_times). The steady methods and

@@ -1,4 +1,4 @@
-"""Error against run time of the scenes' FMUs, and the stiff and extreme cases (issue 6).
+"""Error against run time of the scenes' FMUs, and the stiff and extreme cases.
 
 ``contact-fmu report`` (contact_fmu.cli) runs both; modules:
 
