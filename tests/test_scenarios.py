@@ -14,6 +14,7 @@ import pytest
 import fmu_build
 from contact_fmu import cli
 from contact_fmu import examples as ex
+from contact_fmu.fmu import variables as fv
 from contact_fmu.scenario import ScenarioError, discover, load, runner
 from contact_fmu.scenario.signals import SignalError, held, parse
 
@@ -109,7 +110,7 @@ P = 1000.0
         (('mode = "body"', 'mode = "body"\nmethod = "euler"'), "model.method = 'euler' is invalid"),
         (("P = 1000.0", "P = 1000.0\nFx_ex = { pulse = 1 }"), "unknown piece 'pulse'"),
         (("P = 1000.0", ""), "inputs.P is missing"),
-        (("mu = 0.3", "mu = 0.0"), "parameters.mu = 0.0 is invalid: must be > 0"),
+        (("mu = 0.3", "mu = 0.0"), f"parameters.mu = 0.0 is invalid: must be >= {fv.MU_MIN:g}"),
         (("mu = 0.3", "mu = 0.3\nIz = 1.0e-3"), 'Iz is a variable of this body-mode model only '
          'with model.spin = "eq11"'),
         (('name = "mini"', 'name = "mini scene"'), "must be an identifier"),
