@@ -18,6 +18,19 @@ import pytest
 _status: list[int] = []
 
 
+@pytest.fixture(autouse=True)
+def _fmpy_logger_alive():
+    """fmpy passes every FMI 2.0 log message of the process to one global callback,
+    the one registered last; ``simulate_fmu(logger=f)`` (as some tests call it) leaves
+    it pointing at ``f`` after f is freed, and the next message of any FMU would crash
+    the process (contact_fmu/scenario/fmpy_log.py). Each test ends with the global
+    callback back on a live one."""
+    yield
+    from contact_fmu.scenario import fmpy_log
+
+    fmpy_log.claim()
+
+
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     _status.append(int(exitstatus))
 

@@ -10,6 +10,8 @@ messages on while pythonfmu's own logger drops them) and for the native FMU.
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import fmpy
@@ -65,3 +67,43 @@ def test_no_debug_messages_reach_the_host_without_debug_logging(fmu):
     messages, error = run(fmu, start_values={"mu": 0.3})
     assert error is None
     assert [m for s, m in messages if s == 0] == []
+
+
+def test_messages_reach_the_instance_that_logged_them_and_outlive_it(fmu):
+    """fmpy hands every FMI 2.0 message of the process to one global callback (the last
+    registered). Two live Instances: mu = -1 set on the first is logged to the first
+    only. Then, with both closed and collected, fmpy's own simulate_fmu of a model that
+    cannot start (Rx = 5e-324 with Iy = 0, see test_fmu_fmpy) prints its message through
+    fmpy's printer, instead of calling a freed callback (a segmentation fault). Run in a
+    fresh process, so that nothing else in it registered a logger."""
+    code = f"""
+import gc
+import fmpy
+from fmpy.fmi1 import FMICallException
+from contact_fmu.scenario.instance import Instance
+
+a = Instance({str(fmu)!r}, "a")
+b = Instance({str(fmu)!r}, "b")
+try:
+    a.set("mu", -1.0)
+except FMICallException:
+    pass
+print("A", sum("mu" in m for s, m in a.messages if s >= 2))
+print("B", sum("mu" in m for s, m in b.messages if s >= 2))
+a.close()
+b.close()
+del a, b
+gc.collect()
+try:
+    fmpy.simulate_fmu({str(fmu)!r}, start_values={{"Rx": 5e-324, "Ry": 2.97e9, "Iy": 0.0}},
+                      stop_time=1e-3, output_interval=1e-4)
+except FMICallException:
+    print("refused")
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300, cwd=ROOT)  # fmt: skip
+    assert r.returncode == 0, (r.returncode, r.stdout[-2000:], r.stderr[-2000:])
+    lines = r.stdout.splitlines()
+    assert "A 1" in lines and "B 0" in lines, lines
+    assert "refused" in lines, lines
+    assert any(line.startswith("[ERROR]") and "Rx" in line for line in lines), lines

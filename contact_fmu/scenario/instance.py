@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import shutil
 import tempfile
-from ctypes import byref
 from pathlib import Path
 from typing import Any
 
@@ -20,8 +19,9 @@ from fmpy.fmi2 import (
     fmi2CallbackAllocateMemoryTYPE,
     fmi2CallbackFreeMemoryTYPE,
     fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
 )
+
+from contact_fmu.scenario import fmpy_log
 
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 
@@ -48,27 +48,21 @@ class Instance:
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.messages: list[tuple[int, str]] = []
         self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        try:
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(byref(self._callbacks))
-        except ImportError:  # pragma: no cover - fmpy without its C logger proxy
-            pass
+        self._log_key = fmpy_log.attach(self._callbacks, self._log)
         self.fmu = FMU2Slave(
             guid=self.md.guid,
             unzipDirectory=str(self.dir),
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=name,
         )
-        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
+        self._fmi.instantiate(callbacks=self._callbacks, loggingOn=True)
         self.initialised = False  # exitInitializationMode answered OK
         self.time = start_time
         try:
-            self.fmu.setupExperiment(startTime=start_time)
-            self.fmu.enterInitializationMode()
+            self._fmi.setupExperiment(startTime=start_time)
+            self._fmi.enterInitializationMode()
             for k, v in (start_values or {}).items():
                 self.set(k, v)
             if initialise:
@@ -77,33 +71,40 @@ class Instance:
             self.close()
             raise
 
+    @property
+    def _fmi(self) -> FMU2Slave:
+        """The fmpy slave, with the log route claimed for the call to come (another
+        object in the process may have registered fmpy's one global logger since)."""
+        fmpy_log.claim()
+        return self.fmu
+
     def initialise(self) -> None:
         """fmi2ExitInitializationMode (fmpy raises FMICallException above Warning)."""
-        self.fmu.exitInitializationMode()
+        self._fmi.exitInitializationMode()
         self.initialised = True
 
-    def _log(self, env, instance, status, category, message) -> None:
-        self.messages.append((int(status), message.decode(errors="replace") if message else ""))
+    def _log(self, status: int, text: str) -> None:
+        self.messages.append((status, text))
 
     # ---- values ----------------------------------------------------------------------
     def set(self, name: str, value: Any) -> None:
         v = self.vars[name]
         if v.type == "Real":
-            self.fmu.setReal([v.valueReference], [float(value)])
+            self._fmi.setReal([v.valueReference], [float(value)])
         elif v.type == "Integer":
-            self.fmu.setInteger([v.valueReference], [int(value)])
+            self._fmi.setInteger([v.valueReference], [int(value)])
         elif v.type == "String":
-            self.fmu.setString([v.valueReference], [str(value)])
+            self._fmi.setString([v.valueReference], [str(value)])
         else:
             raise TypeError(f"{name}: type {v.type} not supported")
 
     def get(self, name: str) -> Any:
         v = self.vars[name]
         if v.type == "Integer":
-            return self.fmu.getInteger([v.valueReference])[0]
+            return self._fmi.getInteger([v.valueReference])[0]
         if v.type == "String":
-            return self.fmu.getString([v.valueReference])[0].decode()
-        return self.fmu.getReal([v.valueReference])[0]
+            return self._fmi.getString([v.valueReference])[0].decode()
+        return self._fmi.getReal([v.valueReference])[0]
 
     def outputs(self) -> dict[str, Any]:
         return {n: self.get(n) for n, v in self.vars.items() if v.causality == "output"}
@@ -113,38 +114,39 @@ class Instance:
         """doStep from ``time`` (default: the instance's time) by h; the FMI status."""
         t = self.time if time is None else time
         try:
-            self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            self._fmi.doStep(currentCommunicationPoint=t, communicationStepSize=h)
         except FMICallException as e:
             return int(e.status)
         self.time = t + h
         return OK
 
     def get_state(self) -> Any:
-        return (self.fmu.getFMUstate(), self.time)
+        return (self._fmi.getFMUstate(), self.time)
 
     def set_state(self, state: Any) -> None:
         s, self.time = state
-        self.fmu.setFMUstate(s)
+        self._fmi.setFMUstate(s)
 
     def free_state(self, state: Any) -> None:
-        self.fmu.freeFMUstate(state[0])
+        self._fmi.freeFMUstate(state[0])
 
     def serialize_state(self, state: Any) -> bytes:
         """A state of get_state as bytes (fmi2SerializeFMUstate; the master's time is
         not in them)."""
-        return bytes(self.fmu.serializeFMUstate(state[0]))
+        return bytes(self._fmi.serializeFMUstate(state[0]))
 
     def deserialize_state(self, data: bytes, time: float) -> Any:
         """Bytes of serialize_state, from any instance of this FMU, as a state for
         set_state at the master's ``time`` (s) (fmi2DeSerializeFMUstate)."""
-        return (self.fmu.deSerializeFMUstate(data), time)
+        return (self._fmi.deSerializeFMUstate(data), time)
 
     def close(self) -> None:
         try:
             if self.initialised:  # FMI 2.0: terminate ends an initialised model only
-                self.fmu.terminate()
+                self._fmi.terminate()
         finally:
-            self.fmu.freeInstance()
+            self._fmi.freeInstance()
+            fmpy_log.detach(self._log_key)
             if self._own_dir:
                 shutil.rmtree(self.dir, ignore_errors=True)
 
