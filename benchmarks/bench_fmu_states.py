@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/bench_fmu_states.py [--held 100 1000 10000 30000] [--write]
 
-fmu2.c keeps the live states of each instance in a hash set, so that a freed or foreign
+native/instance.c keeps the live states of each instance in a hash set, so that a freed or foreign
 pointer is refused without being read. From the C importer (tests/native_importer.c,
 mode ``states``, no Python), on the native Fig. 13 FMU: N states got (fmi2GetFMUstate:
 allocation, copy, entry in the set), set in a shuffled order (lookup, restore), sized in
@@ -96,7 +96,7 @@ def report(costs: dict[int, dict[str, float]], step: float) -> str:
         )
     lines += [
         "",
-        "The live states are a hash set of pointers per instance (fmu2.c): the lookup does "
+        "The live states are a hash set of pointers per instance (native/instance.c): the lookup does "
         "not grow with the number held as a linear scan would (N/2 comparisons per call). "
         "What grows is the memory the states take: a state is the instance core, 1.7 KiB "
         "for Fig. 13, so 30000 states (51 MB) no longer fit the caches, and get, set and "

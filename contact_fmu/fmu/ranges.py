@@ -2,7 +2,7 @@
 initial values, variables.SPEED_MAX and RATE_MAX), checked on a state: every step of the
 body and rigid_body modes, and their initial state. Kept apart from body_model so that a
 rigid_body FMU carries no law or integrator for it; stepper.c's range table (CF_SPEED_MAX,
-CF_RATE_MAX) and fmu2.c's messages are the C side, in the same words."""
+CF_RATE_MAX) and instance.c's messages are the C side, in the same words."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from .._validate import InputError
 from .variables import RATE_MAX, SPEED_MAX
 
 # why the initial state can be beyond its range: Rx, not range-checked against the
-# speeds, is free to be small (fmu2.c: START_RANGE_WHY, the same words)
+# speeds, is free to be small (native/instance.c: START_RANGE_WHY, the same words)
 START_RANGE_WHY = "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
 
 
