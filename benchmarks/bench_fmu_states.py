@@ -96,8 +96,9 @@ def report(costs: dict[int, dict[str, float]], step: float) -> str:
         )
     lines += [
         "",
-        "The live states are a hash set of pointers per instance (native/instance.c): the lookup does "
-        "not grow with the number held as a linear scan would (N/2 comparisons per call). "
+        "The live states are a hash set of pointers per instance (native/instance.c): the "
+        "lookup does not grow with the number held as a linear scan would (N/2 comparisons "
+        "per call). "
         "What grows is the memory the states take: a state is the instance core, 1.7 KiB "
         "for Fig. 13, so 30000 states (51 MB) no longer fit the caches, and get, set and "
         "free, which touch a state's memory, slow down with it.",
