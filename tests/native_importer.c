@@ -36,6 +36,7 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+#include "importer_common.h"
 
 #ifndef LINKED
 #include <dlfcn.h>
@@ -133,30 +134,6 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     if (!quiet) fprintf(stderr, "[%s %d] %s\n", name, (int)status, buf);
 }
 
-typedef struct {
-    int n_in, n_out, n_par;
-    fmi2ValueReference in[16], out[32], par[32];
-    double par_val[32];
-} spec;
-
-static int read_list(FILE *f, int *n, fmi2ValueReference *vr, int cap) {
-    if (fscanf(f, "%d", n) != 1 || *n < 0 || *n > cap) return 1;
-    for (int i = 0; i < *n; i++)
-        if (fscanf(f, "%u", &vr[i]) != 1) return 1;
-    return 0;
-}
-
-static int read_spec(FILE *f, spec *s) {
-    if (read_list(f, &s->n_in, s->in, 16) || read_list(f, &s->n_out, s->out, 32)) return 1;
-    if (fscanf(f, "%d", &s->n_par) != 1 || s->n_par < 0 || s->n_par > 32) return 1;
-    for (int i = 0; i < s->n_par; i++) {
-        char v[64];
-        if (fscanf(f, "%u %63s", &s->par[i], v) != 2) return 1;
-        s->par_val[i] = strtod(v, NULL);
-    }
-    return 0;
-}
-
 static fmi2Component start(const api *f, const char *guid, const char *ident,
                            const fmi2CallbackFunctions *cb, const spec *s) {
     const char *res = getenv("FMU_RESOURCES"); /* the resources folder's URI, if any */
@@ -204,15 +181,6 @@ static int run(const api *f, const char *guid, const char *ident, FILE *in) {
 }
 
 /* ---- fuzz ------------------------------------------------------------------------- */
-static unsigned long long rng_state;
-static unsigned long long rnd(void) { /* xorshift64* */
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return rng_state * 2685821657736338717ull;
-}
-static double uniform(void) { return (double)(rnd() >> 11) / 9007199254740992.0; }
-
 static double extreme(void) {
     static const double pool[] = {0.0, -0.0, 1e308, -1e308, 6e306, 1.2e308, 5e-324, -5e-324,
                                   1e-300, 1.0, -1.0, 1e3, 1000.0, 190.98593171027443, 0.3};

@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "fmi3Functions.h"
+#include "importer_common.h"
 
 #ifndef LINKED
 #include <dlfcn.h>
@@ -112,30 +113,6 @@ static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3Stri
     (void)env, (void)category;
     messages++;
     if (!quiet) fprintf(stderr, "[%d] %s\n", (int)status, message);
-}
-
-typedef struct {
-    int n_in, n_out, n_par;
-    fmi3ValueReference in[16], out[32], par[32];
-    double par_val[32];
-} spec;
-
-static int read_list(FILE *f, int *n, fmi3ValueReference *vr, int cap) {
-    if (fscanf(f, "%d", n) != 1 || *n < 0 || *n > cap) return 1;
-    for (int i = 0; i < *n; i++)
-        if (fscanf(f, "%u", &vr[i]) != 1) return 1;
-    return 0;
-}
-
-static int read_spec(FILE *f, spec *s) {
-    if (read_list(f, &s->n_in, s->in, 16) || read_list(f, &s->n_out, s->out, 32)) return 1;
-    if (fscanf(f, "%d", &s->n_par) != 1 || s->n_par < 0 || s->n_par > 32) return 1;
-    for (int i = 0; i < s->n_par; i++) {
-        char v[64];
-        if (fscanf(f, "%u %63s", &s->par[i], v) != 2) return 1;
-        s->par_val[i] = strtod(v, NULL);
-    }
-    return 0;
 }
 
 static fmi3Instance start(const api *f, const char *token, const spec *s) {
@@ -279,20 +256,12 @@ static int calls(const api *f, const char *token, FILE *in) {
 }
 
 /* ---- fuzz ---------------------------------------------------------------------------- */
-static unsigned long long rng_state;
-static unsigned long long rnd(void) { /* xorshift64* */
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return rng_state * 2685821657736338717ull;
-}
-
 static double extreme(void) {
     static const double v[] = {0.0, -0.0, 1.0, -1.0, 1e-300, -1e-300, 1e300, -1e300,
                                1.7976931348623157e308, 5e-324, INFINITY, -INFINITY, NAN};
     const unsigned k = (unsigned)(rnd() % 16);
     if (k < sizeof v / sizeof v[0]) return v[k];
-    return ldexp((double)(rnd() >> 11) / 9007199254740992.0 - 0.5, (int)(rnd() % 80) - 40);
+    return ldexp(uniform() - 0.5, (int)(rnd() % 80) - 40);
 }
 
 static int fuzz(const api *f, const char *token, FILE *in, unsigned long long seed, long n,
