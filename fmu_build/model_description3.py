@@ -30,6 +30,31 @@ LOG_CATEGORIES = (
 )
 
 
+# The traction along the contact's centre line y = 0 as three Float64 arrays of LINE_N
+# cells (FMI 3.0 arrays, fixed size): the cells' x and the traction there, at the
+# outputs' kinematics (layer.LayerContact.traction with ny = 1; native cf_get_line). After
+# time's value reference, in this order. The C side's CF_LINE_N is LINE_N (cf_model.h).
+LINE_N = 41
+LINE = (
+    ("x_centre", "m", "x of the cells along the contact's centre line y = 0, ascending"),
+    ("tau_x_centre", "Pa", "traction tau_x along the centre line y = 0 (Eqs. 35-36)"),
+    ("tau_y_centre", "Pa", "traction tau_y along the centre line y = 0 (Eqs. 35-36)"),
+)
+
+
+def has_line(cfg: ModelConfig) -> bool:
+    """Whether the FMU has the centre line's arrays: the thin-layer law in body and
+    contact mode (native model.h's CF_LINE)."""
+    return cfg.mode != "rigid_body" and not cfg.has_table
+
+
+def line_vrs(cfg: ModelConfig) -> dict[str, int]:
+    """The arrays' value references (after time's), {} where the FMU has none."""
+    if not has_line(cfg):
+        return {}
+    return {name: time_vr(cfg) + 1 + i for i, (name, _, _) in enumerate(LINE)}
+
+
 def _num(x: float) -> str:
     return repr(float(x))
 
@@ -72,7 +97,8 @@ def model_description(cfg: ModelConfig, identifier: str, token: str) -> bytes:
         hasEventMode="false",
     )
     declared = cfg.variables
-    units = sorted({v.unit for v in declared if v.type == "Real"} | {"s"})
+    units = {v.unit for v in declared if v.type == "Real"} | {"s"}
+    units = sorted(units | ({unit for _, unit, _ in LINE} if has_line(cfg) else set()))
     defs = ET.SubElement(root, "UnitDefinitions")
     for name in units:
         unit = ET.SubElement(defs, "Unit", name=name)
@@ -101,6 +127,12 @@ def model_description(cfg: ModelConfig, identifier: str, token: str) -> bytes:
         variability="continuous",
         unit="s",
     )
+    for (name, unit, text), vr in zip(LINE, line_vrs(cfg).values(), strict=False):
+        el = ET.SubElement(
+            mv, "Float64", name=name, valueReference=str(vr), description=text,
+            causality="output", variability="continuous", initial="calculated", unit=unit,
+        )  # fmt: skip
+        ET.SubElement(el, "Dimension", start=str(LINE_N))
     for vr, v in enumerate(declared):
         c = v.causality[cfg.mode]
         attrs = {"name": v.name, "valueReference": str(vr), "description": v.description}
@@ -129,10 +161,14 @@ def model_description(cfg: ModelConfig, identifier: str, token: str) -> bytes:
     structure = ET.SubElement(root, "ModelStructure")
     outputs = [vr for vr, v in enumerate(declared) if v.causality[cfg.mode] == fv.OUTPUT]
     inputs = {v.name: vr for vr, v in enumerate(declared) if v.causality[cfg.mode] == fv.INPUT}
+    # the line follows the contact's kinematics and load as Tx does
+    feedthrough = {vr: declared[vr].feedthrough for vr in outputs}
+    tx = fv.BY_NAME["Tx"].feedthrough
+    outputs += list(line_vrs(cfg).values())
     for vr in outputs:
         deps = []
         if cfg.mode == "contact":  # a force element: outputs follow the inputs directly
-            deps = sorted(inputs[n] for n in declared[vr].feedthrough if n in inputs)
+            deps = sorted(inputs[n] for n in feedthrough.get(vr, tx) if n in inputs)
         ET.SubElement(
             structure, "Output", valueReference=str(vr), dependencies=" ".join(map(str, deps))
         )

@@ -53,6 +53,7 @@ from contact_fmu import integrator, kinematics, layer, native, solvers
 from contact_fmu.fmu import body_model
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
+from fmu_build import model_description3
 
 from . import CACHE, documentation, model_description, publish, write_archive
 from . import identifier as model_identifier
@@ -220,6 +221,7 @@ def header(cfg: ModelConfig, guid: str) -> str:
         f"#define CF_SPIN_NX {layer.SPIN_GRID[0]}",
         f"#define CF_SPIN_NY {layer.SPIN_GRID[1]}",
         f"#define CF_TINY {_c(layer.TINY)}",
+        f"#define CF_LINE_N {model_description3.LINE_N}",
         *_table_header(cfg),
         f"#define CF_METHOD_START {('full', 'quasistationary').index(method)}",
         f"#define CF_SCHEME_START {integrator.SCHEMES.index(scheme)}",

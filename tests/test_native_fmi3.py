@@ -30,6 +30,7 @@ from fmpy.fmi3 import FMU3Slave
 
 from contact_fmu import examples as ex
 from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.layer import LayerContact
 from contact_fmu.scenario import load, runner
 from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from fmu_build import __main__ as cli
@@ -154,7 +155,18 @@ class Instance3:
         return self.fmu.getFloat64([v.valueReference])[0]
 
     def outputs(self) -> dict[str, Any]:
-        return {n: self.get(n) for n, v in self.vars.items() if v.causality == "output"}
+        """The scalar outputs (the FMI 2.0 FMU's): not the centre line's arrays."""
+        return {
+            n: self.get(n)
+            for n, v in self.vars.items()
+            if v.causality == "output" and not v.dimensions
+        }
+
+    def array(self, name: str) -> np.ndarray:
+        """An array output, its values in one call."""
+        v = self.vars[name]
+        n = math.prod(int(d.start) for d in v.dimensions)
+        return np.array(self.fmu.getFloat64([v.valueReference], nValues=n))
 
     def step(self, h: float, time: float | None = None) -> int:
         t = self.time if time is None else time
@@ -210,14 +222,28 @@ def test_model_description_is_the_fmi2_fmus_in_fmi3_and_validates(fmus, kind):
         for a in ("valueReference", "causality", "variability", "initial", "unit", "min", "max"):
             assert getattr(v, a) == getattr(w, a), (v.name, a)
         assert v.start == w.start, v.name  # strings as written: the same repr
-    assert list(v3) == ["time"] and v3["time"].causality == "independent"
+    # FMI 3.0's own: time, and the centre line's arrays on the thin-layer law outside the
+    # rigid_body mode, after it
+    line = [name for name, _, _ in model_description3.LINE]
+    if kind in ("rail_traction", "full_rigid_body"):
+        line = []
+    assert list(v3) == ["time", *line] and v3["time"].causality == "independent"
     assert v3["time"].valueReference == len(md2.modelVariables)
+    for k, name in enumerate(line, start=1):
+        assert v3[name].valueReference == len(md2.modelVariables) + k
+        assert [d.start for d in v3[name].dimensions] == [model_description3.LINE_N]
+        assert v3[name].causality == "output" and v3[name].variability == "continuous"
 
     def deps(unknowns):
         return {u.variable.name: sorted(d.name for d in u.dependencies or []) for u in unknowns}
 
-    assert deps(md3.outputs) == deps(md2.outputs)
-    assert deps(md3.initialUnknowns) == deps(md2.initialUnknowns)
+    scalar = [u for u in md3.outputs if u.variable.name not in line]
+    assert deps(scalar) == deps(md2.outputs)
+    # the line follows the inputs Tx follows
+    assert all(deps(md3.outputs)[n] == deps(md2.outputs)["Tx"] for n in line)
+    assert deps(u for u in md3.initialUnknowns if u.variable.name not in line) == deps(
+        md2.initialUnknowns
+    )
     with zipfile.ZipFile(path3) as z:
         cs3 = ET.fromstring(z.read("modelDescription.xml")).find("CoSimulation").attrib
     with zipfile.ZipFile(path2) as z:
@@ -509,7 +535,7 @@ def test_contact_derivatives_are_the_fmi2_fmus(fmus):
         unknowns = [
             v.valueReference
             for v in a.md.modelVariables
-            if v.causality == "output" and v.type == "Float64"
+            if v.causality == "output" and v.type == "Float64" and not v.dimensions
         ]
         J3, J2 = [], []
         for k in knowns:
@@ -541,6 +567,91 @@ def test_derivatives_outside_the_contact_mode_are_refused_naming_why(fmus):
                 fn([vx], [fx], [1.0])
             assert e.value.status == ERROR
             assert "provided by the contact mode only" in a.messages[-1][1]
+
+
+# ---- the traction along the centre line (FMI 3.0 arrays) ---------------------------------------
+LAW = ("P", "Rx", "Ry", "k1", "k2", "kb", "ks", "mu")
+
+
+def _line(inst) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return tuple(inst.array(name) for name, _, _ in model_description3.LINE)
+
+
+def test_centre_line_is_eq_36_in_the_adhesion_area_and_the_laws_field(fmus):
+    """Fig. 13's body under a traction force (partial slip, no spin): along the centre line
+    y = 0 the traction is Eq. (36) where the material adheres, tau_x = vx (l - x)/(|Vx| k)
+    from the leading edge l = a1 (Vx > 0, k = kb + ks), and mu p(x) = mu p0 (1 - (x/a1)^2)
+    where it slips (Eqs. 4-5); the cells are layer.LayerContact.traction's (nx = 41, ny = 1)
+    and so is the whole field. The C march and the Python one run the same recurrence of
+    41 projections on the same doubles, so they agree to rounding: 1e-12 mu p0 covers a
+    few ulp per step."""
+    path3, _ = fmus("fig13")
+    with Instance3(path3) as a:
+        a.set("Fx_ex", 0.8 * 0.3 * 1000.0)  # 0.8 mu P: an adhesion area and a slip area
+        for _ in range(40):
+            assert a.step(H) == OK
+        x, tx, ty = _line(a)
+        law = LayerContact(**{n: a.get(n) for n in LAW})
+        Vx, vx, k = a.get("Vx"), a.get("vx"), a.get("kb") + a.get("ks")
+        ref = law.traction(vx, 0.0, Vx, nx=model_description3.LINE_N, ny=1)
+    cap = law.mu * law.p0 * np.maximum(1.0 - (x / law.a1) ** 2, 0.0)
+    np.testing.assert_allclose(x, ref.x, rtol=1e-14, atol=0.0)
+    scale = law.mu * law.p0
+    assert np.max(np.abs(tx - ref.tau_x[0])) <= 1e-12 * scale and not np.any(ty)
+    assert np.all(np.abs(tx) <= cap * (1 + 1e-12))
+    stick = tx < cap * (1 - 1e-9)
+    assert 1 < np.count_nonzero(stick) < 40  # partial slip: both areas on the line
+    eq36 = vx * (law.a1 - x) / (abs(Vx) * k)
+    np.testing.assert_allclose(tx[stick], eq36[stick], rtol=1e-12)
+    np.testing.assert_allclose(tx[~stick], cap[~stick], rtol=1e-12)
+
+
+def test_centre_line_with_spin_at_standstill_and_lifted_off(fmus):
+    """The full contact FMU (inputs are the kinematics): with lateral creep and spin the
+    line is the law's field (the strip march, Eqs. 35 and 3 with phi = Omega_z); at
+    standstill (Vx = 0) every point slides, tau = mu p v/|v| with v = vx + i (vy + phi x)
+    (Eq. 5), so |tau| = mu p(x); lifted off (P = 0) there is no traction. Each read
+    follows the inputs set since the last (no step in contact mode)."""
+    path3, _ = fmus("full_contact")
+    kin = {"Vx": 5.0, "Omega_y": 4.99 / 0.05, "Vy": 0.003, "Omega_z": 0.4, "P": 900.0}
+    with Instance3(path3, start=kin) as a:
+        law = LayerContact(**{n: a.get(n) for n in LAW})
+        vx = kin["Vx"] - a.get("Rx") * kin["Omega_y"]
+        x, tx, ty = _line(a)
+        ref = law.traction(vx, kin["Vy"], kin["Vx"], nx=model_description3.LINE_N, ny=1,
+                           phi=kin["Omega_z"])  # fmt: skip
+        scale = law.mu * law.p0
+        assert np.max(np.abs(tx - ref.tau_x[0])) <= 1e-12 * scale
+        assert np.max(np.abs(ty - ref.tau_y[0])) <= 1e-12 * scale
+        assert np.any(ty != 0.0)
+        a.set("Vx", 0.0)
+        a.set("Omega_y", 0.0)  # standstill, the wheel turned by nothing: vx = 0
+        x, tx, ty = _line(a)
+        cap = law.mu * law.p0 * np.maximum(1.0 - (x / law.a1) ** 2, 0.0)
+        v = 0.0 + 1j * (kin["Vy"] + kin["Omega_z"] * x)
+        np.testing.assert_allclose(tx + 1j * ty, cap * v / np.abs(v), rtol=1e-14, atol=0.0)
+        a.set("P", 0.0)
+        assert not any(np.any(arr) for arr in _line(a))
+
+
+def test_centre_line_refusals(fmus):
+    """An array read with too few values, an array set, or read before the model is set
+    up: fmi3Error, a message that says why, the instance usable after."""
+    path3, _ = fmus("fig13")
+    with Instance3(path3, init=False) as a:
+        vr = a.vars["tau_x_centre"].valueReference
+        with pytest.raises(FMICallException):
+            a.fmu.getFloat64([vr], nValues=model_description3.LINE_N)
+        assert "read it after" in a.messages[-1][1]
+        a.fmu.exitInitializationMode()
+        a.initialised = True
+        with pytest.raises(FMICallException):
+            a.fmu.getFloat64([vr], nValues=1)
+        assert "41 per array of the centre line" in a.messages[-1][1]
+        with pytest.raises(FMICallException):
+            a.fmu.setFloat64([vr], [0.0] * model_description3.LINE_N)
+        assert "is an output of this FMU" in a.messages[-1][1]
+        assert a.step(H) == OK and np.all(np.isfinite(_line(a)[1]))
 
 
 # ---- resources ---------------------------------------------------------------------------------

@@ -13,7 +13,9 @@
  * - the independent variable time (FMI 3.0 requires one) has the value reference after
  *   the model's (CF3_VR_TIME) and is read as cf_time;
  * - Float64 = Real, Int32 = Integer, Boolean and String as is; every other type has no
- *   variable here; values come one per value reference (every variable is a scalar);
+ *   variable here; values come one per value reference, except the three Float64
+ *   arrays of the traction along the contact's centre line (x_centre, tau_x_centre,
+ *   tau_y_centre, after time: cf_get_line) in body and contact mode on the thin-layer law;
  * - fmi3GetAdjointDerivative: seed^T J from cf_directional_derivative's columns.
  * The functions FMI 3.0 defines that this FMU does not provide (model exchange, scheduled
  * execution, event mode, clocks, configuration mode, output derivatives) answer
@@ -215,17 +217,41 @@ static int has_time(const fmi3ValueReference vr[], size_t n) {
     return 0;
 }
 
+/* the centre line's arrays x_centre, tau_x_centre, tau_y_centre (model_description3.LINE):
+ * the value references after time's, cf_line_size() values each; which array, or -1 */
+static int line_of(fmi3ValueReference vr) {
+    if (cf_line_size() == 0 || vr <= CF3_VR_TIME || vr > CF3_VR_TIME + 3) return -1;
+    return (int)(vr - CF3_VR_TIME - 1);
+}
+
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, fmi3Float64 values[], size_t nValues) {
     INST3();
-    SCALARS("fmi3GetFloat64");
-    if (!has_time(valueReferences, nValueReferences))
-        return st(cf_get_real(I, valueReferences, nValueReferences, values));
+    size_t need = 0, special = 0;
+    if (nValueReferences > 0 && valueReferences == NULL) return fmi3Error;
+    for (size_t i = 0; i < nValueReferences; i++) {
+        const int line = line_of(valueReferences[i]);
+        need += line >= 0 ? (size_t)cf_line_size() : 1;
+        special += line >= 0 || valueReferences[i] == CF3_VR_TIME;
+    }
+    if (nValues != need)
+        return REFUSE("fmi3GetFloat64: %zu values for %zu value references (%zu expected: "
+                      "one per scalar, %d per array of the centre line)",
+                      nValues, nValueReferences, need, cf_line_size());
+    if (!special) return st(cf_get_real(I, valueReferences, nValueReferences, values));
     if (values == NULL) return fmi3Error;
-    fmi3Status s = fmi3OK; /* one at a time: time is the layer's time */
-    for (size_t i = 0; i < nValueReferences && s < fmi3Error; i++) {
-        if (valueReferences[i] == CF3_VR_TIME) values[i] = cf_time(I);
-        else s = worst(s, st(cf_get_real(I, &valueReferences[i], 1, &values[i])));
+    fmi3Status s = fmi3OK; /* one at a time: time is the layer's, the arrays the line's */
+    for (size_t i = 0, k = 0; i < nValueReferences && s < fmi3Error; i++) {
+        const fmi3ValueReference vr = valueReferences[i];
+        const int line = line_of(vr);
+        if (line >= 0) {
+            s = worst(s, st(cf_get_line(I, line, &values[k])));
+            k += (size_t)cf_line_size();
+            continue;
+        }
+        if (vr == CF3_VR_TIME) values[k] = cf_time(I);
+        else s = worst(s, st(cf_get_real(I, &vr, 1, &values[k])));
+        k++;
     }
     return s;
 }
@@ -233,6 +259,11 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Float64 values[], size_t nValues) {
     INST3();
+    for (size_t i = 0; valueReferences != NULL && i < nValueReferences; i++)
+        if (line_of(valueReferences[i]) >= 0)
+            return REFUSE("fmi3SetFloat64: value reference %u is an output of this FMU (an "
+                          "array of the centre line): it cannot be set",
+                          (unsigned)valueReferences[i]);
     SCALARS("fmi3SetFloat64");
     if (has_time(valueReferences, nValueReferences))
         return REFUSE("fmi3SetFloat64: time (value reference %u) is the independent "

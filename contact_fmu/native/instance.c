@@ -966,6 +966,37 @@ cf_status cf_get_real(cf_inst *I, const unsigned *vr, size_t n, double *v) {
     return status;
 }
 
+int cf_line_size(void) { return CF_LINE ? CF_LINE_N : 0; }
+
+/* the centre line's arrays (which: 0 x, 1 tau_x, 2 tau_y) at the outputs' kinematics: the
+ * body's state (vx_slip, vy_slip, Vx, Omega_z), or the contact mode's inputs */
+cf_status cf_get_line(cf_inst *I, int which, double *v) {
+    if (!CF_LINE || which < 0 || which > 2 || v == NULL) return CF_STATUS_ERROR;
+    static const char *const NAMES[3] = {"x_centre", "tau_x_centre", "tau_y_centre"};
+    cf_core *c = &I->c;
+    if (!c->built) {
+        say(I, CF_STATUS_ERROR, "%s: the model is set up at %sExitInitializationMode: read "
+            "it after", NAMES[which], I->api);
+        return CF_STATUS_ERROR;
+    }
+    if (CF_MODE == MODE_CONTACT && c->dirty) {
+        const cf_status s = refresh(I);
+        if (s != CF_STATUS_OK) return s;
+    }
+    const double *o = c->b.out;
+    const int contact = CF_MODE == MODE_CONTACT;
+    const double Vx = contact ? c->val[R_VX] : o[O_VX];
+    const double phi = contact ? c->val[R_OMEGA_Z] : o[O_OMEGA_Z];
+    double line[3][CF_LINE_N];
+    if (cf_model_centre_line(c, &c->p, &c->b, o[O_VX_SLIP], o[O_VY_SLIP], Vx, phi, line) != 0) {
+        say(I, CF_STATUS_ERROR, "%s: the traction field is not finite at vx = %g, vy = %g, "
+            "Vx = %g, Omega_z = %g", NAMES[which], o[O_VX_SLIP], o[O_VY_SLIP], Vx, phi);
+        return CF_STATUS_ERROR;
+    }
+    memcpy(v, line[which], sizeof line[which]);
+    return CF_STATUS_OK;
+}
+
 cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     cf_status status = CF_STATUS_OK;

@@ -89,6 +89,14 @@ CF_HIDDEN cf_status cf_set_boolean(cf_inst *I, const unsigned *vr, size_t n); /*
 CF_HIDDEN cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n,
                                   const char *const *v);
 
+/* ---- the traction along the contact's centre line (FMI 3.0 arrays) ----------------------- */
+/* the number of cells of the line's arrays, 0 where this FMU has none (rigid_body mode, a
+ * creep-force table) */
+CF_HIDDEN int cf_line_size(void);
+/* which: 0 the cells' x (m, ascending), 1 tau_x, 2 tau_y (Pa) there, cf_line_size()
+ * values into v, at the outputs' kinematics (layer.LayerContact.traction, ny = 1) */
+CF_HIDDEN cf_status cf_get_line(cf_inst *I, int which, double *v);
+
 /* ---- stepping ----------------------------------------------------------------------------- */
 /* a communication step of h from t (t: the FMU's time, to 64 ulp) */
 CF_HIDDEN cf_status cf_do_step(cf_inst *I, double t, double h);

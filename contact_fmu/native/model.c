@@ -243,3 +243,35 @@ int cf_model_analytic_row(const cf_core *c, int role, int have, double J[3][4], 
     row[3] = J[k][3];
     return 1;
 }
+
+/* The strip march (Eq. 35 bounded by Eqs. 4-5: cf_strip_march) of one strip, the centre
+ * line y = 0, from the leading edge; at standstill every point slides, tau = mu p v/|v|
+ * (Eq. 5, v of Eq. 3 at y = 0: vx + i (vy + phi x)), as layer._Grid._march_numpy. */
+int cf_model_centre_line(const cf_core *c, const cf_params *law, const cf_body *b, double vx,
+                         double vy, double Vx, double phi, double line[3][CF_LINE_N]) {
+    enum { N = CF_LINE_N };
+    double y[1], dist[N], mid[N], cap[N], w[N], tau[2 * N];
+    unsigned char inside[N], slip[N];
+    cf_strips g;
+    memset(line, 0, 3 * sizeof line[0]);
+    const double in[4] = {vx, vy, Vx, phi};
+    for (int k = 0; k < 4; k++)
+        if (!isfinite(in[k])) return -1;
+    if (law->P == 0.0 || !(law->a1 > 0.0)) return 0; /* lift-off: no contact, no traction */
+    const double *v = c->val;
+    cf_grid_build(&g, line[0], y, dist, mid, cap, w, inside, N, 1, law->a1, b->a2, b->p0,
+                  law->mu, v[R_KB] + v[R_KS], CF_TINY);
+    if (Vx != 0.0) {
+        if (cf_strip_march(&g, 1, &vx, &vy, &Vx, &phi, tau, slip) != CF_OK) return -1;
+        for (int j = 0; j < N; j++) { /* march order: against x for Vx > 0 */
+            const int e = Vx > 0.0 ? N - 1 - j : j;
+            line[1][j] = tau[2 * e], line[2][j] = tau[2 * e + 1];
+        }
+        return 0;
+    }
+    for (int j = 0; j < N; j++) {
+        const double sx = vx, sy = vy + phi * line[0][j], mag = hypot(sx, sy);
+        if (mag > 0.0) line[1][j] = cap[j] * sx / mag, line[2][j] = cap[j] * sy / mag;
+    }
+    return 0;
+}

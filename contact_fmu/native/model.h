@@ -80,6 +80,11 @@ typedef struct {
     unsigned char slip[GRID_N];
 } spin_grid;
 
+/* the traction along the contact's centre line y = 0 (the FMI 3.0 FMU's arrays x_centre,
+ * tau_x_centre, tau_y_centre): CF_LINE_N cells, on the thin-layer law in body and contact
+ * mode (model_description3.has_line; CF_LINE_N, its LINE_N, comes with cf_model.h) */
+#define CF_LINE (CF_MODE != MODE_RIGID && !CF_TABLE)
+
 /* ---- the model's numerics (model.c) -------------------------------------------------- */
 /* the Python integrator's constants into p and b (cf_model.h) */
 CF_HIDDEN void cf_model_constants(cf_params *p, cf_body *b);
@@ -99,6 +104,12 @@ CF_HIDDEN void cf_model_rigid_step(const cf_core *c, double h, double out[N_OUT]
 /* d(Tx, Ty, Mz)/d(vx, vy, V, phi) at c's inputs, analytic; 0 where there is none */
 CF_HIDDEN int cf_model_contact_jacobian(const cf_core *c, spin_grid *g, int need_phi,
                                         double J[3][4]);
+/* layer.LayerContact.traction(vx, vy, Vx, nx = CF_LINE_N, ny = 1, phi) of the law at its
+ * load (law, b): the cells' x (m), ascending, and tau_x, tau_y (Pa) there; all 0 without
+ * contact (P = 0); 0 if the field is finite, else -1 (a non-finite input) */
+CF_HIDDEN int cf_model_centre_line(const cf_core *c, const cf_params *law, const cf_body *b,
+                                   double vx, double vy, double Vx, double phi,
+                                   double line[3][CF_LINE_N]);
 /* an output's row of d(outputs)/d(Vx, Vy, Omega_y, Omega_z) where analytic, else 0 */
 CF_HIDDEN int cf_model_analytic_row(const cf_core *c, int role, int have, double J[3][4],
                                     double row[4]);
