@@ -72,7 +72,7 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
     "cf_params": (
         "The parameters of a step (stepper.c): the body, the law at its load, the path and "
         "the constants of integrator.py, solvers.py and layer.py, passed so that they live "
-        "once (the ctypes Kernel from the Python values, the native FMU from CF_* below: "
+        "once (the ctypes Kernel from the Python values, the native FMU from the CF_* above: "
         "model.c's cf_model_constants). native.Params.",
         [
             ("M", "double", "kg: the body's mass"),

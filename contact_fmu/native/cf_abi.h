@@ -59,7 +59,7 @@ enum {
 
 /* The parameters of a step (stepper.c): the body, the law at its load, the path and the
  * constants of integrator.py, solvers.py and layer.py, passed so that they live once (the
- * ctypes Kernel from the Python values, the native FMU from CF_* below: model.c's
+ * ctypes Kernel from the Python values, the native FMU from the CF_* above: model.c's
  * cf_model_constants). native.Params. */
 typedef struct {
     double M;                 /* kg: the body's mass */
