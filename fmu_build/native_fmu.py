@@ -4,12 +4,13 @@ The binary is built from the C files of contact_fmu/native, each its own transla
 unit (SOURCES): fmi2.c (the FMI 2.0 front end: arguments and statuses), instance.c (the
 version-neutral instance layer: phases, checks, step admission, messages, FMU states),
 model.c (the contact outputs, the rigid-body step, the analytic Jacobian) and stepper.c
-(the kernel), with their headers instance.h, model.h, stepper.h, cf_core.h (the checks
-of a value and of a doStep call, shared with the pythonfmu FMU's binding fmi.c) and a
-header generated here, cf_model.h: the FMU's variables from
-``contact_fmu.fmu.variables`` (names, kinds, starts, ranges and the requirement texts of
-their check messages), its GUID and the Python integrator's constants, so that each
-lives once. The model description is written like the pythonfmu FMU's and completed by
+(the kernel), with their headers instance.h, model.h, stepper.h, cf_abi.h (the structs
+and the Python numerics' constants the C code shares with Python, generated from
+contact_fmu/native/abi.py and committed), cf_core.h (the checks of a value and of a
+doStep call, shared with the pythonfmu FMU's binding fmi.c) and a header generated here,
+cf_model.h: the FMU's variables from ``contact_fmu.fmu.variables`` (names, kinds,
+starts, ranges and the requirement texts of their check messages) and its GUID, so that
+each lives once. The model description is written like the pythonfmu FMU's and completed by
 the same ``model_description.patch`` (units, ranges, starts, ModelStructure); it lists the
 C files (``<SourceFiles>``) that the FMU carries under ``sources/``, so that fmpy's
 build (or any importer's) compiles it on Windows or macOS: every .c file into one shared
@@ -33,7 +34,6 @@ else is refused here with a message that names the scene's feature
 
 from __future__ import annotations
 
-import ast
 import hashlib
 import importlib.util
 import json
@@ -49,8 +49,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from contact_fmu import integrator, kinematics, layer, native, solvers
-from contact_fmu.fmu import body_model
+from contact_fmu import integrator, layer, native
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 from fmu_build import model_description3
@@ -64,7 +63,8 @@ NATIVE_DIR = Path(native.__file__).resolve().parent
 # headers they include; with HEADER (generated) they are the FMU's sources/
 # CORE: what every front end is linked with (the FMI 3.0 FMU's: native_fmu3.SOURCES)
 FRONT_END = "fmi2.c"
-CORE = ("instance.c", "model.c", "stepper.c", "instance.h", "model.h", "stepper.h", "cf_core.h")
+CORE = ("instance.c", "model.c", "stepper.c", "instance.h", "model.h", "stepper.h", "cf_abi.h",
+        "cf_core.h")  # fmt: skip
 SOURCES = (FRONT_END, *CORE)
 HEADER = "cf_model.h"
 # no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
@@ -127,42 +127,6 @@ def _cstr(s: str) -> str:
     return json.dumps(s)  # a C string literal for the ASCII texts used here
 
 
-def _time_rtol() -> float:
-    """slave.TIME_RTOL, read from its source (the build does not import pythonfmu)."""
-    src = (Path(body_model.__file__).with_name("slave.py")).read_text()
-    for node in ast.parse(src).body:
-        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "TIME_RTOL":
-            return float(ast.literal_eval(node.value))
-    raise RuntimeError("slave.TIME_RTOL not found")
-
-
-# the constants of the Python integrator the C kernel reads, by their C names
-def constants() -> dict[str, float | int]:
-    return {
-        "V_STANDSTILL": integrator.V_STANDSTILL,
-        "V_SCALE_FLOOR": integrator.V_SCALE_FLOOR,
-        "Z_ALGEBRAIC": integrator.Z_ALGEBRAIC,
-        "CAPACITY_MARGIN": integrator.CAPACITY_MARGIN,
-        "ALGEBRAIC_KEY": integrator.ALGEBRAIC,
-        "GAMMA": integrator.GAMMA,
-        "SOLVE_RTOL": solvers.SOLVE_RTOL,
-        "EXPAND": solvers.EXPAND,
-        "MAX_EXPANSIONS": solvers.MAX_EXPANSIONS,
-        "MAX_NEWTON": solvers.MAX_NEWTON,
-        "FD_STEP": solvers.FD_STEP,
-        "LINE_SEARCH_MIN": solvers.LINE_SEARCH_MIN,
-        "CONTRACTION_MAX": solvers.CONTRACTION_MAX,
-        "CONTRACTION_FAST": solvers.CONTRACTION_FAST,
-        "NEWTON_ITERATIONS": solvers.NEWTON_ITERATIONS,
-        "BETA_FULL_SLIP": layer.BETA_FULL_SLIP,
-        "BETA_SERIES": layer.BETA_SERIES,
-        "V_CREEP_FLOOR": kinematics.V_CREEP_FLOOR,
-        "SUBSTEP_SLACK": body_model.SUBSTEP_SLACK,
-        "MAX_SUBSTEPS": body_model.MAX_SUBSTEPS,
-        "TIME_RTOL": _time_rtol(),
-    }
-
-
 _ROLES = {
     "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "vx0",
     "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
@@ -181,7 +145,8 @@ def _role(cfg: ModelConfig, v: fv.Var) -> str:
 
 def header(cfg: ModelConfig, guid: str) -> str:
     """cf_model.h for ``cfg``: the variables in value-reference order, the GUID, the
-    start method and the constants."""
+    start method and scheme, the model parts it has (the constants the C code shares
+    with Python are cf_abi.h's)."""
     kinds = {fv.PARAMETER: "K_PARAMETER", fv.INPUT: "K_INPUT", fv.OUTPUT: "K_OUTPUT"}
     types = {"Real": "T_REAL", "Integer": "T_INTEGER", "String": "T_STRING"}
     rows = []
@@ -229,9 +194,6 @@ def header(cfg: ModelConfig, guid: str) -> str:
         *rows,
         "};",
     ]
-    for name, value in constants().items():
-        lit = str(value) if isinstance(value, int) else _c(value)
-        lines.append(f"#define CF_{name} {lit}")
     return "\n".join(lines) + "\n"
 
 

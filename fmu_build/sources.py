@@ -93,7 +93,9 @@ def closure(roots: list[str]) -> list[str]:
 
 # Files other than Python a module reads next to itself, by module.
 COMPANIONS = {
-    "native": ("native/stepper.c", "native/stepper.h", "native/fmi.c", "native/cf_core.h")
+    "native": tuple(
+        f"native/{n}" for n in ("stepper.c", "stepper.h", "cf_abi.h", "fmi.c", "cf_core.h")
+    )
 }
 
 

@@ -130,13 +130,13 @@ def test_body_fmu_carries_the_compiled_stepper_and_loads_it(built, tmp_path):
     no compiled code, carries the loader's Python alone, no library and no C source, and
     the rigid-body FMU no native part at all."""
     lib, ext = f"native/{native.library_name()}", f"native/{native.fmi_name()}"
-    assert {"native/stepper.c", "native/fmi.c", "native/cf_core.h", lib, ext} <= _vendored(
-        built["fig13"]
-    )
+    carried = {"native/stepper.c", "native/fmi.c", "native/cf_core.h", "native/cf_abi.h"}
+    assert carried | {"native/abi.py", lib, ext} <= _vendored(built["fig13"])
     contact = _vendored(built["full_contact"])
     assert {"native/stepper.c", lib} <= contact and ext not in contact
     assert {f for f in _vendored(built["sweep"]) if f.startswith("native/")} == {
-        "native/__init__.py"
+        "native/__init__.py",
+        "native/abi.py",  # the loader's structs
     }
     assert not any(f.startswith("native/") for f in _vendored(built["full_rigid_body"]))
     fmpy.extract(str(built["fig13"].path), str(tmp_path))

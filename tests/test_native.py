@@ -815,23 +815,6 @@ def test_compiled_sdirk2_damps_the_fast_mode_at_any_step(monkeypatch, lateral, r
     assert counts["kernel"] + counts_v["kernel"] == 12
 
 
-def test_physical_ranges_in_c_are_the_declared_ones():
-    """stepper.c refuses a body step beyond the physical ranges (within_range) and loads
-    beyond LOAD_LIMIT mu P with constants of its own (the library is compiled without
-    the FMU's generated header): they are the Python declarations' numbers, which the
-    model descriptions and both FMUs' input checks take from variables.py."""
-    import re
-
-    from contact_fmu.fmu.variables import RATE_MAX, SPEED_MAX
-    from contact_fmu.integrator import LOAD_LIMIT
-
-    text = native.HEADER.read_text()
-    found = dict(re.findall(r"^#define CF_(SPEED_MAX|RATE_MAX|LOAD_LIMIT) (\S+)", text, re.M))
-    assert {k: float(v) for k, v in found.items()} == {
-        "SPEED_MAX": SPEED_MAX, "RATE_MAX": RATE_MAX, "LOAD_LIMIT": LOAD_LIMIT
-    }  # fmt: skip
-
-
 def test_c_sources_compile_without_warnings(tmp_path):
     """stepper.c, fmi.c and the native FMU's C files (with the generated headers of the
     body FMU with Eqs. 10-11, of the half-space table's and of the full contact FMU: the

@@ -68,7 +68,7 @@ from .config import ModelConfig
 # Relative tolerance between doStep's currentCommunicationPoint and the FMU's time: a
 # master that accumulates steps, multiplies or converts integer nanoseconds differs
 # from t + h by a few units in the last place of t, never by more (64 ulp).
-TIME_RTOL = 1.4210854715202004e-14  # 64 * 2**-52 (a literal: fmu_build reads it)
+TIME_RTOL = 1.4210854715202004e-14  # 64 * 2**-52 (the C code's CF_TIME_RTOL: native/abi.py)
 # The value reference through which the FMU's binary (pythonfmu_shim.c, CF_CELL_VR)
 # hands over the address of its status cell; no variable has it.
 CELL_VR = 2147483647

@@ -43,8 +43,8 @@ UNITS: dict[str, dict[str, int]] = {
 # Eq. 20) no longer resolves Omega_y = (Vx - vx)/Rx to the changes one step makes
 # (eps |Vx| / Rx against h Rx mu P / Iy; docs/reliability.md), and the strip march of
 # the law with spin overflows (its increments grow as Omega_z a1 dx/(|Vx| k)). Far
-# beyond any wheel, bearing or vehicle. stepper.c's CF_SPEED_MAX, CF_RATE_MAX: the same
-# numbers (tests/test_native.py keeps them equal).
+# beyond any wheel, bearing or vehicle. The C code's CF_SPEED_MAX, CF_RATE_MAX are these
+# (cf_abi.h, generated from contact_fmu/native/abi.py).
 SPEED_MAX = 1e4  # m/s
 RATE_MAX = 1e7  # rad/s
 # Smallest coefficient of friction. Measured friction coefficients reach 1e-3 with

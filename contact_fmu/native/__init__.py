@@ -43,8 +43,11 @@ from typing import Any
 
 import numpy as np
 
+from . import abi
+
 SOURCE = Path(__file__).with_name("stepper.c")
 HEADER = Path(__file__).with_name("stepper.h")  # its types and functions (the FMU's too)
+ABI = abi.HEADER  # cf_abi.h, included by stepper.h: the structs and constants shared here
 # No contraction into fused multiply-adds, no fast math: the Python path's roundings.
 # CF_GLIBC_COMPAT: the oldest glibc symbol versions of hypot and pow (stepper.h).
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math", "-DCF_GLIBC_COMPAT")
@@ -54,66 +57,41 @@ KERNEL_FLAGS = (*CFLAGS, "-DCF_KERNEL_EXPORT")
 OK = 0
 
 
+# The structs the C code shares (stepper.h's, from cf_abi.h): their fields are declared
+# once, in abi.py, which writes the C header too.
 class Params(ctypes.Structure):
-    _fields_ = [
-        (n, ctypes.c_double)
-        for n in (
-            "M", "Rx", "A1", "A2", "m_slip", "mu", "P", "a1", "creep_full_slip",
-            "beta_per_creep", "ry", "v_standstill", "v_scale_floor", "z_algebraic",
-            "capacity_margin", "solve_rtol", "expand", "beta_full_slip", "beta_series",
-        )
-    ] + [("max_newton", ctypes.c_int), ("quasistationary", ctypes.c_int), ("law", ctypes.c_int)] + [
-        (n, ctypes.c_void_p) for n in ("coef", "ax1", "ax2", "ax3")
-    ] + [(n, ctypes.c_int) for n in ("n1", "n2", "n3")] + [
-        (n, ctypes.c_double)
-        for n in ("ext1", "ext2", "ext3", "xi_ref", "phi_ref", "c", "saturation_width", "Iz", "rz")
-    ] + [("dyn_vy", ctypes.c_int), ("dyn_spin", ctypes.c_int), ("strips", ctypes.c_void_p)] + [
-        ("fd_step", ctypes.c_double), ("line_search_min", ctypes.c_double),
-        ("contraction_max", ctypes.c_double), ("contraction_fast", ctypes.c_double),
-        ("newton_iterations", ctypes.c_int), ("algebraic_key", ctypes.c_double),
-        ("bracket", ctypes.c_int), ("max_expansions", ctypes.c_int),
-        ("gamma", ctypes.c_double), ("sdirk", ctypes.c_int), ("Iy", ctypes.c_double),
-    ]  # fmt: skip
+    """cf_params: the parameters of a step (the body, the law at its load, the path, the
+    Python numerics' constants)."""
+
+    _fields_ = abi.fields("cf_params")
 
 
 class State(ctypes.Structure):
-    _fields_ = [(n, ctypes.c_double) for n in ("Vx", "vx", "t", "dv", "Tx", "Ty", "Mz")] + [
-        ("out_sliding", ctypes.c_int),
-        ("sliding", ctypes.c_int),
-    ]
+    """cf_state: the state of the scalar path (cf_advance)."""
+
+    _fields_ = abi.fields("cf_state")
 
 
 class VState(ctypes.Structure):
-    """stepper.c's cf_vstate: the state of the vector path (cf_advance_vector)."""
+    """cf_vstate: the state of the vector path (cf_advance_vector)."""
 
-    _fields_ = [
-        (n, ctypes.c_double) for n in ("Vx", "vx", "Vy", "Oz", "t", "dv", "Tx", "Ty", "Mz")
-    ] + [
-        ("out_sliding", ctypes.c_int), ("jac_valid", ctypes.c_int), ("jac_h", ctypes.c_double),
-        ("J", ctypes.c_double * 36), ("sliding", ctypes.c_int),
-    ]  # fmt: skip
+    _fields_ = abi.fields("cf_vstate")
 
 
-# RollingBody.outputs() keys in the order of stepper.c's cf_body.out
-OUTPUTS = (
-    "Vx", "Vy", "Omega_y", "Omega_z", "Tx", "Ty", "Mz", "vx", "vy",
-    "xi_x", "xi_y", "xi_sp", "a1", "a2", "p0", "adhesion", "regime",
-)  # fmt: skip
+# RollingBody.outputs() keys in the order of cf_body.out
+OUTPUTS = tuple(key for key, _, _ in abi.OUTPUTS)
 
 
 class Strips(ctypes.Structure):
-    """stepper.c's cf_strips: the grid of layer._Grid for the compiled strip march."""
+    """cf_strips: the grid of layer._Grid for the compiled strip march."""
 
-    _fields_ = [("ny", ctypes.c_int), ("nx", ctypes.c_int)] + [
-        (n, ctypes.c_void_p) for n in ("x", "y", "dist", "mid", "cap", "w")
-    ] + [("k", ctypes.c_double), ("tiny", ctypes.c_double)]  # fmt: skip
+    _fields_ = abi.fields("cf_strips")
 
 
 class BodyIO(ctypes.Structure):
-    _fields_ = [
-        (n, ctypes.c_double)
-        for n in ("P", "Fx_ex", "My_ex", "h_max", "a2", "p0", "v_creep_floor", "substep_slack")
-    ] + [("max_substeps", ctypes.c_int), ("out", ctypes.c_double * len(OUTPUTS))]
+    """cf_body: a communication step of the body (its inputs, parameters, outputs)."""
+
+    _fields_ = abi.fields("cf_body")
 
 
 SOURCE_FMI = Path(__file__).with_name("fmi.c")
@@ -127,11 +105,11 @@ def _fmi_flags() -> tuple[str, ...]:
 
 
 def _key(source: Path) -> str:
-    """The content key of a library built from ``source`` (and the headers stepper.h and
-    cf_core.h) with KERNEL_FLAGS; OSError where a file is not there."""
+    """The content key of a library built from ``source`` (and the headers stepper.h,
+    cf_abi.h and cf_core.h) with KERNEL_FLAGS; OSError where a file is not there."""
     text = source.read_bytes() + CORE.read_bytes() + " ".join(KERNEL_FLAGS).encode()
     if source == SOURCE:
-        text += HEADER.read_bytes()
+        text += HEADER.read_bytes() + ABI.read_bytes()
     return hashlib.sha256(text).hexdigest()[:12]
 
 

@@ -86,7 +86,7 @@ typedef struct {
 #define CF_LINE (CF_MODE != MODE_RIGID && !CF_TABLE)
 
 /* ---- the model's numerics (model.c) -------------------------------------------------- */
-/* the Python integrator's constants into p and b (cf_model.h) */
+/* the Python integrator's constants into p and b (cf_abi.h) */
 CF_HIDDEN void cf_model_constants(cf_params *p, cf_body *b);
 /* the creep-force table's arrays (table: axes then patch coefficients) into p */
 CF_HIDDEN void cf_model_attach_table(const double *table, cf_params *p);

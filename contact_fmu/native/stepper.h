@@ -1,5 +1,6 @@
 /* The compiled kernel's interface (stepper.c): its types and the functions other
- * files call. Two users: the ctypes library of contact_fmu/native/__init__.py (stepper.c
+ * files call (the structs it shares with Python, the order of a body step's outputs and
+ * the Python numerics' constants are cf_abi.h's, generated from contact_fmu/native/abi.py). Two users: the ctypes library of contact_fmu/native/__init__.py (stepper.c
  * alone, built with CF_KERNEL_EXPORT so that ctypes finds cf_advance, cf_body_step,
  * cf_body_outputs, cf_strip_march, cf_layer_forces, cf_advance_vector) and the native
  * FMU (model.c, instance.c on stepper.c), whose library exports the fmi2 functions only:
@@ -13,6 +14,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "cf_abi.h" /* the structs and constants shared with Python (generated) */
 #include "cf_core.h"
 
 /* Internal linkage across the files of one library: hidden from its dynamic symbol
@@ -52,77 +54,10 @@ __asm__(".symver pow,pow@GLIBC_2.17");
 #define CF_OK 0
 #define CF_FALLBACK 1
 
-typedef struct {
-    /* body: M (kg), Rx (m), A1, A2 (Eq. 23), m_slip = M A2 (kg) */
-    double M, Rx, A1, A2, m_slip;
-    /* law: mu, P (N), a1 (m), creep_full_slip, beta_per_creep (layer.py) */
-    double mu, P, a1, creep_full_slip, beta_per_creep;
-    /* held ratio vy/Vx (Lateral.vy_ratio); the spin ratio of this path is 0 */
-    double ry;
-    /* constants of integrator.py, solvers.py and layer.py, passed so they live once */
-    double v_standstill, v_scale_floor, z_algebraic, capacity_margin;
-    double solve_rtol, expand, beta_full_slip, beta_series;
-    int max_newton;
-    int quasistationary; /* method: 1 "quasistationary", 0 "full" */
-    /* the law: LAW_LAYER (above) or LAW_TABLE (halfspace/table.py CreepTable at P: its
-     * Hermite patches coef (n1-1, n2-1, n3-1, 64, 4), axes, box, units) */
-    int law;
-    const double *coef, *ax1, *ax2, *ax3;
-    int n1, n2, n3;
-    double ext1, ext2, ext3, xi_ref, phi_ref, c, saturation_width;
-    /* the vector path (cf_advance_vector): Iz (kg m^2), the held spin ratio (1/m),
-     * whether Vy (Eq. 10) and Omega_z (Eq. 11) are stage unknowns, and the thin-layer
-     * law's spin grid (a cf_strips, NULL for the table) */
-    double Iz, rz;
-    int dyn_vy, dyn_spin;
-    const void *strips;
-    /* solvers.newton: the forward-difference step, the smallest line-search fraction,
-     * the contractions that keep and renew a Jacobian, the iteration cap */
-    double fd_step, line_search_min, contraction_max, contraction_fast;
-    int newton_iterations;
-    /* integrator.ALGEBRAIC: the key of a kept Newton matrix of the algebraic stage */
-    double algebraic_key;
-    /* 1: a scalar stage whose Newton iteration does not converge is solved here by
-     * solvers.increasing_root (its bracket search, then scipy's brentq, in C), as the
-     * Python path does; 0: CF_FALLBACK, the Python path solves it (its own kernel) */
-    int bracket;
-    int max_expansions; /* solvers.MAX_EXPANSIONS */
-    /* the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES), and SDIRK2's gamma =
-     * 1 - 1/sqrt(2) (integrator.GAMMA) */
-    double gamma;
-    int sdirk;
-    double Iy; /* kg m^2: the body's inertia (cf_body_inertia), for the free step at P = 0 */
-} cf_params;
-
+/* cf_params.law */
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
 
-typedef struct {
-    double Vx, vx, t, dv; /* y[0], y[1], t, _dv of RollingBody */
-    double Tx, Ty, Mz;    /* out: ContactOutputs */
-    int out_sliding;      /* out.sliding */
-    int sliding;          /* RollingBody.sliding (quasistationary gross sliding) */
-} cf_state;
-
-/* ---- fmu/body_model.py + RollingBody.outputs: a communication step of the body ----- */
-/* The outputs of RollingBody.outputs(), in the order of native.OUTPUTS. */
-enum {
-    O_VX, O_VY, O_OMEGA_Y, O_OMEGA_Z, O_TX, O_TY, O_MZ, O_VX_SLIP, O_VY_SLIP,
-    O_XI_X, O_XI_Y, O_XI_SP, O_A1, O_A2, O_P0, O_ADHESION, O_REGIME, N_OUT
-};
-
-typedef struct {
-    double P, Fx_ex, My_ex; /* inputs held over the step (Fy_ex, Mz_ex: no effect here) */
-    double h_max;           /* parameter: largest internal step (s) */
-    double a2, p0;          /* the law's, reported */
-    double v_creep_floor, substep_slack;
-    int max_substeps;
-    double out[N_OUT];
-} cf_body;
-
-#define CF_LOAD_LIMIT 1e9 /* integrator.LOAD_LIMIT */
-#define CF_SPEED_MAX 1e4 /* fmu/variables.SPEED_MAX (m/s), RATE_MAX (rad/s): ranges.within_range */
-#define CF_RATE_MAX 1e7
-
+/* ---- fmu/body_model.py: a communication step of the body (cf_body) ---------------- */
 /* Why a communication step of the body is not served (else CF_OK): the checks of
  * BodyModel.step and the adapter, once for both front ends. fmi.c's fast path takes
  * any of them as CF_FALLBACK (cf_body_step: the Python adapter then words the refusal),
@@ -151,25 +86,6 @@ static const cf_ranged CF_RANGED[4] = {
     {O_OMEGA_Y, "Omega_y", CF_RATE_MAX},
     {O_OMEGA_Z, "Omega_z", CF_RATE_MAX},
 };
-
-/* ---- layer._Grid.march: the strip march of the spin law --------------------------- */
-typedef struct {
-    int ny, nx;
-    const double *x, *y;           /* node coordinates (nx), (ny) */
-    const double *dist, *mid, *cap; /* (ny x nx): distance marched, midpoint, mu p */
-    const double *w;               /* (ny x nx): resultant weights */
-    double k, tiny;                /* kb + ks (m/Pa); layer.TINY */
-} cf_strips;
-
-/* The state of the vector path (cf_advance_vector: Vy and/or Omega_z as stage unknowns) */
-typedef struct {
-    double Vx, vx, Vy, Oz, t, dv; /* y, t, _dv of RollingBody */
-    double Tx, Ty, Mz;            /* out: ContactOutputs */
-    int out_sliding;
-    int jac_valid;                /* RollingBody._jac: (jac_h, J) kept, or none */
-    double jac_h, J[36];          /* 2n x 2n (n x n for the algebraic stage), row major */
-    int sliding;                  /* RollingBody.sliding (quasistationary gross sliding) */
-} cf_vstate;
 
 /* The vector path of a step (Eqs. 10-11: the native FMU's CF_VECTOR): its state, the lateral
  * loads, the spin grid's scratch and mask (cf_vbody_outputs) */
