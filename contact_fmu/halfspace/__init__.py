@@ -1,13 +1,14 @@
 """Exact half-space theory: Hertz, numerical normal contact, steady rolling with
-Boussinesq-Cerruti influence and layers, line contact, transient rolling, the
-creep-force table and its spec, and the mapping to CONTACT's conventions. Every public
-class and function is exported here. See docs/halfspace.md."""
+Boussinesq-Cerruti influence and layers, Kalker's FASTSIM beside it, line contact,
+transient rolling, the creep-force table and its spec, and the mapping to CONTACT's
+conventions. Every public class and function is exported here. See docs/halfspace.md."""
 
 import importlib
 from typing import Any
 
 from . import conventions
 from .contact import CreepCoefficients, HalfSpaceContact
+from .fastsim import Fastsim, kalker_coefficients
 from .hertz import CombinedElastic, Hertz, Material, UnitWarning, relative_curvatures
 from .influence import Grid
 from .line import LineContact
@@ -47,6 +48,7 @@ __all__ = [
     "CreepCoefficients",
     "CoulombSolution",
     "CreepTable",
+    "Fastsim",
     "Grid",
     "HalfSpaceContact",
     "HalfSpaceField",
@@ -69,6 +71,7 @@ __all__ = [
     "build_table",
     "conventions",
     "ellipse_patch",
+    "kalker_coefficients",
     "relative_curvatures",
     "solve_normal",
     "solve_rolling",
