@@ -21,6 +21,7 @@ from contact_fmu.halfspace import (  # noqa: E402
     Fastsim,
     HalfSpaceContact,
     kalker_coefficients,
+    plot_creep_curves,
     wheel_on_rail,
 )
 from contact_fmu.halfspace.validation import KALKER_E3, NUS, kalker_contact  # noqa: E402
@@ -274,3 +275,27 @@ def test_bad_solve_inputs_name_the_variable():
     assert e.value.name == "kb + ks"
     # given coefficients lift the table's range
     assert Fastsim(6e-3, 0.5e-3, G, NU, MU, P=P, C=(15.0, 18.0, 20.0)).C == (15.0, 18.0, 20.0)
+
+
+def test_creep_curve_plot_draws_exact_and_fastsim_together():
+    """``plot_creep_curves``: Tx/(mu P) of the exact solver (circles) and of FASTSIM with
+    both bounds (lines) against the creepage in mu P/(G c^2), each curve the solvers'
+    own forces at those creepages; Ty is left out where it is zero (pure xi)."""
+    c = wheel_on_rail(n=12)
+    ax = plot_creep_curves(c, (1.0, 0.0, 0.0), s_max=1.0, points=4)
+    lines = {ln.get_label(): ln for ln in ax.get_lines() if not ln.get_label().startswith("_")}
+    assert set(lines) == {"exact Tx", "FASTSIM parabolic Tx", "FASTSIM elliptic Tx"}
+    muP = c.mu * c.P
+    x0 = muP / (c.elastic.G * c.c**2)
+    s = lines["exact Tx"].get_xdata()
+    np.testing.assert_allclose(s, [0.25, 0.5, 0.75, 1.0], rtol=1e-15)
+    np.testing.assert_allclose(
+        lines["FASTSIM elliptic Tx"].get_ydata()[1],
+        c.fastsim(0.5 * x0, bound="elliptic").Tx / muP,
+        rtol=1e-12,
+    )
+    np.testing.assert_allclose(lines["exact Tx"].get_ydata()[3], c.solve(x0).Tx / muP, rtol=1e-9)
+    plt.close(ax.figure)
+    with pytest.raises(InputError) as e:
+        plot_creep_curves(c, (0.0, 0.0, 0.0))
+    assert e.value.name == "direction"

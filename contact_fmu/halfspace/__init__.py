@@ -13,6 +13,7 @@ from .hertz import CombinedElastic, Hertz, Material, UnitWarning, relative_curva
 from .influence import Grid
 from .line import LineContact
 from .normal import NormalSolution, solve_normal
+from .plotting import plot_creep_curves
 from .railway import STEEL, wheel_on_rail
 from .rolling import RollingPatch, RollingSolution, ellipse_patch, solve_rolling
 from .spec import Solid, TableLaw, TableSpec, build_file
@@ -72,6 +73,7 @@ __all__ = [
     "conventions",
     "ellipse_patch",
     "kalker_coefficients",
+    "plot_creep_curves",
     "relative_curvatures",
     "solve_normal",
     "solve_rolling",
