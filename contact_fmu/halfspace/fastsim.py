@@ -44,7 +44,8 @@ P (full sliding in one direction gives exactly mu P):
 * ``bound="elliptic"``: the Hertz pressure p0 (1 - x^2/a^2 - y^2/b^2)^(1/2), p0 =
   3 P/(2 pi a b), as in CONTACT's FASTSIM with the elliptical traction bound (B-digit 2
   of CONTACT, Vollebregt's user guide). The linear limit is the same; the creep curve
-  bends later and saturates more abruptly (docs/halfspace.md).
+  bends later and approaches mu P only slowly: the bound rises like the square root of
+  the distance from the leading edge, so adhesion persists there (docs/halfspace.md).
 
 The march is vectorised over the strips (one numpy step per column of the grid) and
 over a batch of creepages (``forces``).
