@@ -71,6 +71,9 @@ BoolArray = NDArray[np.bool_]
 DEFAULT_N = 32
 MIN_N = 4
 BOUNDS = ("parabolic", "elliptic")
+# ``forces`` marches its creepages in batches of at most this many increments per
+# component (cases x elements of the grid): 16 MB per array.
+BATCH_ELEMENTS = 2_000_000
 
 # Kalker (1990), Table E3: rows g = 0.1, 0.2, ..., 1.0 with g = a/b (a <= b) and g = b/a
 # (a >= b); per row (C11, C22, C23), each for nu = 0, 0.25, 0.5. As stored in CONTACT's
@@ -298,10 +301,11 @@ class Fastsim:
         """Full-adhesion forces of the grid over the ellipse's integrals 8 a^2 b/3 (xi,
         eta) and pi a^3 b/4 (spin), from the march itself with unit flexibilities."""
         X, Y, length, xm = self._geometry
-        unit = np.zeros((1, *X.shape))
+        unit = np.zeros((X.shape[1], 1, X.shape[0]))
         # unit creepage: increments = travel; unit spin (lateral part): x_mid times travel
-        Tx, Ty, _ = self._march(length[None], unit, np.full(X.shape, np.inf))[:3]
-        _, Ts, _ = self._march(unit, (xm * length)[None], np.full(X.shape, np.inf))[:3]
+        free = np.full(X.shape, np.inf)
+        Tx, Ty, _ = self._march(length.T[:, None, :], unit, free)[:3]
+        _, Ts, _ = self._march(unit, (xm * length).T[:, None, :], free)[:3]
         a, b = self.a1, self.a2
         q1 = float(Tx[0]) / (8.0 * a * a * b / 3.0)
         q3 = float(Ts[0]) / (math.pi * a**3 * b / 4.0)
@@ -311,7 +315,8 @@ class Fastsim:
     def _march(
         self, inc_x: FloatArray, inc_y: FloatArray, g: FloatArray, fields: bool = False
     ) -> tuple:
-        """The strip march for a batch: increments inc (B, ny, nx) (Pa), bound g (ny, nx).
+        """The strip march for a batch: increments inc (nx, B, ny) (Pa; column first, so
+        that a column's slice is contiguous), bound g (ny, nx).
 
         From the trailing column's neighbour ahead to the trailing edge, one column at a
         time for all strips and cases: predictor tau_H = tau_I+ + inc_I (zero ahead of the
@@ -321,7 +326,7 @@ class Fastsim:
         C = patch.contact
         X, Y = patch.grid.mesh()
         dA = patch.grid.area
-        B, ny, nx = inc_x.shape
+        nx, B, ny = inc_x.shape
         tx, ty = np.zeros((B, ny)), np.zeros((B, ny))
         Tx, Ty, Mz = np.zeros(B), np.zeros(B), np.zeros(B)
         if fields:
@@ -332,8 +337,8 @@ class Fastsim:
             if not ins.any():
                 tx[:], ty[:] = 0.0, 0.0
                 continue
-            hx = np.where(ins, tx + inc_x[:, :, i], 0.0)
-            hy = np.where(ins, ty + inc_y[:, :, i], 0.0)
+            hx = np.where(ins, tx + inc_x[i], 0.0)
+            hy = np.where(ins, ty + inc_y[i], 0.0)
             mag = np.hypot(hx, hy)
             gi = g[:, i]
             over = mag > gi
@@ -352,11 +357,11 @@ class Fastsim:
     def _increments(
         self, xi: FloatArray, eta: FloatArray, phi: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Traction increments (B, ny, nx) (Pa) of the creepages (B,): the integral of
+        """Traction increments (nx, B, ny) (Pa) of the creepages (B,): the integral of
         w/L over each element's travel."""
-        X, Y, length, xm = self._geometry
+        X, Y, length, xm = (a.T[:, None, :] for a in self._geometry)
         L1, L2, L3 = self.flexibilities
-        xi, eta, phi = (v[:, None, None] for v in (xi, eta, phi))
+        xi, eta, phi = (v[None, :, None] for v in (xi, eta, phi))
         inc_x = (xi / L1 - phi * Y / L3) * length
         inc_y = (eta / L2 + phi * xm / L3) * length
         return inc_x, inc_y
@@ -396,12 +401,17 @@ class Fastsim:
     def forces(
         self, xi: ArrayLike, eta: ArrayLike = 0.0, phi: ArrayLike = 0.0
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(Tx, Ty, Mz) (N, N m) for creepages broadcast together, one march for all (the
-        creep curve of many points at about the cost of one solve)."""
+        """(Tx, Ty, Mz) (N, N m) for creepages broadcast together, one march for all (in
+        batches of BATCH_ELEMENTS): a creep curve of 100 points costs about four solves."""
         from .contact import _broadcast
 
         xi, eta, phi = _broadcast(xi=xi, eta=eta, phi=phi)
         shape = xi.shape
-        inc = self._increments(xi.ravel(), eta.ravel(), phi.ravel())
-        Tx, Ty, Mz = self._march(*inc, self.patch.g)
-        return Tx.reshape(shape), Ty.reshape(shape), Mz.reshape(shape)
+        w = [v.ravel() for v in (xi, eta, phi)]
+        out = np.zeros((3, w[0].size))
+        # batches of at most BATCH_ELEMENTS increments per component (16 MB)
+        step = max(1, BATCH_ELEMENTS // (self.patch.grid.nx * self.patch.grid.ny))
+        for k in range(0, w[0].size, step):
+            inc = self._increments(*(v[k : k + step] for v in w))
+            out[:, k : k + step] = self._march(*inc, self.patch.g)
+        return out[0].reshape(shape), out[1].reshape(shape), out[2].reshape(shape)
