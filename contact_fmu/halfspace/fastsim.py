@@ -77,8 +77,8 @@ BATCH_ELEMENTS = 2_000_000
 
 # Kalker (1990), Table E3: rows g = 0.1, 0.2, ..., 1.0 with g = a/b (a <= b) and g = b/a
 # (a >= b); per row (C11, C22, C23), each for nu = 0, 0.25, 0.5. As stored in CONTACT's
-# m_hertz.f90 (linrol; Apache-2.0); its older copies carry 1.15 for C23 at a/b = 0.8, nu =
-# 0.25, a misprint of 1.25 (monotone in nu and in g like its neighbours).
+# m_hertz.f90 (linrol; Apache-2.0). The copy in CONTACT's usetab_table program carries
+# 1.15 for C23 at a/b = 0.8, nu = 0.25, a misprint of 1.25 (C23 grows with nu in every row).
 _TABLE_A_LT_B = (
     ((2.51, 3.31, 4.85), (2.51, 2.52, 2.53), (0.334, 0.473, 0.731)),
     ((2.59, 3.37, 4.81), (2.59, 2.63, 2.66), (0.483, 0.603, 0.809)),
