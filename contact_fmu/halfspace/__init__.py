@@ -1,17 +1,19 @@
 """Exact half-space theory: Hertz, numerical normal contact, steady rolling with
-Boussinesq-Cerruti influence and layers, line contact, transient rolling, the
-creep-force table and its spec, and the mapping to CONTACT's conventions. Every public
-class and function is exported here. See docs/halfspace.md."""
+Boussinesq-Cerruti influence and layers, Kalker's FASTSIM beside it, line contact,
+transient rolling, the creep-force table and its spec, and the mapping to CONTACT's
+conventions. Every public class and function is exported here. See docs/halfspace.md."""
 
 import importlib
 from typing import Any
 
 from . import conventions
 from .contact import CreepCoefficients, HalfSpaceContact
+from .fastsim import Fastsim, kalker_coefficients
 from .hertz import CombinedElastic, Hertz, Material, UnitWarning, relative_curvatures
 from .influence import Grid
 from .line import LineContact
 from .normal import NormalSolution, solve_normal
+from .plotting import plot_creep_curves
 from .railway import STEEL, wheel_on_rail
 from .rolling import RollingPatch, RollingSolution, ellipse_patch, solve_rolling
 from .spec import Solid, TableLaw, TableSpec, build_file
@@ -47,6 +49,7 @@ __all__ = [
     "CreepCoefficients",
     "CoulombSolution",
     "CreepTable",
+    "Fastsim",
     "Grid",
     "HalfSpaceContact",
     "HalfSpaceField",
@@ -69,6 +72,8 @@ __all__ = [
     "build_table",
     "conventions",
     "ellipse_patch",
+    "kalker_coefficients",
+    "plot_creep_curves",
     "relative_curvatures",
     "solve_normal",
     "solve_rolling",

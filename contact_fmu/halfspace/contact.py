@@ -273,6 +273,23 @@ class HalfSpaceContact:
             sol, error=tuple(map(float, err)), extrapolated=tuple(map(float, fine - err))
         )
 
+    def fastsim(
+        self,
+        xi: float,
+        eta: float = 0.0,
+        phi: float = 0.0,
+        bound: str = "parabolic",
+        C: ArrayLike | None = None,
+        check_units: bool = True,
+    ) -> RollingSolution:
+        """Kalker's FASTSIM on this contact and grid (``fastsim.Fastsim.of``): the same
+        RollingSolution as ``solve``, for a one-line comparison. bound: "parabolic"
+        (Kalker's) or "elliptic" (the Hertz pressure); C: (C11, C22, C23), default
+        Kalker's table (``linear_coefficients()`` gives this grid's). No layers."""
+        from .fastsim import Fastsim  # the exact solver does not need it
+
+        return Fastsim.of(self, bound=bound, C=C).solve(xi, eta, phi, check_units=check_units)
+
     def richardson_grids(self) -> tuple[tuple[int, int], tuple[int, int], float]:
         """The grids of ``solve(richardson=True)``: the elements (bx, by) of this grid's
         bounding box of the ellipse (an int n: (n - 2, n)), those (cx, cy) of the coarse

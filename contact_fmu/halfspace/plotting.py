@@ -1,5 +1,6 @@
 """Plots of a steady-rolling solution (``RollingSolution.plot``): the traction on the
-grid as arrows over contours of its magnitude, with the adhesion and slip areas marked.
+grid as arrows over contours of its magnitude, with the adhesion and slip areas marked;
+and the creep curves of the exact solver and FASTSIM together (``plot_creep_curves``).
 
 Matplotlib is imported here only, on the first plot: the solver modules import numpy
 and scipy alone.
@@ -11,9 +12,14 @@ from typing import Any
 
 import numpy as np
 
+from .._validate import InputError, array, count, positive
+
 # Lengths in mm and tractions in MPa on the axes (the solver's SI values scaled).
 MM = 1e3
 MPA = 1e-6
+# A creep curve whose force stays below this (in units of mu P) along the whole curve is
+# zero up to the solver's rounding (Ty of pure xi) and is left out.
+ZERO_FORCE = 1e-9
 
 
 def plot_solution(sol: Any, ax: Any = None, arrows: bool = True, title: bool = True) -> Any:
@@ -48,4 +54,52 @@ def plot_solution(sol: Any, ax: Any = None, arrows: bool = True, title: bool = T
         ax.set_title(
             f"Tx = {sol.Tx:.4g} N, Ty = {sol.Ty:.4g} N, Mz = {sol.Mz:.4g} N m", fontsize="small"
         )
+    return ax
+
+
+def plot_creep_curves(
+    contact: Any,
+    direction: tuple[float, float, float] = (1.0, 0.0, 0.0),
+    s_max: float = 1.5,
+    points: int = 16,
+    bounds: tuple[str, ...] = ("parabolic", "elliptic"),
+    ax: Any = None,
+) -> Any:
+    """Creep curves of the exact solver and of FASTSIM together on ``ax`` (a new
+    figure's when None); returns the axes.
+
+    contact: a HalfSpaceContact (no layers). The creepages run along ``direction`` =
+    (xi, eta, phi c) in units of mu P/(G c^2): (xi, eta, phi) = s (d_xi, d_eta, d_phi/c)
+    mu P/(G c^2) for ``points`` values of s in (0, s_max]. Drawn against s: Tx/(mu P)
+    and Ty/(mu P) unless below ZERO_FORCE along the whole curve, the exact solver's
+    (``contact.solve``, circles) and FASTSIM's on the same grid for each of ``bounds``
+    (``contact.fastsim``, lines), labelled "<solver> Tx" etc."""
+    import matplotlib.pyplot as plt
+
+    d = tuple(float(v) for v in array("direction", direction, (3,)))
+    if not any(d):
+        raise InputError("direction", direction, "(xi, eta, phi c), not all zero")
+    s = np.linspace(0.0, positive("s_max", s_max), count("points", points, 2) + 1)[1:]
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.0, 4.5))
+    muP = contact.mu * contact.P
+    xref = muP / (contact.elastic.G * contact.c**2)
+    w = [(v * d[0] * xref, v * d[1] * xref, v * d[2] * xref / contact.c) for v in s]
+    curves = {"exact": [contact.solve(*a, check_units=False) for a in w]}
+    for b in bounds:
+        curves[f"FASTSIM {b}"] = [contact.fastsim(*a, bound=b, check_units=False) for a in w]
+    for k, (name, sols) in enumerate(curves.items()):
+        for comp, style in (("Tx", "-"), ("Ty", "--")):
+            T = np.array([getattr(x, comp) for x in sols]) / muP
+            if np.abs(T).max() < ZERO_FORCE:
+                continue
+            colour = f"C{k}"
+            if name == "exact":
+                ax.plot(s, T, "o", ms=4, color=colour, ls=style, lw=0.8, label=f"{name} {comp}")
+            else:
+                ax.plot(s, T, color=colour, ls=style, label=f"{name} {comp}")
+    ax.axhline(0.0, color="grey", lw=0.5)
+    ax.set_xlabel(f"creepage s along (xi, eta, phi c) = {d} (mu P/(G c^2))")
+    ax.set_ylabel("T/(mu P)")
+    ax.legend(loc="best", fontsize="small")
     return ax
