@@ -13,7 +13,8 @@ each in processes of its own (PYTHONPATH set to it):
    loads, do_step, get_real of the outputs), N times; the fastest of 7 passes;
 2. the native Fig. 13 FMU, each method, from the C importer (tests/native_importer.c):
    N communication steps of the case eta = 3 repeated from its start state, the fastest
-   of its 3 passes (bench_native.py's importer run).
+   of its 3 passes (bench_native.py's importer run); the FMI 3.0 native FMU likewise from
+   tests/native_importer3.c, where the tree builds one, against REV's FMI 2.0 FMU.
 
 Each figure is the best of R processes; the ratio is this tree's over REV's.
 """
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import platform
 import subprocess
 import sys
 import tempfile
@@ -67,17 +69,24 @@ for _ in range(7):
 print(best)
 """
 
-# run in a tree's own process: the native Fig. 13 FMU of each method into argv[1]
+# run in a tree's own process: the native Fig. 13 FMUs of each method into argv[1], FMI 2.0
+# and, where the tree builds it, FMI 3.0
 BUILD = """
 import sys
+from pathlib import Path
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load
 from fmu_build import native_fmu
+native_fmu3 = None
+if Path("fmu_build/native_fmu3.py").exists():  # the tree's own, not the installed one's
+    from fmu_build import native_fmu3
 
 scene = load("scenarios/fig13.toml")
 for m in sys.argv[2:]:
     cfg = ModelConfig.from_dict(scene.config.to_dict() | {"methods": [m]})
-    print("FMU", m, native_fmu.build(cfg, sys.argv[1]).path)
+    print("FMU 2", m, native_fmu.build(cfg, sys.argv[1]).path)
+    if native_fmu3 is not None:
+        print("FMU 3", m, native_fmu3.build(cfg, sys.argv[1]).path)
 """
 
 
@@ -87,28 +96,31 @@ def _run(tree: Path, *args: str) -> str:
     return subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True, check=True).stdout
 
 
-def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple[str, str], list]:
-    """The C importer's command line for each tree's native FMU of each method."""
+def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple, list]:
+    """The C importers' command lines (FMI 2.0, FMI 3.0) for each tree's native FMUs of
+    each method: (tree, method, version) -> argv."""
     sys.path.insert(0, str(ROOT / "tests"))
-    from test_native_fmu import _spec
+    from native_c import spec
 
     from contact_fmu.scenario import load
 
     scene = load(ROOT / "scenarios" / "fig13.toml")
     case = scene.case("eta = 3")
-    exe = compile_importer(work)
+    exe = {"2": compile_importer(work), "3": compile_importer(work, fmi3=True)}
     runs = {}
     for label, tree in trees.items():
         built = _run(tree, "-c", BUILD, str(work / label), *METHODS).splitlines()
-        for _, m, path in (line.split(maxsplit=2) for line in built if line.startswith("FMU ")):
-            unzip = work / f"{label}-{m}"
+        for _, v, m, path in (line.split(maxsplit=3) for line in built if line[:4] == "FMU "):
+            unzip = work / f"{label}-{m}-{v}"
             fmpy.extract(path, str(unzip))
             md = fmpy.read_model_description(str(unzip))
-            spec = unzip / "spec.txt"
-            spec.write_text(_spec(md, scene, case))
+            spec_file = unzip / "spec.txt"
+            spec_file.write_text(spec(md, scene, case))
             ident = md.coSimulation.modelIdentifier
-            lib = unzip / "binaries" / "linux64" / f"{ident}.so"
-            runs[label, m] = [str(exe), str(lib), md.guid, ident, "bench", str(spec), str(n)]
+            folder = f"{platform.machine()}-linux" if v == "3" else "linux64"
+            lib = str(unzip / "binaries" / folder / f"{ident}.so")
+            head = [str(exe[v]), lib, md.guid] + ([ident] if v == "2" else [])
+            runs[label, m, v] = [*head, "bench", str(spec_file), str(n)]
     return runs
 
 
@@ -138,13 +150,17 @@ def main() -> int:
                   f"us per step (setReal, doStep, getReal), ratio {a / b:.3f}")  # fmt: skip
         runs = _importer_runs(trees, work, args.importer_steps)
         for m in METHODS:
-            rate = {k: [] for k in trees}
+            keys = [k for k in runs if k[1] == m]
+            rate = {k: [] for k in keys}
             for _ in range(args.repeats):
-                for k in trees:
-                    rate[k].append(importer_rate(runs[k, m]))
-            b, a = max(rate[args.base]), max(rate["this tree"])
-            print(f"native FMU from the C importer, fig13 {m}: {b:.4g} -> {a:.4g} steps/s, "
-                  f"time ratio {b / a:.3f}")  # fmt: skip
+                for k in keys:
+                    rate[k].append(importer_rate(runs[k]))
+            b = max(rate[args.base, m, "2"])
+            for (tree, _, v), r in rate.items():
+                if (tree, v) != (args.base, "2"):
+                    print(f"native FMI {v}.0 FMU ({tree}) from the C importer, fig13 {m}: "
+                          f"{max(r):.4g} steps/s against {b:.4g} ({args.base}, FMI 2.0), "
+                          f"time ratio {b / max(r):.3f}")  # fmt: skip
     return 0
 
 

@@ -280,10 +280,12 @@ def importer_rate(args: list[str]) -> float:
     return rate
 
 
-def compile_importer(work: Path) -> Path:
-    """tests/native_importer.c compiled into ``work`` (it dlopens the FMU's binary)."""
-    exe = work / "importer"
-    cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe), str(IMPORTER),
+def compile_importer(work: Path, fmi3: bool = False) -> Path:
+    """tests/native_importer.c (native_importer3.c: ``fmi3``) compiled into ``work`` (it
+    dlopens the FMU's binary)."""
+    exe = work / ("importer3" if fmi3 else "importer")
+    source = IMPORTER.with_name("native_importer3.c") if fmi3 else IMPORTER
+    cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe), str(source),
            "-ldl", "-lm"]  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=True)
     return exe

@@ -34,6 +34,38 @@ static inline int read_spec(FILE *f, spec *s) {
     return 0;
 }
 
+/* The rows "t h u_1 ... u_n_in" that follow the spec, to the end of the file: a table of
+ * *rows x (2 + n_in) doubles (free it), or NULL (no row, a short row, no memory). */
+static inline double *read_rows(FILE *in, int n_in, size_t *rows) {
+    const size_t width = 2 + (size_t)n_in;
+    size_t cap = 256;
+    double *tab = (double *)malloc(cap * width * sizeof *tab);
+    char tok[64];
+    *rows = 0;
+    while (tab != NULL && fscanf(in, "%63s", tok) == 1) {
+        if (*rows == cap) {
+            double *more = (double *)realloc(tab, 2 * cap * width * sizeof *tab);
+            if (more == NULL) break;
+            tab = more, cap *= 2;
+        }
+        double *row = tab + *rows * width;
+        row[0] = strtod(tok, NULL);
+        for (size_t i = 1; i < width; i++) {
+            if (fscanf(in, "%63s", tok) != 1) {
+                free(tab);
+                return NULL;
+            }
+            row[i] = strtod(tok, NULL);
+        }
+        (*rows)++;
+    }
+    if (tab != NULL && (*rows == 0 || !feof(in))) {
+        free(tab);
+        return NULL;
+    }
+    return tab;
+}
+
 static unsigned long long rng_state; /* the fuzz run's seed, then its state */
 
 static inline unsigned long long rnd(void) { /* xorshift64* */

@@ -439,29 +439,10 @@ static int bench(const api *f, const char *guid, const char *ident, FILE *in, lo
     /* the case: its rows "t h u_1 ... u_n", run in turn from its start state again and
      * again (a master repeating a scene), so that any N steps stay within the case */
     const size_t width = 2 + (size_t)s.n_in;
-    size_t rows = 0, cap = 256;
-    double *tab = malloc(cap * width * sizeof *tab);
-    char tok[64];
-    while (tab != NULL && fscanf(in, "%63s", tok) == 1) {
-        if (rows == cap) {
-            double *more = realloc(tab, 2 * cap * width * sizeof *tab);
-            if (more == NULL) break;
-            tab = more, cap *= 2;
-        }
-        double *row = tab + rows * width;
-        row[0] = strtod(tok, NULL);
-        for (size_t i = 1; i < width; i++) {
-            if (fscanf(in, "%63s", tok) != 1) {
-                free(tab);
-                return 2;
-            }
-            row[i] = strtod(tok, NULL);
-        }
-        rows++;
-    }
-    if (tab == NULL || rows == 0 || !feof(in)) {
+    size_t rows;
+    double *tab = read_rows(in, s.n_in, &rows);
+    if (tab == NULL) {
         fprintf(stderr, "bench: SPEC has no rows of \"t h u...\" (or no memory)\n");
-        free(tab);
         return 2;
     }
     quiet = 1;

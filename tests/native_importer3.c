@@ -3,6 +3,9 @@
  *   native_importer3 LIB TOKEN run   SPEC        run a case: outputs of every step (hex)
  *   native_importer3 LIB TOKEN calls SPEC        the bad and unsupported calls: one line
  *                                              "call status" each (the FMI 3.0 status)
+ *   native_importer3 LIB TOKEN bench SPEC N      N steps of the case, repeated from its
+ *                                              start state: steps per second (the
+ *                                              fastest of 3 passes)
  *   native_importer3 LIB TOKEN fuzz  SPEC SEED N TIME  N random calls with extreme
  *                                              values (TIME: the value reference of
  *                                              time, read after a state is set):
@@ -19,6 +22,7 @@
  * environment: the resources folder (a path) to instantiate with.
  */
 #include <math.h>
+#include <time.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -325,9 +329,68 @@ static int fuzz(const api *f, const char *token, FILE *in, unsigned long long se
     return 0;
 }
 
+/* ---- bench: native_importer.c's, in FMI 3.0's calls ----------------------------------- */
+static int bench_failed(const char *call, long k, double t, fmi3Status st) {
+    fprintf(stderr, "bench: %s at step %ld (t = %.17g s) answered %d\n", call, k, t, (int)st);
+    return 3;
+}
+
+static int bench(const api *f, const char *token, FILE *in, long n) {
+    spec s;
+    if (read_spec(in, &s) || n <= 0) return 2;
+    /* the case's rows run in turn from its start state again and again (a master
+     * repeating a scene), so that any N steps stay within the case */
+    const size_t width = 2 + (size_t)s.n_in;
+    size_t rows;
+    double *tab = read_rows(in, s.n_in, &rows);
+    if (tab == NULL) return 2;
+    quiet = 1;
+    fmi3Instance c = start(f, token, &s);
+    if (c == NULL) return bench_failed("fmi3InstantiateCoSimulation", 0, 0.0, fmi3Error);
+    fmi3FMUState start_state = NULL;
+    fmi3Status st = f->GetState(c, &start_state);
+    if (st != fmi3OK) return bench_failed("fmi3GetFMUState", 0, 0.0, st);
+    /* every repeat must end with the outputs of the first (the start state set back) */
+    double y[32] = {0}, end[32], best = INFINITY, last;
+    int have_end = 0;
+    for (int rep = 0; rep < 3; rep++) {
+        struct timespec a, b;
+        size_t r = 0;
+        clock_gettime(CLOCK_MONOTONIC, &a);
+        for (long k = 0; k < n; k++) {
+            const double *row = tab + r * width;
+            if (r == 0 && (st = f->SetState(c, start_state)) != fmi3OK)
+                return bench_failed("fmi3SetFMUState", k, row[0], st);
+            if ((st = f->SetFloat64(c, s.in, (size_t)s.n_in, row + 2, (size_t)s.n_in)) != fmi3OK)
+                return bench_failed("fmi3SetFloat64", k, row[0], st);
+            if (step(f, c, row[0], row[1], &st, &last) || st != fmi3OK)
+                return bench_failed("fmi3DoStep", k, row[0], st);
+            if ((st = f->GetFloat64(c, s.out, (size_t)s.n_out, y, (size_t)s.n_out)) != fmi3OK)
+                return bench_failed("fmi3GetFloat64", k, row[0], st);
+            if (++r == rows) {
+                r = 0;
+                if (!have_end) memcpy(end, y, sizeof y), have_end = 1;
+                else if (memcmp(end, y, (size_t)s.n_out * sizeof y[0]) != 0) return 3;
+            }
+        }
+        clock_gettime(CLOCK_MONOTONIC, &b);
+        double dt = (double)(b.tv_sec - a.tv_sec) + 1e-9 * (double)(b.tv_nsec - a.tv_nsec);
+        best = dt < best ? dt : best;
+    }
+    for (int i = 0; i < s.n_out; i++)
+        if (!isfinite(y[i])) return 3;
+    printf("%.6g\n", (double)n / best);
+    f->FreeState(c, &start_state);
+    f->Terminate(c);
+    f->FreeInstance(c);
+    free(tab);
+    return 0;
+}
+
 int main(int argc, char **argv) {
     if (argc < 5) {
-        fprintf(stderr, "usage: %s LIB TOKEN run|calls|fuzz SPEC [SEED N TIME]\n", argv[0]);
+        fprintf(stderr, "usage: %s LIB TOKEN run|calls|bench|fuzz SPEC [N | SEED N TIME]\n",
+                argv[0]);
         return 2;
     }
     api f;
@@ -337,6 +400,8 @@ int main(int argc, char **argv) {
     int rc;
     if (strcmp(argv[3], "run") == 0) rc = run(&f, argv[2], in);
     else if (strcmp(argv[3], "calls") == 0) rc = calls(&f, argv[2], in);
+    else if (strcmp(argv[3], "bench") == 0 && argc >= 6)
+        rc = bench(&f, argv[2], in, strtol(argv[5], NULL, 10));
     else if (strcmp(argv[3], "fuzz") == 0 && argc >= 8)
         rc = fuzz(&f, argv[2], in, strtoull(argv[5], NULL, 10), strtol(argv[6], NULL, 10),
                   (fmi3ValueReference)strtoul(argv[7], NULL, 10));
