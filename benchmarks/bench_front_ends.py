@@ -16,7 +16,10 @@ each in processes of its own (PYTHONPATH set to it):
    of its 3 passes (bench_native.py's importer run); the FMI 3.0 native FMU likewise from
    tests/native_importer3.c, where the tree builds one, against REV's FMI 2.0 FMU.
 
-Each figure is the best of R processes; the ratio is this tree's over REV's.
+Each figure is the best of R processes; the ratio is this tree's over REV's. With
+--callgrind the native FMUs' steps are also counted in machine instructions (valgrind's
+callgrind: the importer's bench run of 2000 and of 12000 steps, the difference over the
+30000 steps between them; the same for the same binary and inputs, whatever else runs).
 """
 
 from __future__ import annotations
@@ -124,12 +127,27 @@ def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple, li
     return runs
 
 
+def instructions_per_step(argv: list[str], work: Path) -> float:
+    """Instructions of one step (setReal, doStep, getReal) of the importer's bench run
+    ``argv`` (its last argument the step count), under callgrind: the bench runs 3 passes,
+    so 12000 steps less 2000 steps is 30000 steps with the start-up cancelled."""
+    counts = []
+    for n in (2000, 12000):
+        out = subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={work / 'cg.out'}",
+             *argv[:-1], str(n)], capture_output=True, text=True, check=True,
+        ).stderr  # fmt: skip
+        counts.append(int(out.split("Collected : ")[1].split()[0]))
+    return (counts[1] - counts[0]) / 30000
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--base", default="HEAD", help="the revision to compare with")
     ap.add_argument("--steps", type=int, default=3000, help="steps of the adapter's C path")
     ap.add_argument("--importer-steps", type=int, default=20_000)
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--callgrind", action="store_true", help="count instructions per step")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
@@ -161,6 +179,15 @@ def main() -> int:
                     print(f"native FMI {v}.0 FMU ({tree}) from the C importer, fig13 {m}: "
                           f"{max(r):.4g} steps/s against {b:.4g} ({args.base}, FMI 2.0), "
                           f"time ratio {b / max(r):.3f}")  # fmt: skip
+        if args.callgrind:
+            for m in METHODS:
+                ins = {k: instructions_per_step(v, work) for k, v in runs.items() if k[1] == m}
+                b = ins[args.base, m, "2"]
+                for (tree, _, v), n in ins.items():
+                    print(
+                        f"native FMI {v}.0 FMU ({tree}), fig13 {m}: {n:.0f} instructions "
+                        f"per step, ratio {n / b:.3f} to {args.base}'s FMI 2.0 FMU"
+                    )
     return 0
 
 

@@ -211,45 +211,54 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 }
 
 /* ---- getting and setting values -------------------------------------------------------- */
-static int has_time(const fmi3ValueReference vr[], size_t n) {
-    for (size_t i = 0; i < n && vr != NULL; i++)
-        if (vr[i] == CF3_VR_TIME) return 1;
-    return 0;
+/* What a Float64 value reference is beyond the model's variables: time (CF3_VR_TIME), one
+ * of the centre line's arrays x_centre, tau_x_centre, tau_y_centre (model_description3.LINE:
+ * the value references after time's, cf_line_size() values each), or a scalar of the
+ * layer. One scan per call: the layer's sizes are asked once (they are another unit's). */
+typedef struct {
+    fmi3ValueReference time;
+    size_t line_n;
+} float64_map;
+
+static float64_map float64_map_now(void) {
+    const float64_map m = {CF3_VR_TIME, (size_t)cf_line_size()};
+    return m;
 }
 
-/* the centre line's arrays x_centre, tau_x_centre, tau_y_centre (model_description3.LINE):
- * the value references after time's, cf_line_size() values each; which array, or -1 */
-static int line_of(fmi3ValueReference vr) {
-    if (cf_line_size() == 0 || vr <= CF3_VR_TIME || vr > CF3_VR_TIME + 3) return -1;
-    return (int)(vr - CF3_VR_TIME - 1);
+/* which array of the line vr is, or -1 */
+static int line_of(const float64_map *m, fmi3ValueReference vr) {
+    if (m->line_n == 0 || vr <= m->time || vr > m->time + 3) return -1;
+    return (int)(vr - m->time - 1);
 }
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, fmi3Float64 values[], size_t nValues) {
     INST3();
-    size_t need = 0, special = 0;
     if (nValueReferences > 0 && valueReferences == NULL) return fmi3Error;
+    const float64_map m = float64_map_now();
+    size_t need = 0, special = 0;
     for (size_t i = 0; i < nValueReferences; i++) {
-        const int line = line_of(valueReferences[i]);
-        need += line >= 0 ? (size_t)cf_line_size() : 1;
-        special += line >= 0 || valueReferences[i] == CF3_VR_TIME;
+        const fmi3ValueReference vr = valueReferences[i];
+        const int line = line_of(&m, vr);
+        need += line >= 0 ? m.line_n : 1;
+        special += line >= 0 || vr == m.time;
     }
     if (nValues != need)
         return REFUSE("fmi3GetFloat64: %zu values for %zu value references (%zu expected: "
-                      "one per scalar, %d per array of the centre line)",
-                      nValues, nValueReferences, need, cf_line_size());
+                      "one per scalar, %zu per array of the centre line)",
+                      nValues, nValueReferences, need, m.line_n);
     if (!special) return st(cf_get_real(I, valueReferences, nValueReferences, values));
     if (values == NULL) return fmi3Error;
     fmi3Status s = fmi3OK; /* one at a time: time is the layer's, the arrays the line's */
     for (size_t i = 0, k = 0; i < nValueReferences && s < fmi3Error; i++) {
         const fmi3ValueReference vr = valueReferences[i];
-        const int line = line_of(vr);
+        const int line = line_of(&m, vr);
         if (line >= 0) {
             s = worst(s, st(cf_get_line(I, line, &values[k])));
-            k += (size_t)cf_line_size();
+            k += m.line_n;
             continue;
         }
-        if (vr == CF3_VR_TIME) values[k] = cf_time(I);
+        if (vr == m.time) values[k] = cf_time(I);
         else s = worst(s, st(cf_get_real(I, &vr, 1, &values[k])));
         k++;
     }
@@ -259,15 +268,17 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Float64 values[], size_t nValues) {
     INST3();
-    for (size_t i = 0; valueReferences != NULL && i < nValueReferences; i++)
-        if (line_of(valueReferences[i]) >= 0)
+    const float64_map m = float64_map_now();
+    for (size_t i = 0; valueReferences != NULL && i < nValueReferences; i++) {
+        const fmi3ValueReference vr = valueReferences[i];
+        if (line_of(&m, vr) >= 0)
             return REFUSE("fmi3SetFloat64: value reference %u is an output of this FMU (an "
-                          "array of the centre line): it cannot be set",
-                          (unsigned)valueReferences[i]);
+                          "array of the centre line): it cannot be set", (unsigned)vr);
+        if (vr == m.time)
+            return REFUSE("fmi3SetFloat64: time (value reference %u) is the independent "
+                          "variable: doStep advances it", (unsigned)vr);
+    }
     SCALARS("fmi3SetFloat64");
-    if (has_time(valueReferences, nValueReferences))
-        return REFUSE("fmi3SetFloat64: time (value reference %u) is the independent "
-                      "variable: doStep advances it", (unsigned)CF3_VR_TIME);
     return st(cf_set_real(I, valueReferences, nValueReferences, values));
 }
 

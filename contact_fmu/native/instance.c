@@ -1310,25 +1310,30 @@ static const char *state_problem(const cf_core *c, char *why, size_t n) {
         char one[256];
         if (v->type == T_STRING) {
             bad = (is_scheme(i) ? c->scheme : c->method) < 0;
-            snprintf(one, sizeof one, "%s = '%s'", v->name, string_text(c, i));
         } else {
             if (v->role < R_COUNT && !same_double(c->val[v->role], c->var[i])) {
                 snprintf(why, n, "its values of %s disagree", v->name);
                 return why;
             }
             bad = requirement(v, c->var[i]) != NULL;
-            if (bad) bad_text(v, c->var[i], one, sizeof one);
-            else {
+        }
+        if (bad != (c->bad[i] != 0)) { /* the text of the value: only for the refusal */
+            if (v->type == T_STRING) {
+                snprintf(one, sizeof one, "%s = '%s'", v->name, string_text(c, i));
+            } else if (bad) {
+                bad_text(v, c->var[i], one, sizeof one);
+            } else {
                 py_repr(c->var[i], r, sizeof r);
                 snprintf(one, sizeof one, "%s = %s", v->name, r);
             }
-        }
-        if (bad != (c->bad[i] != 0)) {
             snprintf(why, n, "its record of invalid values does not match its values (%s, "
                      "recorded as %s)", one, c->bad[i] ? "invalid" : "valid");
             return why;
         }
         if (bad && c->built && v->kind == K_PARAMETER && v->role != R_MU) {
+            if (v->type == T_STRING)
+                snprintf(one, sizeof one, "%s = '%s'", v->name, string_text(c, i));
+            else bad_text(v, c->var[i], one, sizeof one);
             snprintf(why, n, "its model's parameters differ from its values or are invalid "
                      "(%s)", one);
             return why;
