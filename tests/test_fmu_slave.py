@@ -365,11 +365,11 @@ def test_input_fast_check_is_var_check(cfg):
         var = fv.BY_NAME[name]
         extra = [b + d for b in (var.min, var.max) if b is not None for d in (-1e-9, 0.0, 1e-9)]
         for value in values + extra:
-            s.s._bad.clear()
+            s.s._call.bad.clear()
             s.set(name, value)
-            assert (name in s.s._bad) == (var.check(value) is not None), (name, value)
-            if name not in s.s._bad:
-                assert s.s._in[name] == float(value) and s.get(name) == float(value)
+            assert (name in s.s._call.bad) == (var.check(value) is not None), (name, value)
+            if name not in s.s._call.bad:
+                assert s.s._call.inputs[name] == float(value) and s.get(name) == float(value)
 
 
 @pytest.mark.skipif(native.library() is None, reason="no C compiler")

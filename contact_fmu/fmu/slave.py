@@ -63,6 +63,7 @@ from pythonfmu.enums import Fmi2Status
 
 from . import state_bytes
 from . import variables as fv
+from .call_state import CallState
 from .config import ModelConfig
 
 # Relative tolerance between doStep's currentCommunicationPoint and the FMU's time: a
@@ -113,18 +114,20 @@ class ContactSlave(Fmi2Slave):
             self.default_experiment = DefaultExperiment(start, stop, step_size=step)
         self._vars = {v.name: v for v in cfg.variables}
         self._causality = {n: v.causality[cfg.mode] for n, v in self._vars.items()}
+        # what every FMI call reads or changes, shared with the compiled calls (fmi.c):
         # parameter and input values; the inputs also by themselves, the argument of
-        # every step (kept in step with _values by _set)
-        self._values: dict[str, Any] = {
-            n: cfg.start(v) for n, v in self._vars.items() if self._causality[n] != fv.OUTPUT
-        }
-        self._in = self._input_values()
+        # every step (kept in step with values by _set); the values held bad; the time
+        self._call = CallState(
+            values={
+                n: cfg.start(v) for n, v in self._vars.items() if self._causality[n] != fv.OUTPUT
+            }
+        )
+        self._call.inputs = self._input_values()
         self._out: dict[str, float] = {
             n: float(v.start) for n, v in self._vars.items() if self._causality[n] == fv.OUTPUT
         }
-        self._bad: dict[str, str] = {}  # inadmissible values held: name -> message
         # the mu the outputs were computed with (a tuned mu applies from the next step)
-        self._out_mu: float | None = self._values.get("mu")
+        self._out_mu: float | None = self._call.values.get("mu")
         self._model: Any = None
         self._model_params: dict[str, Any] | None = None
         # the model's compiled step (model.fast(), e.g. native.FastBody) or None; while
@@ -139,10 +142,7 @@ class ContactSlave(Fmi2Slave):
         self._fast_fmi: Any = None  # the C binding of the FMI calls (native/fmi.c) or None
         # get_real's readers of _fast_out, by the tuple of value references asked for
         self._fast_reads: dict[tuple[int, ...], Any] = {}
-        self._out_stale = False  # _out behind _fast_out (after compiled steps)
         self._getters: dict[str, Any] = {}  # the Python getters of the Real outputs
-        self._time = 0.0
-        self._dirty = True  # inputs changed since the outputs were computed
         self._init_problem: str | None = None  # why exitInitializationMode failed
         self._terminated = False
         self._undo: Any = None  # this model's snapshot while a state is being set
@@ -241,7 +241,7 @@ class ContactSlave(Fmi2Slave):
 
     # ---- get/set -------------------------------------------------------------------------
     def _real_output(self, name: str) -> float:
-        if self._dirty and self._model is not None and self._model.feedthrough:
+        if self._call.dirty and self._model is not None and self._model.feedthrough:
             self._refresh()
         return self._out[name]  # floats, checked finite by _collect
 
@@ -249,13 +249,13 @@ class ContactSlave(Fmi2Slave):
         var = self._vars[name]
         if self._causality[name] == fv.OUTPUT:
             self._sync_out()
-            if self._dirty and self._model is not None and self._model.feedthrough:
+            if self._call.dirty and self._model is not None and self._model.feedthrough:
                 self._refresh()
             value = self._out[name]
         else:
-            value = self._values[name]
-            if name in self._bad:  # the value set was refused: not a value to use
-                self._refuse(f"{name}: {self._bad[name]} (held until corrected)")
+            value = self._call.values[name]
+            if name in self._call.bad:  # the value set was refused: not a value to use
+                self._refuse(f"{name}: {self._call.bad[name]} (held until corrected)")
         if var.type == "Integer":
             return int(value)
         if var.type == "String":
@@ -271,7 +271,7 @@ class ContactSlave(Fmi2Slave):
         if c == fv.PARAMETER and self._model is not None and not var.tunable:
             self._error(
                 f"{name} is a fixed parameter and the model is initialised: "
-                f"{name} = {value!r} is ignored ({name} stays {self._values[name]!r})"
+                f"{name} = {value!r} is ignored ({name} stays {self._call.values[name]!r})"
             )
             return
         problem = self.cfg.check(name, value)
@@ -279,24 +279,24 @@ class ContactSlave(Fmi2Slave):
             problem = " or ".join(f'"{s}"' for s in _CHOICES[name])
         if c == fv.PARAMETER and self._model is not None:
             self._fast_pull()  # the outputs of the mu they were computed with (_out_mu)
-        self._values[name] = (
+        self._call.values[name] = (
             value if var.type == "String" or problem == "a number" else float(value)
         )
         if c == fv.INPUT:
-            self._in[name] = self._values[name]
+            self._call.inputs[name] = self._call.values[name]
             if problem is None:
-                self._to_fast(name, self._in[name])
+                self._to_fast(name, self._call.inputs[name])
         if problem is None:
-            if self._bad:
-                self._bad.pop(name, None)
+            if self._call.bad:
+                self._call.bad.pop(name, None)
         else:
             msg = f"{name} = {value!r} is invalid: must be {problem}"
-            self._bad[name] = msg
+            self._call.bad[name] = msg
             self.log(f"{msg}; doStep answers fmi2Discard until it is corrected", Fmi2Status.error)
         if c == fv.INPUT:
-            self._dirty = True
+            self._call.dirty = True
         elif problem is None and self._model is not None:  # a tunable parameter
-            self._tune(name, self._values[name])
+            self._tune(name, self._call.values[name])
 
     def _tune(self, name: str, value: Any) -> None:
         """A tunable parameter's new value into the running model (from the next step;
@@ -308,14 +308,14 @@ class ContactSlave(Fmi2Slave):
             self._model.tune({name: value})
         except Exception as e:
             self._model.restore(snap)
-            self._values[name] = self._model_params[name]
+            self._call.values[name] = self._model_params[name]
             self._refuse(f"{name} = {value!r} is refused: {_describe(e)}")
             return
         finally:
             if self._fast is not None:
                 self._fast_push()
         self._model_params = {**self._model_params, name: value}
-        self._dirty = True
+        self._call.dirty = True
 
     def set_real(self, vrs: list[int], values: list[float]) -> None:
         """fmi2SetReal, the per-step call: a Real input's float is tested here against
@@ -336,12 +336,12 @@ class ContactSlave(Fmi2Slave):
             ):
                 self._set(name, value)  # the general rules (Var.check) and their message
                 continue
-            self._values[name] = self._in[name] = value
-            if self._bad:
-                self._bad.pop(name, None)
+            self._call.values[name] = self._call.inputs[name] = value
+            if self._call.bad:
+                self._call.bad.pop(name, None)
             if io is not None and name in fast_inputs:
                 setattr(io, name, value)
-            self._dirty = True
+            self._call.dirty = True
 
     def get_real(self, vrs: list[int]) -> list[float]:
         """fmi2GetReal: while the compiled step runs, outputs straight from its struct
@@ -356,11 +356,11 @@ class ContactSlave(Fmi2Slave):
         return self._guarded("getReal", super().get_real, vrs)
 
     def _inputs(self) -> dict[str, float]:
-        return dict(self._in)
+        return dict(self._call.inputs)
 
     def _input_values(self) -> dict[str, Any]:
         """The inputs among _values (what _in caches)."""
-        return {n: v for n, v in self._values.items() if self._causality[n] == fv.INPUT}
+        return {n: v for n, v in self._call.values.items() if self._causality[n] == fv.INPUT}
 
     def _to_fast(self, name: str, value: float) -> None:
         """An input's admissible value into the compiled step's struct, if it reads it."""
@@ -368,7 +368,7 @@ class ContactSlave(Fmi2Slave):
             setattr(self._fast_io, name, value)
 
     def _params(self) -> dict[str, Any]:
-        return {n: v for n, v in self._values.items() if self._causality[n] == fv.PARAMETER}
+        return {n: v for n, v in self._call.values.items() if self._causality[n] == fv.PARAMETER}
 
     def _data_dir(self) -> Path | None:
         """This instance's copy of the vendored package (in its resources folder): where
@@ -388,21 +388,22 @@ class ContactSlave(Fmi2Slave):
     # ---- model -----------------------------------------------------------------------------
     def _build(self) -> bool:
         """Set the model up from the current parameters and inputs; False with a message."""
-        if self._bad:
-            for msg in self._bad.values():
+        if self._call.bad:
+            for msg in self._call.bad.values():
                 self._error(f"cannot initialise the model: {msg}")
             return False
         try:
             module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
             model = module.build(
-                self.cfg, self._params(), self._inputs(), self._time, self._data_dir()
+                self.cfg, self._params(), self._inputs(), self._call.time, self._data_dir()
             )
             out = self._collect(model.outputs())
         except Exception as e:  # an exception reaching pythonfmu would be fmi2Fatal
             self._error(f"cannot initialise the model: {_describe(e)}")
             return False
-        self._model, self._model_params, self._out, self._dirty = model, self._params(), out, False
-        self._out_mu = self._values.get("mu")
+        self._model, self._model_params, self._out = model, self._params(), out
+        self._call.dirty = False
+        self._out_mu = self._call.values.get("mu")
         self._fast_enable()
         return True
 
@@ -412,7 +413,7 @@ class ContactSlave(Fmi2Slave):
         fast = getattr(self._model, "fast", None)
         compiled = fast is not None and not self._model.feedthrough and not self._terminated
         self._fast = fast() if compiled else None
-        self._fast_out, self._fast_step, self._out_stale = None, None, False
+        self._fast_out, self._fast_step, self._call.out_stale = None, None, False
         self._fast_io, self._fast_inputs, self._fast_reads = None, frozenset(), {}
         for name in _FMI_CALLS:  # the class's methods again
             self.__dict__.pop(name, None)
@@ -438,7 +439,7 @@ class ContactSlave(Fmi2Slave):
         methods = (self._python_step, cls.set_real.__get__(self), cls.get_real.__get__(self))
         slots = [(vr, *slot) for vr, slot in self._input_slots.items()]
         outs = [(vr, v.name) for vr, v in reals.items()]
-        self._fast_fmi = self._fast.bind_fmi(self, methods, TIME_RTOL, slots, outs)
+        self._fast_fmi = self._fast.bind_fmi(self._call, methods, TIME_RTOL, slots, outs)
         if self._fast_fmi is not None:
             for name in _FMI_CALLS:
                 setattr(self, name, getattr(self._fast_fmi, name))
@@ -447,7 +448,7 @@ class ContactSlave(Fmi2Slave):
         """After Python changed the model: its state, the inputs and the outputs (those
         of _out, as Python computed them) into the compiled step's struct."""
         self._fast.push()
-        for n, v in self._in.items():
+        for n, v in self._call.inputs.items():
             self._to_fast(n, v)
         for n, i in self._fast_index.items():
             self._fast_out[i] = self._out[n]
@@ -459,10 +460,10 @@ class ContactSlave(Fmi2Slave):
             self._sync_out()
 
     def _sync_out(self) -> None:
-        if self._out_stale:
+        if self._call.out_stale:
             self._out = {n: self._fast_out[i] for n, i in self._fast_index.items()}
-            self._out_mu = self._values.get("mu")  # _tune pulls before mu changes
-            self._out_stale = False
+            self._out_mu = self._call.values.get("mu")  # _tune pulls before mu changes
+            self._call.out_stale = False
 
     def _collect(self, outputs: dict[str, float]) -> dict[str, float]:
         """The declared outputs, checked finite."""
@@ -478,7 +479,7 @@ class ContactSlave(Fmi2Slave):
         """Direct feedthrough: outputs for the current inputs. Where they cannot be had
         (an input held invalid, a failing evaluation) the call answers fmi2Error: the
         outputs kept are those of the last good inputs, never served as fmi2OK."""
-        bad = [m for n, m in self._bad.items() if self._causality.get(n) == fv.INPUT]
+        bad = [m for n, m in self._call.bad.items() if self._causality.get(n) == fv.INPUT]
         if bad:
             self._refuse("no outputs for the current inputs: " + "; ".join(bad))
             return
@@ -486,8 +487,8 @@ class ContactSlave(Fmi2Slave):
         try:
             self._model.evaluate(self._inputs())
             self._out = self._collect(self._model.outputs())
-            self._out_mu = self._values.get("mu")
-            self._dirty = False
+            self._out_mu = self._call.values.get("mu")
+            self._call.dirty = False
         except Exception as e:
             self._model.restore(snap)
             self._refuse(f"no outputs for the current inputs: {_describe(e)}")
@@ -498,7 +499,7 @@ class ContactSlave(Fmi2Slave):
     ) -> None:
         start = float(start_time)
         if math.isfinite(start):
-            self._time = start
+            self._call.time = start
         else:
             self._error(f"startTime = {start_time!r} is invalid: must be finite; using 0")
 
@@ -517,7 +518,7 @@ class ContactSlave(Fmi2Slave):
         for problem in getattr(native, "PROBLEMS", ()):
             self.log(problem, Fmi2Status.warning)
         if not built:
-            self._init_problem = "; ".join(self._bad.values()) or "see the messages above"
+            self._init_problem = "; ".join(self._call.bad.values()) or "see the messages above"
             self._refuse(f"exitInitializationMode: the model cannot start: {self._init_problem}")
 
     def terminate(self) -> None:
@@ -530,15 +531,15 @@ class ContactSlave(Fmi2Slave):
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         step = self._fast_step
-        if step is not None and not self._bad:  # the compiled step: _do_step's checks
+        if step is not None and not self._call.bad:  # the compiled step: _do_step's checks
             t, h = current_time, step_size
             if (
                 0.0 < h < _INF
                 and -_INF < t < _INF
-                and abs(t - self._time) <= TIME_RTOL * max(abs(t), abs(self._time))
+                and abs(t - self._call.time) <= TIME_RTOL * max(abs(t), abs(self._call.time))
                 and step(h) == 0
             ):
-                self._time, self._dirty, self._out_stale = t + h, False, True
+                self._call.time, self._call.dirty, self._call.out_stale = t + h, False, True
                 return True
         return self._python_step(current_time, step_size)
 
@@ -563,14 +564,16 @@ class ContactSlave(Fmi2Slave):
             return self._discard(
                 f"communicationStepSize = {h!r} is invalid: must be > 0 and finite"
             )
-        if not math.isfinite(t) or abs(t - self._time) > TIME_RTOL * max(abs(t), abs(self._time)):
+        now = self._call.time
+        if not math.isfinite(t) or abs(t - now) > TIME_RTOL * max(abs(t), abs(now)):
             return self._discard(
                 f"currentCommunicationPoint = {t!r} is invalid: must be the FMU's time "
-                f"{self._time!r}"
+                f"{self._call.time!r}"
             )
-        if self._bad:
+        if self._call.bad:
             return self._discard(
-                f"doStep at t = {t!r} discarded, state unchanged: " + "; ".join(self._bad.values())
+                f"doStep at t = {t!r} discarded, state unchanged: "
+                + "; ".join(self._call.bad.values())
             )
         self._fast_pull()
         snap = self._model.snapshot()
@@ -584,8 +587,8 @@ class ContactSlave(Fmi2Slave):
             return self._discard(
                 f"doStep at t = {t!r} with h = {h!r} discarded, state unchanged: {_describe(e)}"
             )
-        self._out, self._time, self._dirty = out, t + h, False
-        self._out_mu = self._values.get("mu")
+        self._out, self._call.time, self._call.dirty = out, t + h, False
+        self._out_mu = self._call.values.get("mu")
         if self._fast is not None:
             self._fast_push()
         if note:
@@ -600,12 +603,12 @@ class ContactSlave(Fmi2Slave):
             model = (dict(self._model_params), self._model.snapshot())
         return copy.deepcopy(
             {
-                "time": self._time,
-                "values": self._values,
-                "bad": self._bad,
+                "time": self._call.time,
+                "values": self._call.values,
+                "bad": self._call.bad,
                 "out": self._out,
                 "out_mu": self._out_mu,
-                "dirty": self._dirty,
+                "dirty": self._call.dirty,
                 "model": model,
             }
         )
@@ -621,11 +624,11 @@ class ContactSlave(Fmi2Slave):
         except Exception as e:  # whatever a damaged state makes fail: refused, not Fatal
             problem = _describe(e)
         if problem is None:
-            self._bad.pop(_STATE, None)
+            self._call.bad.pop(_STATE, None)
             return
         msg = f"the FMU state given to setFMUstate is refused: {problem}"
         if self._cell is None:  # no fmi2Error to answer with: refuse the steps instead
-            self._bad[_STATE] = msg
+            self._call.bad[_STATE] = msg
             msg += " (doStep refused until a valid state is set)"
         self._error(msg + "; the instance's state is unchanged")
 
@@ -641,7 +644,7 @@ class ContactSlave(Fmi2Slave):
             return f"its time {t!r} is not a finite float"
         if type(dirty) is not bool:
             return f"its flag {dirty!r} is not a bool"
-        if not isinstance(values, dict) or set(values) != set(self._values):
+        if not isinstance(values, dict) or set(values) != set(self._call.values):
             return "its variables differ from this FMU's"
         bad = {}
         for n, v in values.items():
@@ -675,10 +678,10 @@ class ContactSlave(Fmi2Slave):
                 self._restore_own(model)
                 return bound
         # checked: apply
-        self._time, self._values, self._bad = t, copy.deepcopy(values), bad
-        self._in = self._input_values()
+        self._call.time, self._call.values, self._call.bad = t, copy.deepcopy(values), bad
+        self._call.inputs = self._input_values()
         self._model, self._model_params = model, params
-        self._out, self._dirty, self._out_mu = dict(out), dirty, out_mu
+        self._out, self._call.dirty, self._out_mu = dict(out), dirty, out_mu
         self._fast_enable()
         return None
 

@@ -401,12 +401,13 @@ class FastBody:
         return partial(self._step, *self._pointers)
 
     def bind_fmi(
-        self, slave: Any, methods: tuple[Any, Any, Any], rtol: float, slots: list, outs: list
+        self, shared: Any, methods: tuple[Any, Any, Any], rtol: float, slots: list, outs: list
     ) -> Any:
-        """The FMI calls of ``slave`` on this step in C (fmi.c: its do_step, set_real and
-        get_real, falling back on ``methods``, the adapter's own), or None without the
-        extension. slots: (vr, name, min, max, open min) of the Real inputs the adapter
-        checks itself; outs: (vr, name) of the Real outputs read from ``io.out``."""
+        """An adapter's FMI calls on this step in C (fmi.c: do_step, set_real and get_real,
+        falling back on ``methods``, the adapter's own), or None without the extension.
+        shared: the adapter's CallState (fmu/call_state.py), which the calls read and
+        write; slots: (vr, name, min, max, open min) of the Real inputs the adapter checks
+        itself; outs: (vr, name) of the Real outputs read from ``io.out``."""
         fmi = fmi_module()
         if fmi is None:
             return None
@@ -418,4 +419,4 @@ class FastBody:
         step = ctypes.cast(self._step, ctypes.c_void_p).value
         out = io + BodyIO.out.offset
         idx = [(vr, self.index(n)) for vr, n in outs]
-        return fmi.bind(slave, self, *methods, step, *self._pointers, out, rtol, rows, idx)
+        return fmi.bind(shared, self, *methods, step, *self._pointers, out, rtol, rows, idx)

@@ -12,14 +12,16 @@
  *                        Otherwise the Python step.
  *   set_real(vrs, vals)  a float, finite and in the declared range of a Real input
  *                        (cf_core.h's cf_value_check):
- *                        stored in the adapter's _values and _in, cleared from _bad,
- *                        written to the struct if the step reads it, _dirty set.
+ *                        stored in the CallState's values and inputs, cleared from
+ *                        bad, written to the struct if the step reads it, dirty set.
  *                        Otherwise that value goes through the adapter's set_real.
  *   get_real(vrs)        outputs of the struct only: a list of its doubles.
  *                        Otherwise the adapter's get_real.
  *
- * Python state is read and written through the adapter's attributes on every call (no
- * copy kept here), so whatever the adapter reassigns stays the truth. The checks are
+ * The adapter's state of the calls is one object, its CallState (fmu/call_state.py: time,
+ * values, inputs, bad, dirty, out_stale), bound here and read and written through those
+ * attributes on every call (no copy kept here), so whatever the adapter reassigns stays
+ * the truth; nothing else of the adapter is read. The checks are
  * the native FMU's (instance.c): the value's range and the time's in cf_core.h, the step's
  * caps, load limit and outputs in stepper.c's cf_body_step; each is slave.py's rule,
  * and test_fmu_slave compares the two paths bit for bit.
@@ -36,7 +38,7 @@
 typedef int (*step_fn)(void *, void *, void *, double);
 
 typedef struct {
-    PyObject *name;   /* the input's name (a str, key of _values, _in, _bad) */
+    PyObject *name;   /* the input's name (a str, key of values, inputs, bad) */
     double lo, hi;    /* declared range */
     int open_lo;      /* lo excluded */
     double *dst;      /* its place in the struct, or NULL */
@@ -44,7 +46,7 @@ typedef struct {
 
 typedef struct {
     PyObject_HEAD
-    PyObject *slave;             /* the ContactSlave */
+    PyObject *shared;            /* the adapter's CallState (fmu/call_state.py) */
     PyObject *owner;             /* the FastBody: keeps the structs alive */
     PyObject *py_step, *py_set, *py_get; /* the adapter's own methods */
     step_fn step;
@@ -62,7 +64,7 @@ typedef struct {
 static PyObject *s_time, *s_bad, *s_values, *s_in, *s_dirty, *s_stale;
 
 static int traverse(Binding *b, visitproc visit, void *arg) {
-    Py_VISIT(b->slave);
+    Py_VISIT(b->shared);
     Py_VISIT(b->owner);
     Py_VISIT(b->py_step);
     Py_VISIT(b->py_set);
@@ -71,7 +73,7 @@ static int traverse(Binding *b, visitproc visit, void *arg) {
 }
 
 static int clear(Binding *b) {
-    Py_CLEAR(b->slave);
+    Py_CLEAR(b->shared);
     Py_CLEAR(b->owner);
     Py_CLEAR(b->py_step);
     Py_CLEAR(b->py_set);
@@ -91,8 +93,8 @@ static void dealloc(Binding *b) {
 }
 
 /* the length of a dict attribute of the adapter, -1 on error */
-static Py_ssize_t dict_len(PyObject *slave, PyObject *attr) {
-    PyObject *d = PyObject_GetAttr(slave, attr);
+static Py_ssize_t dict_len(PyObject *shared, PyObject *attr) {
+    PyObject *d = PyObject_GetAttr(shared, attr);
     if (d == NULL) return -1;
     Py_ssize_t n = PyDict_Check(d) ? PyDict_GET_SIZE(d) : PyObject_Length(d);
     Py_DECREF(d);
@@ -106,9 +108,9 @@ static PyObject *do_step(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
         PyErr_Clear();
         return PyObject_Vectorcall(b->py_step, args, nargs, NULL);
     }
-    Py_ssize_t bad = dict_len(b->slave, s_bad);
+    Py_ssize_t bad = dict_len(b->shared, s_bad);
     if (bad < 0) return NULL;
-    PyObject *now = PyObject_GetAttr(b->slave, s_time);
+    PyObject *now = PyObject_GetAttr(b->shared, s_time);
     if (now == NULL) return NULL;
     double time = PyFloat_AsDouble(now);
     Py_DECREF(now);
@@ -117,10 +119,10 @@ static PyObject *do_step(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
         b->step(b->params, b->state, b->io, h) == 0) {
         PyObject *next = PyFloat_FromDouble(t + h);
         if (next == NULL) return NULL;
-        int err = PyObject_SetAttr(b->slave, s_time, next);
+        int err = PyObject_SetAttr(b->shared, s_time, next);
         Py_DECREF(next);
-        if (err || PyObject_SetAttr(b->slave, s_dirty, Py_False) ||
-            PyObject_SetAttr(b->slave, s_stale, Py_True))
+        if (err || PyObject_SetAttr(b->shared, s_dirty, Py_False) ||
+            PyObject_SetAttr(b->shared, s_stale, Py_True))
             return NULL;
         b->steps++;
         Py_RETURN_TRUE;
@@ -150,9 +152,9 @@ static int set_one(Binding *b, PyObject *vr, PyObject *value) {
 
 /* a slot's admissible float into the adapter's dicts and the struct */
 static int store(Binding *b, const slot *s, PyObject *value, double v) {
-    PyObject *values = PyObject_GetAttr(b->slave, s_values);
-    PyObject *in = PyObject_GetAttr(b->slave, s_in);
-    PyObject *bad = PyObject_GetAttr(b->slave, s_bad);
+    PyObject *values = PyObject_GetAttr(b->shared, s_values);
+    PyObject *in = PyObject_GetAttr(b->shared, s_in);
+    PyObject *bad = PyObject_GetAttr(b->shared, s_bad);
     int err = values == NULL || in == NULL || bad == NULL ||
               PyObject_SetItem(values, s->name, value) || PyObject_SetItem(in, s->name, value);
     if (!err && PyDict_Check(bad) && PyDict_Contains(bad, s->name) == 1)
@@ -188,7 +190,7 @@ static PyObject *set_real(Binding *b, PyObject *const *args, Py_ssize_t nargs) {
         if (set_one(b, vr, value)) return NULL;
     }
     /* once for all values stored here (the adapter's setter marks its own) */
-    if (stored && PyObject_SetAttr(b->slave, s_dirty, Py_True)) return NULL;
+    if (stored && PyObject_SetAttr(b->shared, s_dirty, Py_True)) return NULL;
     Py_RETURN_NONE;
 }
 
@@ -247,21 +249,21 @@ static PyTypeObject BindingType = {
 
 static void *address(PyObject *x) { return PyLong_AsVoidPtr(x); }
 
-/* bind(slave, owner, py_step, py_set, py_get, step, params, state, io, out, rtol,
+/* bind(shared, owner, py_step, py_set, py_get, step, params, state, io, out, rtol,
  *      slots, outs): slots a list of (vr, name, lo, hi, open_lo, dst address or 0),
  *      outs a list of (vr, index into out). Addresses as ints. */
 static PyObject *bind(PyObject *mod, PyObject *args) {
     (void)mod;
-    PyObject *slave, *owner, *py_step, *py_set, *py_get, *a_step, *a_params, *a_state, *a_io,
+    PyObject *shared, *owner, *py_step, *py_set, *py_get, *a_step, *a_params, *a_state, *a_io,
         *a_out, *slots, *outs;
     double rtol;
-    if (!PyArg_ParseTuple(args, "OOOOOOOOOOdO!O!", &slave, &owner, &py_step, &py_set, &py_get,
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOdO!O!", &shared, &owner, &py_step, &py_set, &py_get,
                           &a_step, &a_params, &a_state, &a_io, &a_out, &rtol, &PyList_Type,
                           &slots, &PyList_Type, &outs))
         return NULL;
     Binding *b = PyObject_GC_New(Binding, &BindingType);
     if (b == NULL) return NULL;
-    b->slave = Py_NewRef(slave);
+    b->shared = Py_NewRef(shared);
     b->owner = Py_NewRef(owner);
     b->py_step = Py_NewRef(py_step);
     b->py_set = Py_NewRef(py_set);
@@ -339,12 +341,12 @@ static int exec_module(PyObject *m) {
     if (PyModule_AddObjectRef(m, "Binding", (PyObject *)&BindingType) < 0) return -1;
 #define INTERN(v, s) \
     if ((v) == NULL && ((v) = PyUnicode_InternFromString(s)) == NULL) return -1
-    INTERN(s_time, "_time");
-    INTERN(s_bad, "_bad");
-    INTERN(s_values, "_values");
-    INTERN(s_in, "_in");
-    INTERN(s_dirty, "_dirty");
-    INTERN(s_stale, "_out_stale");
+    INTERN(s_time, "time");
+    INTERN(s_bad, "bad");
+    INTERN(s_values, "values");
+    INTERN(s_in, "inputs");
+    INTERN(s_dirty, "dirty");
+    INTERN(s_stale, "out_stale");
     return 0;
 }
 
