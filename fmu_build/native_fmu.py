@@ -158,6 +158,8 @@ def constants() -> dict[str, float | int]:
         "V_CREEP_FLOOR": kinematics.V_CREEP_FLOOR,
         "SUBSTEP_SLACK": body_model.SUBSTEP_SLACK,
         "MAX_SUBSTEPS": body_model.MAX_SUBSTEPS,
+        "WORK_VECTOR": body_model.WORK_VECTOR,
+        "WORK_SCALAR": body_model.WORK_SCALAR,
         "TIME_RTOL": _time_rtol(),
     }
 
@@ -165,7 +167,7 @@ def constants() -> dict[str, float | int]:
 _ROLES = {
     "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "vx0",
     "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
-    "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex", "scheme",
+    "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex", "scheme", "max_work",
 }  # fmt: skip
 _MODES = {"body": "MODE_BODY", "contact": "MODE_CONTACT", "rigid_body": "MODE_RIGID"}
 
