@@ -18,7 +18,7 @@ from typing import Any
 from .. import native
 from .._validate import InputError
 from ..dynamics import Body, Lateral, Loads
-from ..integrator import RollingBody
+from ..integrator import RollingBody, WorkBudgetError
 from ..kinematics import V_CREEP_FLOOR, spin_for_slip
 from .config import ModelConfig
 from .laws import make_law
@@ -35,7 +35,14 @@ from .ranges import within_range
 MAX_WORK = 10_000
 WORK_SCALAR = 1
 WORK_VECTOR = 100
-WORK_PER_CELL = 1
+WORK_PER_CELL = 2
+# Where Python solves the stages (the vector path where the compiled one declines, the
+# transient field), each evaluation of the law counts too: WORK_VECTOR_EVAL, or nx ny
+# WORK_PER_CELL_EVAL for the field. A step takes about 4 (vector) or 6 (field)
+# evaluations; a hostile one up to hundreds (the Newton iterations of its stages), and
+# the evaluations beyond the budget discard the step (WorkBudgetError).
+WORK_VECTOR_EVAL = 25
+WORK_PER_CELL_EVAL = 0.125
 # Most internal steps of the scalar path at the default budget (its cap before any
 # parameter sets another: stepper.c's CF_MAX_SUBSTEPS).
 MAX_SUBSTEPS = MAX_WORK // WORK_SCALAR
@@ -94,6 +101,8 @@ class BodyModel:
         vector = len(getattr(stepper, "_idx", ())) > 1
         self.work = WORK_VECTOR if vector else WORK_SCALAR
         self.cap = step_cap(max_work, self.work)
+        # the work of one evaluation of the law in a Python stage solve (None: not counted)
+        self.eval_work: float | None = WORK_VECTOR_EVAL if vector else None
 
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
         P = inputs["P"]
@@ -102,7 +111,14 @@ class BodyModel:
             self.P = P
         loads = Loads(*[inputs.get(k, 0.0) for k in Loads._fields])
         n = self.internal_steps(h)
-        self.stepper.advance(h, loads, n)
+        if self.eval_work is not None:
+            self.stepper.eval_limit = max(1, int(self.max_work // self.eval_work))
+        try:
+            self.stepper.advance(h, loads, n)
+        except WorkBudgetError as e:
+            raise WorkBudgetError(
+                e.limit, f", beyond max_work = {self.max_work:g} (each costs {self.eval_work:g})"
+            ) from None
         within_range(self.stepper.outputs())
         if n == self.cap and self.beyond_cap(h):
             return self.cap_note(h, n, f"h_max = {self.h_max:g} s")

@@ -9,7 +9,9 @@ steps that keeps each within ``cells_per_step`` cells at the present speed, load
 (zero-order hold); any step is stable, these two only set the accuracy. An internal
 step costs nx ny WORK_PER_CELL work units: at most max_work // that many are taken
 (fewer, longer steps beyond: fmi2Warning), and a grid whose one step exceeds max_work
-is refused at the step (fmi2Discard naming max_work).
+is refused at the step (fmi2Discard naming max_work); each evaluation of the field in
+the stage solves costs nx ny WORK_PER_CELL_EVAL, and a step whose evaluations exceed
+max_work is discarded (WorkBudgetError).
 
 The field can be written to a CSV file (``field_file``) at chosen times
 (``field_times``): at the end of the communication step that reaches each requested
@@ -38,7 +40,7 @@ from .._validate import InputError
 from ..dynamics import Body, Lateral
 from ..kinematics import spin_for_slip
 from ..transient import TransientRollingBody
-from .body_model import MAX_WORK, WORK_PER_CELL, BodyModel, substeps
+from .body_model import MAX_WORK, WORK_PER_CELL, WORK_PER_CELL_EVAL, BodyModel, substeps
 from .config import ModelConfig
 from .laws import make_law
 from .ranges import within_range
@@ -159,6 +161,7 @@ class TransientBodyModel(BodyModel):
         field = stepper.field
         self.work = field.nx * field.ny * WORK_PER_CELL  # one internal step's cost
         self.cap = int(max_work // self.work)  # 0: not one step within the budget
+        self.eval_work = field.nx * field.ny * WORK_PER_CELL_EVAL
 
     def needed_steps(self, h: float) -> int:
         """max(ceil(h/h_max), steps of at most ``cells`` cells at the present speed)."""

@@ -311,9 +311,10 @@ VARIABLES: tuple[Var, ...] = (
         "1",
         "Most work of one communication step, in work units (1 to 1e9): an internal step "
         "costs 1 (vx the only unknown), 100 (Vy and/or Omega_z as unknowns, Eqs. 10-11) or "
-        'nx ny (phase "transient"); a step that needs more is taken in fewer, longer '
+        '2 nx ny (phase "transient"); a step that needs more is taken in fewer, longer '
         "internal steps (fmi2Warning), at least one (the transient field: fmi2Discard if "
-        "one exceeds it)",
+        "one exceeds it). Where Python solves the stages, each evaluation of the law counts "
+        "too (25; the field's nx ny / 8): a step beyond the budget is discarded",
         {"body": PARAMETER},
         10_000.0,
         min=1.0,
