@@ -404,6 +404,7 @@ class RollingBody(BodyState, EvalBudget):
         """Tx and dTx/dvx along a stage path on which Vx moves by k per unit of vx
         (held ratios). The law's analytic slope (``tx_slope``) where it has one, else a
         forward difference."""
+        self.spend()  # one evaluation of a scalar stage solve, against the budget
         ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
         slope = getattr(self.law, "tx_slope", None)
         if slope is not None and rz == 0.0:

@@ -34,6 +34,7 @@ from contact_fmu.fmu.body_model import (
     WORK_PER_CELL,
     WORK_PER_CELL_EVAL,
     WORK_SCALAR,
+    WORK_SCALAR_EVAL,
     WORK_VECTOR,
     WORK_VECTOR_EVAL,
 )
@@ -110,9 +111,8 @@ def test_the_costs_in_the_declaration_are_the_models():
     assert WORK_SCALAR == 1
     assert f"costs 1 (vx the only unknown), {WORK_VECTOR} (Vy and/or Omega_z" in var.description
     assert f'{WORK_PER_CELL} nx ny (phase "transient")' in var.description
-    assert f"({WORK_VECTOR_EVAL}; the field's nx ny / {1 / WORK_PER_CELL_EVAL:g})" in (
-        var.description
-    )
+    evals = f"{WORK_SCALAR_EVAL}, {WORK_VECTOR_EVAL} with Eqs. 10-11, nx ny / "
+    assert evals + f"{1 / WORK_PER_CELL_EVAL:g} on the field" in var.description
 
 
 @pytest.mark.parametrize("case", SLOW, ids=list(SLOW))

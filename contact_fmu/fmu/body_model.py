@@ -36,11 +36,13 @@ MAX_WORK = 10_000
 WORK_SCALAR = 1
 WORK_VECTOR = 100
 WORK_PER_CELL = 2
-# Where Python solves the stages (the vector path where the compiled one declines, the
-# transient field), each evaluation of the law counts too: WORK_VECTOR_EVAL, or nx ny
-# WORK_PER_CELL_EVAL for the field. A step takes about 4 (vector) or 6 (field)
-# evaluations; a hostile one up to hundreds (the Newton iterations of its stages), and
-# the evaluations beyond the budget discard the step (WorkBudgetError).
+# Where Python solves the stages (where the compiled path declines a step, or is not
+# there; the transient field), each evaluation of the law counts too: WORK_SCALAR_EVAL
+# (20 to 80 us here), WORK_VECTOR_EVAL (0.6 to 1.3 ms on the spin grid), or nx ny
+# WORK_PER_CELL_EVAL for the field. A step takes about 2 to 4 (scalar, vector) or 6
+# (field) evaluations; a hostile one up to hundreds (the Newton iterations of its
+# stages), and the evaluations beyond the budget discard the step (WorkBudgetError).
+WORK_SCALAR_EVAL = 1
 WORK_VECTOR_EVAL = 25
 WORK_PER_CELL_EVAL = 0.125
 # Most internal steps of the scalar path at the default budget (its cap before any
@@ -102,7 +104,7 @@ class BodyModel:
         self.work = WORK_VECTOR if vector else WORK_SCALAR
         self.cap = step_cap(max_work, self.work)
         # the work of one evaluation of the law in a Python stage solve (None: not counted)
-        self.eval_work: float | None = WORK_VECTOR_EVAL if vector else None
+        self.eval_work: float | None = WORK_VECTOR_EVAL if vector else WORK_SCALAR_EVAL
 
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
         P = inputs["P"]

@@ -314,7 +314,8 @@ VARIABLES: tuple[Var, ...] = (
         '2 nx ny (phase "transient"); a step that needs more is taken in fewer, longer '
         "internal steps (fmi2Warning), at least one (the transient field: fmi2Discard if "
         "one exceeds it). Where Python solves the stages, each evaluation of the law counts "
-        "too (25; the field's nx ny / 8): a step beyond the budget is discarded",
+        "too (1, 25 with Eqs. 10-11, nx ny / 8 on the field): a step beyond the budget is "
+        "discarded",
         {"body": PARAMETER},
         10_000.0,
         min=1.0,
