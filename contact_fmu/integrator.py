@@ -397,6 +397,7 @@ class RollingBody(BodyState, EvalBudget):
     def _law(self, vx: float, Vx: float) -> tuple:
         """The law at slip vx and speed Vx with the held lateral ratios (floats), at
         standstill as ``forces_at_rest``."""
+        self.spend()  # one evaluation of a scalar step, against the budget
         ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
         return forces_at_rest(self.law, vx, ry * Vx, rz * Vx, Vx)
 
@@ -404,10 +405,10 @@ class RollingBody(BodyState, EvalBudget):
         """Tx and dTx/dvx along a stage path on which Vx moves by k per unit of vx
         (held ratios). The law's analytic slope (``tx_slope``) where it has one, else a
         forward difference."""
-        self.spend()  # one evaluation of a scalar stage solve, against the budget
         ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
         slope = getattr(self.law, "tx_slope", None)
         if slope is not None and rz == 0.0:
+            self.spend()  # else _law's, twice
             if abs(Vx) >= V_STANDSTILL:
                 T, d_vx, d_vy, d_V = slope(vx, ry * Vx, Vx)
                 return T, d_vx + k * ry * d_vy + k * d_V

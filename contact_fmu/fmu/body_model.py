@@ -27,22 +27,23 @@ from .ranges import within_range
 # The work of one doStep is bounded by the parameter max_work (variables.py), counted in
 # work units: an internal step costs WORK_SCALAR (vx the only unknown: compiled, 1 to 3
 # us here) or WORK_VECTOR (Vy and/or Omega_z as unknowns, Eqs. 10-11: each stage solve
-# evaluates the law on its spin grid, 0.3 ms compiled, up to 3 ms where Python solves
-# it), the transient field's one nx ny WORK_PER_CELL (15 us per cell here). Beyond the
-# budget h_max is enlarged for that step (the scheme stays stable; only the accuracy of
-# the slow dynamics drops), so that one doStep cannot take unbounded time: at the
-# default, well under a second on every path (docs/reliability.md, "Worst-case time").
+# evaluates the law on its spin grid, 0.3 ms compiled, up to 7 ms where a hostile step
+# takes many Newton iterations; 30 ms where Python solves it), the transient field's
+# one nx ny WORK_PER_CELL (15 us per cell here). Beyond the budget h_max is enlarged
+# for that step (the scheme stays stable; only the accuracy of the slow dynamics
+# drops), so that one doStep cannot take unbounded time: at the default, well under a
+# second on every path (docs/reliability.md, "Worst-case time").
 MAX_WORK = 10_000
 WORK_SCALAR = 1
-WORK_VECTOR = 100
+WORK_VECTOR = 200
 WORK_PER_CELL = 2
 # Where Python solves the stages (where the compiled path declines a step, or is not
 # there; the transient field), each evaluation of the law counts too: WORK_SCALAR_EVAL
 # (20 to 80 us here), WORK_VECTOR_EVAL (0.6 to 1.3 ms on the spin grid), or nx ny
-# WORK_PER_CELL_EVAL for the field. A step takes about 2 to 4 (scalar, vector) or 6
+# WORK_PER_CELL_EVAL for the field. A step takes about 3 (scalar), 4 to 8 (vector) or 6
 # (field) evaluations; a hostile one up to hundreds (the Newton iterations of its
 # stages), and the evaluations beyond the budget discard the step (WorkBudgetError).
-WORK_SCALAR_EVAL = 1
+WORK_SCALAR_EVAL = 3
 WORK_VECTOR_EVAL = 25
 WORK_PER_CELL_EVAL = 0.125
 # Most internal steps of the scalar path at the default budget (its cap before any
