@@ -104,8 +104,8 @@ class BodyModel:
         vector = len(getattr(stepper, "_idx", ())) > 1
         self.work = WORK_VECTOR if vector else WORK_SCALAR
         self.cap = step_cap(max_work, self.work)
-        # the work of one evaluation of the law in a Python stage solve (None: not counted)
-        self.eval_work: float | None = WORK_VECTOR_EVAL if vector else WORK_SCALAR_EVAL
+        # the work of one evaluation of the law where Python solves the stages
+        self.eval_work: float = WORK_VECTOR_EVAL if vector else WORK_SCALAR_EVAL
 
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
         P = inputs["P"]
@@ -114,8 +114,7 @@ class BodyModel:
             self.P = P
         loads = Loads(*[inputs.get(k, 0.0) for k in Loads._fields])
         n = self.internal_steps(h)
-        if self.eval_work is not None:
-            self.stepper.eval_limit = max(1, int(self.max_work // self.eval_work))
+        self.stepper.eval_limit = max(1, int(self.max_work // self.eval_work))
         try:
             self.stepper.advance(h, loads, n)
         except WorkBudgetError as e:
