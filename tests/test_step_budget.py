@@ -254,3 +254,24 @@ def test_budget_of_the_scalar_path_is_the_old_cap():
     assert body_model.MAX_SUBSTEPS == 10_000 == body_model.step_cap(MAX_WORK, WORK_SCALAR)
     assert body_model.step_cap(MAX_WORK, WORK_VECTOR) == MAX_WORK // WORK_VECTOR
     assert body_model.step_cap(1, WORK_VECTOR) == 1  # at least one step
+
+
+def test_both_targets_word_the_capped_step_the_same():
+    """The full body FMU's capped step (Eqs. 10-11 on the vector path): the pythonfmu
+    FMU words the note in Python, the native one in C, from the same budget: the same
+    status and the same words."""
+    model, _, before, inputs, (t, h) = FULL_YAW
+    answers = []
+    for target in ("pythonfmu", "native"):
+        with Instance(build(target, model), "words", {"max_work": 2500.0}) as b:
+            for t0, h0 in before:
+                assert _do_step(b, t0, h0) == OK
+            for name, value in inputs.items():
+                b.set(name, value)
+            start = len(b.messages)
+            answers.append((_do_step(b, t, h), b.messages[start:]))
+    assert answers[0] == answers[1]
+    assert answers[0][0] == WARNING
+    assert (
+        f"(each costs {WORK_VECTOR}): taken in {2500 // WORK_VECTOR} steps" in answers[0][1][-1][1]
+    )
