@@ -88,10 +88,41 @@ LOAD_LIMIT = 1e9
 # Load history: a function of time returning Loads, or constant Loads.
 LoadInput = Loads | Callable[[float], Loads]
 
-__all__ = ["ContactLaw", "ContactOutputs", "LoadInput", "RollingBody", "StageSolveError"]
+__all__ = [
+    "ContactLaw",
+    "ContactOutputs",
+    "LoadInput",
+    "RollingBody",
+    "StageSolveError",
+    "WorkBudgetError",
+]
 
 
-class RollingBody(BodyState):
+class WorkBudgetError(RuntimeError):
+    """The evaluations of the contact law in one call of ``advance`` reached the
+    stepper's ``eval_limit`` (the FMU's budget max_work, fmu/body_model.py): the stage
+    solves of a hostile step can take hundreds of evaluations, ms each on a spin grid.
+    Not a StageSolveError: no other start is tried."""
+
+    def __init__(self, limit: int, why: str = "") -> None:
+        self.limit = limit
+        super().__init__(f"the stage solves need more than {limit} evaluations of the law{why}")
+
+
+class EvalBudget:
+    """Counts the law's evaluations of the stage solves against ``eval_limit`` (None:
+    no limit), from 0 at each ``advance``."""
+
+    eval_limit: int | None = None
+    evals: int = 0
+
+    def spend(self) -> None:
+        self.evals += 1
+        if self.eval_limit is not None and self.evals > self.eval_limit:
+            raise WorkBudgetError(self.eval_limit)
+
+
+class RollingBody(BodyState, EvalBudget):
     """The rolling body of Eqs. (8)-(11) on a contact law, advanced in time.
 
     ``method``: "full" (stiff slip equation, Eq. 20) or "quasistationary" (Eqs. 26,
@@ -173,6 +204,7 @@ class RollingBody(BodyState):
         h = positive("h", h)
         if substeps < 1:
             raise InputError("substeps", substeps, ">= 1")
+        self.evals = 0
         if self._kernel is not None and not callable(loads):
             L = self._bounded(_checked(loads))
             if self._kernel.advance(self, h, L, substeps):
@@ -365,6 +397,7 @@ class RollingBody(BodyState):
     def _law(self, vx: float, Vx: float) -> tuple:
         """The law at slip vx and speed Vx with the held lateral ratios (floats), at
         standstill as ``forces_at_rest``."""
+        self.spend()  # one evaluation of a scalar step, against the budget
         ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
         return forces_at_rest(self.law, vx, ry * Vx, rz * Vx, Vx)
 
@@ -375,6 +408,7 @@ class RollingBody(BodyState):
         ry, rz = self.lateral.vy_ratio, self.lateral.spin_ratio
         slope = getattr(self.law, "tx_slope", None)
         if slope is not None and rz == 0.0:
+            self.spend()  # else _law's, twice
             if abs(Vx) >= V_STANDSTILL:
                 T, d_vx, d_vy, d_V = slope(vx, ry * Vx, Vx)
                 return T, d_vx + k * ry * d_vy + k * d_V
@@ -393,6 +427,7 @@ class RollingBody(BodyState):
     def _forces(self, Y: FloatArray) -> FloatArray:
         """(Tx, Ty, Mz) at states Y (k, 4), shape (k, 3): one vectorised law call, with
         the law at standstill of ``forces_at_rest`` for |Vx| < V_STANDSTILL."""
+        self.spend()
         k, Vx = Y.shape[0], Y[:, 0]
         near = np.flatnonzero(np.abs(Vx) < V_STANDSTILL)
         rows = np.concatenate([np.arange(k), near])  # near rows twice: at +V_s and -V_s

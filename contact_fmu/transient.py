@@ -57,7 +57,7 @@ from scipy.optimize import root
 from ._validate import InputError, count, finite, positive
 from .body_state import BodyState, ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
-from .integrator import LoadInput, StageSolveError
+from .integrator import EvalBudget, LoadInput, StageSolveError
 from .kinematics import ROLLING, SLIDING, creepage
 from .layer import LayerContact, TractionField
 
@@ -662,7 +662,7 @@ def _strips(rule: str, ny: int, a2: float) -> tuple[FloatArray, FloatArray]:
     return a2 * np.sin(phi), a2 * np.cos(phi) * dphi
 
 
-class TransientRollingBody(BodyState):
+class TransientRollingBody(BodyState, EvalBudget):
     """The rolling body of Eqs. (8)-(11) on the transient thin-layer field.
 
     The same interface as ``integrator.RollingBody`` (advance, set_load, outputs,
@@ -800,6 +800,7 @@ class TransientRollingBody(BodyState):
             raise InputError("substeps", substeps, ">= 1")
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
         saved = self.snapshot()
+        self.evals = 0
         try:
             dt = h / substeps
             t0 = self.t
@@ -888,6 +889,7 @@ class TransientRollingBody(BodyState):
         memo: dict = {}
 
         def evaluate(u: FloatArray) -> tuple[FloatArray, StageField, FloatArray]:
+            self.spend()  # the field's evaluations, against the budget
             yy = state(u)
             ds = ds_of(yy[0])
             st = field.stage(base, tau_hat, ds, elapsed, hg, yy[1], yy[2], yy[3], yy[0], memo)
@@ -904,6 +906,7 @@ class TransientRollingBody(BodyState):
         )
 
         def vector(u: FloatArray) -> tuple[FloatArray, FloatArray, tuple]:
+            self.spend()
             yy = state(u)
             ds = ds_of(yy[0])
             st = field.stage(

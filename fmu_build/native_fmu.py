@@ -130,7 +130,7 @@ def _cstr(s: str) -> str:
 _ROLES = {
     "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "vx0",
     "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
-    "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex", "scheme",
+    "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex", "scheme", "max_work",
 }  # fmt: skip
 _MODES = {"body": "MODE_BODY", "contact": "MODE_CONTACT", "rigid_body": "MODE_RIGID"}
 

@@ -18,24 +18,51 @@ from typing import Any
 from .. import native
 from .._validate import InputError
 from ..dynamics import Body, Lateral, Loads
-from ..integrator import RollingBody
+from ..integrator import RollingBody, WorkBudgetError
 from ..kinematics import V_CREEP_FLOOR, spin_for_slip
 from .config import ModelConfig
 from .laws import make_law
 from .ranges import within_range
 
-# Most stepper steps per communication step: beyond, h_max is enlarged for that step
-# (the scheme stays stable; only the accuracy of the slow dynamics drops) so that one
-# doStep cannot take unbounded time.
-MAX_SUBSTEPS = 10_000
+# The work of one doStep is bounded by the parameter max_work (variables.py), counted in
+# work units: an internal step costs WORK_SCALAR (vx the only unknown: compiled, 1 to 3
+# us here) or WORK_VECTOR (Vy and/or Omega_z as unknowns, Eqs. 10-11: each stage solve
+# evaluates the law on its spin grid, 0.3 ms compiled, up to 7 ms where a hostile step
+# takes many Newton iterations; 30 ms where Python solves it), the transient field's
+# one nx ny WORK_PER_CELL (15 us per cell here). Beyond the budget h_max is enlarged
+# for that step (the scheme stays stable; only the accuracy of the slow dynamics
+# drops), so that one doStep cannot take unbounded time: at the default, well under a
+# second on every path (docs/reliability.md, "Worst-case time").
+MAX_WORK = 10_000
+WORK_SCALAR = 1
+WORK_VECTOR = 200
+WORK_PER_CELL = 2
+# Where Python solves the stages (where the compiled path declines a step, or is not
+# there; the transient field), each evaluation of the law counts too: WORK_SCALAR_EVAL
+# (20 to 80 us here), WORK_VECTOR_EVAL (0.6 to 1.3 ms on the spin grid), or nx ny
+# WORK_PER_CELL_EVAL for the field. A step takes about 3 (scalar), 4 to 8 (vector) or 6
+# (field) evaluations; a hostile one up to hundreds (the Newton iterations of its
+# stages), and the evaluations beyond the budget discard the step (WorkBudgetError).
+WORK_SCALAR_EVAL = 3
+WORK_VECTOR_EVAL = 25
+WORK_PER_CELL_EVAL = 0.125
+# Most internal steps of the scalar path at the default budget (its cap before any
+# parameter sets another: stepper.c's CF_MAX_SUBSTEPS).
+MAX_SUBSTEPS = MAX_WORK // WORK_SCALAR
 # h / h_max within this relative margin of an integer does not add a step.
 SUBSTEP_SLACK = 1e-9
 
 
-def substeps(h: float, h_max: float) -> int:
-    """ceil(h / h_max), at least 1, at most MAX_SUBSTEPS."""
+def substeps(h: float, h_max: float, cap: int = MAX_SUBSTEPS) -> int:
+    """ceil(h / h_max), at least 1, at most ``cap``."""
     n = math.ceil(h / h_max * (1.0 - SUBSTEP_SLACK))
-    return min(max(n, 1), MAX_SUBSTEPS)
+    return min(max(n, 1), cap)
+
+
+def step_cap(max_work: float, work: float) -> int:
+    """Most internal steps of ``work`` units each within ``max_work`` (at least 1:
+    stepper.c's max_substeps, the native FMU's the same from the same parameter)."""
+    return max(1, int(max_work // work))
 
 
 def make_stepper(
@@ -68,10 +95,17 @@ class BodyModel:
 
     feedthrough = False
 
-    def __init__(self, stepper: Any, h_max: float, P: float) -> None:
+    def __init__(self, stepper: Any, h_max: float, P: float, max_work: float = MAX_WORK) -> None:
         self.stepper = stepper
         self.h_max = h_max
         self.P = P
+        self.max_work = max_work
+        # Vy and/or Omega_z as stage unknowns: the vector path (native CF_VECTOR)
+        vector = len(getattr(stepper, "_idx", ())) > 1
+        self.work = WORK_VECTOR if vector else WORK_SCALAR
+        self.cap = step_cap(max_work, self.work)
+        # the work of one evaluation of the law where Python solves the stages
+        self.eval_work: float = WORK_VECTOR_EVAL if vector else WORK_SCALAR_EVAL
 
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
         P = inputs["P"]
@@ -80,14 +114,30 @@ class BodyModel:
             self.P = P
         loads = Loads(*[inputs.get(k, 0.0) for k in Loads._fields])
         n = self.internal_steps(h)
-        self.stepper.advance(h, loads, n)
+        self.stepper.eval_limit = max(1, int(self.max_work // self.eval_work))
+        try:
+            self.stepper.advance(h, loads, n)
+        except WorkBudgetError as e:
+            raise WorkBudgetError(
+                e.limit, f", beyond max_work = {self.max_work:g} (each costs {self.eval_work:g})"
+            ) from None
         within_range(self.stepper.outputs())
-        if n == MAX_SUBSTEPS and h / self.h_max > MAX_SUBSTEPS:
-            return (
-                f"communication step h = {h:g} s exceeds {MAX_SUBSTEPS} internal steps of "
-                f"h_max = {self.h_max:g} s: taken in {MAX_SUBSTEPS} steps of {h / n:g} s"
-            )
+        if n == self.cap and self.beyond_cap(h):
+            return self.cap_note(h, n, f"h_max = {self.h_max:g} s")
         return None
+
+    def beyond_cap(self, h: float) -> bool:
+        """Whether h needs more internal steps than the budget allows (stepper.c's test,
+        instance.c's note)."""
+        return h / self.h_max > self.cap
+
+    def cap_note(self, h: float, n: int, limits: str) -> str:
+        """The warning of a step taken in the budget's n steps (the native FMU's words)."""
+        return (
+            f"communication step h = {h:g} s needs more internal steps ({limits}) than "
+            f"max_work = {self.max_work:g} allows (each costs {self.work:g}): taken in "
+            f"{n} steps of {h / n:g} s"
+        )
 
     def fast(self) -> native.FastBody | None:
         """The whole step in compiled code (contact_fmu/native) where the stepper's path
@@ -98,13 +148,14 @@ class BodyModel:
         constants = {
             "v_creep_floor": V_CREEP_FLOOR,
             "substep_slack": SUBSTEP_SLACK,
-            "max_substeps": MAX_SUBSTEPS,
+            "max_substeps": self.cap,
         }
         return native.FastBody(kernel, self.stepper, self.h_max, constants)
 
     def internal_steps(self, h: float) -> int:
-        """Stepper steps for a communication step h (s): ceil(h / h_max), bounded."""
-        return substeps(h, self.h_max)
+        """Stepper steps for a communication step h (s): ceil(h / h_max), at most the
+        budget's."""
+        return substeps(h, self.h_max, self.cap)
 
     def evaluate(self, inputs: Mapping[str, float]) -> None:  # no feedthrough
         return None
@@ -136,4 +187,4 @@ def build(
     P = inputs["P"]
     stepper = make_stepper(cfg, params, P, t0, data_dir)
     within_range(stepper.outputs(), start=True)
-    return BodyModel(stepper, params["h_max"], P)
+    return BodyModel(stepper, params["h_max"], P, params.get("max_work", MAX_WORK))

@@ -6,7 +6,12 @@ strips across it, advanced together with Eqs. (8)-(11) by an L-stable SDIRK2 ste
 (docs/transient.md). The field is part of the state (FMU get/set state restores it).
 A communication step h is split into the larger of ceil(h/h_max) and the number of
 steps that keeps each within ``cells_per_step`` cells at the present speed, loads held
-(zero-order hold); any step is stable, these two only set the accuracy.
+(zero-order hold); any step is stable, these two only set the accuracy. An internal
+step costs nx ny WORK_PER_CELL work units: at most max_work // that many are taken
+(fewer, longer steps beyond: fmi2Warning), and a grid whose one step exceeds max_work
+is refused at the step (fmi2Discard naming max_work); each evaluation of the field in
+the stage solves costs nx ny WORK_PER_CELL_EVAL, and a step whose evaluations exceed
+max_work is discarded (WorkBudgetError).
 
 The field can be written to a CSV file (``field_file``) at chosen times
 (``field_times``): at the end of the communication step that reaches each requested
@@ -35,7 +40,7 @@ from .._validate import InputError
 from ..dynamics import Body, Lateral
 from ..kinematics import spin_for_slip
 from ..transient import TransientRollingBody
-from .body_model import MAX_SUBSTEPS, BodyModel, substeps
+from .body_model import MAX_WORK, WORK_PER_CELL, WORK_PER_CELL_EVAL, BodyModel, substeps
 from .config import ModelConfig
 from .laws import make_law
 from .ranges import within_range
@@ -148,20 +153,44 @@ class TransientBodyModel(BodyModel):
         P: float,
         cells: float,
         recorder: FieldRecorder,
+        max_work: float = MAX_WORK,
     ) -> None:
-        super().__init__(stepper, h_max, P)
+        super().__init__(stepper, h_max, P, max_work)
         self.cells = cells
         self.recorder = recorder
+        field = stepper.field
+        self.work = field.nx * field.ny * WORK_PER_CELL  # one internal step's cost
+        self.cap = int(max_work // self.work)  # 0: not one step within the budget
+        self.eval_work = field.nx * field.ny * WORK_PER_CELL_EVAL
+
+    def needed_steps(self, h: float) -> int:
+        """max(ceil(h/h_max), steps of at most ``cells`` cells at the present speed)."""
+        by_cells = self.stepper.substeps_for(h, self.cells)
+        return max(substeps(h, self.h_max, cap=2**62), by_cells)
 
     def internal_steps(self, h: float) -> int:
-        """max(ceil(h/h_max), steps of at most ``cells`` cells at the present speed),
-        bounded by MAX_SUBSTEPS."""
-        by_cells = self.stepper.substeps_for(h, self.cells)
-        return min(max(substeps(h, self.h_max), by_cells), MAX_SUBSTEPS)
+        """``needed_steps``, at most the budget's."""
+        return min(self.needed_steps(h), self.cap)
+
+    def beyond_cap(self, h: float) -> bool:
+        return self.needed_steps(h) > self.cap
 
     def step(self, h: float, inputs: Mapping[str, float]) -> str | None:
         _in_contact(inputs["P"])
+        if self.cap < 1:
+            field = self.stepper.field
+            raise InputError(
+                "max_work",
+                self.max_work,
+                f">= {self.work:g}, the work of one internal step on the {field.nx} x "
+                f"{field.ny} field",
+            )
+        n = self.internal_steps(h)
+        capped = n == self.cap and self.beyond_cap(h)
         note = super().step(h, inputs)
+        if capped:
+            limits = f"h_max = {self.h_max:g} s, cells_per_step = {self.cells:g}"
+            note = self.cap_note(h, n, limits)
         self.recorder.capture_due(self.stepper.t, self.stepper.field_arrays)
         return note
 
@@ -218,6 +247,13 @@ def build(
     stepper = make_stepper(cfg, params, P, t0, data_dir)
     within_range(stepper.outputs(), start=True)
     recorder = FieldRecorder(str(params["field_file"]), parse_times(params["field_times"]))
-    model = TransientBodyModel(stepper, params["h_max"], P, params["cells_per_step"], recorder)
+    model = TransientBodyModel(
+        stepper,
+        params["h_max"],
+        P,
+        params["cells_per_step"],
+        recorder,
+        params.get("max_work", MAX_WORK),
+    )
     recorder.capture_due(t0, stepper.field_arrays)
     return model

@@ -243,6 +243,8 @@ CONSTANTS: tuple[tuple[str, str, str, str], ...] = (
     ("CF_V_CREEP_FLOOR", "double", "kinematics.V_CREEP_FLOOR", "(m/s)"),
     ("CF_SUBSTEP_SLACK", "double", "fmu.body_model.SUBSTEP_SLACK", ""),
     ("CF_MAX_SUBSTEPS", "int", "fmu.body_model.MAX_SUBSTEPS", ""),
+    ("CF_WORK_SCALAR", "int", "fmu.body_model.WORK_SCALAR", "(work units per internal step)"),
+    ("CF_WORK_VECTOR", "int", "fmu.body_model.WORK_VECTOR", "(Eqs. 10-11: per internal step)"),
 )  # fmt: skip
 
 

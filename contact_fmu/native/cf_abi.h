@@ -34,6 +34,8 @@
 #define CF_V_CREEP_FLOOR 1e-06               /* kinematics.V_CREEP_FLOOR (m/s) */
 #define CF_SUBSTEP_SLACK 1e-09               /* fmu.body_model.SUBSTEP_SLACK */
 #define CF_MAX_SUBSTEPS 10000                /* fmu.body_model.MAX_SUBSTEPS */
+#define CF_WORK_SCALAR 1 /* fmu.body_model.WORK_SCALAR (work units per internal step) */
+#define CF_WORK_VECTOR 200 /* fmu.body_model.WORK_VECTOR (Eqs. 10-11: per internal step) */
 
 /* The outputs of RollingBody.outputs() in the order of cf_body.out. */
 enum {

@@ -43,6 +43,7 @@
  * version, the GUID, the length and a checksum; foreign or damaged bytes are refused,
  * and so is a state whose content no setter would have admitted (sanitize, state_ok).
  */
+#include <limits.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -636,6 +637,11 @@ static cf_status fmu_step(Inst *I, double t, double h) {
     /* set_load: Eq. (34) at the new P; set_mu: the law at a tuned mu */
     if (P != c->P_law || c->val[R_MU] != p.mu) cf_model_law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
+    /* the budget max_work in internal steps of this path (body_model.step_cap): at
+     * least 1 (max_work <= 1e9: the cap fits an int) */
+    const double work = CF_VECTOR ? CF_WORK_VECTOR : CF_WORK_SCALAR;
+    const double steps = floor(c->val[R_MAX_WORK] / work);
+    b.max_substeps = steps >= 1.0 ? (int)fmin(steps, (double)INT_MAX) : 1;
     cf_vpath vector = {&vw, c->val[R_FY_EX], c->val[R_MZ_EX], NULL, NULL, NULL};
     if (CF_VECTOR) {
         ensure_grid(I, &p, &b, &p);
@@ -675,10 +681,12 @@ static cf_status fmu_step(Inst *I, double t, double h) {
     c->time = t + h;
 #undef REPRS
     const int n = b.max_substeps;
-    if (capped && h / b.h_max > n)
-        say(I, CF_STATUS_WARNING, "communication step h = %g s exceeds %d internal steps of "
-            "h_max = "
-            "%g s: taken in %d steps of %g s", h, n, b.h_max, n, h / n);
+    if (capped && h / b.h_max > n) { /* BodyModel.cap_note */
+        say(I, CF_STATUS_WARNING, "communication step h = %g s needs more internal steps "
+            "(h_max = %g s) than max_work = %g allows (each costs %g): taken in %d "
+            "steps of %g s", h, b.h_max, c->val[R_MAX_WORK], work, n, h / n);
+        return CF_STATUS_WARNING;
+    }
     return CF_STATUS_OK;
 }
 

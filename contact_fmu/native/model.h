@@ -20,6 +20,7 @@ enum {
     R_VX, R_VY, R_OMEGA_Y, R_OMEGA_Z, R_TX, /* contact-mode kinematics, rigid_body's Tx */
     R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
     R_SCHEME, /* the integrator's scheme (a String, as R_METHOD) */
+    R_MAX_WORK, /* the budget of one doStep (work units) */
     R_COUNT
 };
 /* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
