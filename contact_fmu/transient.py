@@ -60,6 +60,7 @@ from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import LoadInput, StageSolveError
 from .kinematics import ROLLING, SLIDING, creepage
 from .layer import LayerContact, TractionField
+from .native import field as native_field
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -124,9 +125,14 @@ class StageField:
     dTx_dvx: float = 0.0
     # d(Tx, Ty, Mz)/d(vx, vy, Omega_z) at fixed geometry, (3, 3), when asked for
     jacobian: FloatArray | None = None
+    # (Tx, Ty, Mz) over the field's strips, where the compiled stage computed it
+    T: tuple[float, float, float] | None = None
 
     def resultant(self, y: FloatArray) -> tuple[float, float, float]:
-        """(Tx, Ty, Mz) = int (tau_x, tau_y, x tau_y - y tau_x) dA (N, N, N m)."""
+        """(Tx, Ty, Mz) = int (tau_x, tau_y, x tau_y - y tau_x) dA (N, N, N m); ``y``:
+        the strips of the field that made this stage."""
+        if self.T is not None:
+            return self.T
         w = self.weights
         Tx = float(np.sum(w * self.tau_x))
         Ty = float(np.sum(w * self.tau_y))
@@ -155,6 +161,10 @@ class LayerField:
     midpoint rule in phi integrates the square-root ends of the ellipse (Eq. 37)
     without loss of order. "uniform": the strips of ``LayerContact.traction``
     (midpoint rule in y, order 1.5 for a field that does not vanish at y = +-a2).
+
+    ``native``: the stage and the weights run compiled (contact_fmu/native/field.c, the
+    same arithmetic to rounding) where the kernel library is there; False keeps this
+    object on the Python path, the reference (as CONTACT_FMU_NATIVE=0 does for all).
     """
 
     def __init__(
@@ -182,7 +192,25 @@ class LayerField:
         self.tau_x = np.zeros((ny, nx))
         self.tau_y = np.zeros((ny, nx))
         self.slip = np.zeros((ny, nx), dtype=bool)
+        self.native = True
         self._update_contact()
+
+    def __getstate__(self) -> dict:
+        """Pickle and deepcopy without the compiled stage's ctypes struct (rebuilt on use)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_cf"}
+
+    def _compiled(self) -> native_field.CompiledField | None:
+        """field.c for this grid and law, or None (``native`` off, or no library)."""
+        if not self.native:
+            return None
+        c = self.__dict__.get("_cf")
+        if c is not None and c.matches(self):
+            return c
+        lib = native_field.library()
+        if lib is None:
+            return None
+        c = self._cf = native_field.CompiledField(lib, self, MIN_SPEED_FRACTION)
+        return c
 
     # ---- geometry ------------------------------------------------------------------
     @property
@@ -247,8 +275,13 @@ class LayerField:
         This is exact along x for the steady field without spin and for the Cattaneo
         field; the weights depend on tau. Across strips: midpoint rule.
         ``tau_x = None``: area weights (each interval shared equally, the end
-        segments to the end nodes).
+        segments to the end nodes). Compiled where the library is (field.c).
         """
+        c = self._compiled()
+        if c is not None:
+            w = c.weights(x, inside, tau_x, tau_y, slip, sign)
+            if w is not None:
+                return w
         dx = self.dx
         pair = inside[:, :-1] & inside[:, 1:]
         w = np.zeros(inside.shape)
@@ -385,7 +418,16 @@ class LayerField:
         node's path in this stage instead of at its end (exact for one stage under
         constant kinematics, used by ``roll``). ``jacobian``: also return the tangent
         d(Tx, Ty, Mz)/d(vx, vy, Omega_z) of the stage force at fixed positions.
+        Compiled where the library is (field.c, cf_field_stage; this code where it
+        declines).
         """
+        c = self._compiled()
+        if c is not None:
+            args = (ds, elapsed, h_own, vx, vy, phi, Vx)
+            r = c.stage(base.theta, base.inside, *tau_hat, args, midpath, jacobian)
+            if r is not None:
+                theta, shift, x, tx, ty, slip, inside, w, T, dT, J = r
+                return StageField(theta, shift, ds, x, tx, ty, slip, inside, w, dT, J, T)
         k = self.law.k
         u = base.theta - ds / self.dx
         shift = math.floor(u)

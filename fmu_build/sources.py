@@ -93,7 +93,14 @@ def closure(roots: list[str]) -> list[str]:
 
 # Files other than Python a module reads next to itself, by module.
 COMPANIONS = {
-    "native": ("native/stepper.c", "native/stepper.h", "native/fmi.c", "native/cf_core.h")
+    "native": (
+        "native/stepper.c",
+        "native/stepper.h",
+        "native/fmi.c",
+        "native/cf_core.h",
+        "native/field.c",
+        "native/field.h",
+    )
 }
 
 

@@ -1,0 +1,347 @@
+/* The thin-layer transient traction field's stage in C (field.h): transient.py's
+ * LayerField.stage, LayerField._weights, _capped_linear and StageField.resultant,
+ * expression by expression and in the same order, so that a stage agrees with the
+ * Python reference to rounding. Two sources of difference remain, both of a few ulp:
+ * numpy's power z**3 (its own SIMD routine where the CPU has one; pow here) and hypot.
+ * The sums over the grid are numpy's pairwise summation (np.add.reduce over a
+ * contiguous array), reproduced by pairwise_sum. No globals, no allocation: the caller
+ * passes every array. Every input is checked (CF_FIELD_BAD_INPUT, CF_FIELD_RANGE) and
+ * every result too (CF_FIELD_NONFINITE): a huge finite input that overflows is not
+ * served; the Python path then takes the call. */
+#include "field.h"
+
+#include <stddef.h>
+
+/* numpy's pairwise summation of n contiguous doubles (DOUBLE_pairwise_sum in
+ * numpy/_core/src/umath/loops_utils.h.src): blocks of at most 128 summed in 8 partial
+ * sums, larger arrays split in halves of a multiple of 8. With the reduction's initial
+ * 0.0 (exact), np.sum of a contiguous float64 array is this sum. */
+static double pairwise_sum(const double *a, size_t n) {
+    if (n < 8) {
+        double res = 0.0;
+        for (size_t i = 0; i < n; i++) res += a[i];
+        return res;
+    }
+    if (n <= 128) {
+        double r[8];
+        size_t i;
+        for (int j = 0; j < 8; j++) r[j] = a[j];
+        for (i = 8; i < n - (n % 8); i += 8)
+            for (int j = 0; j < 8; j++) r[j] += a[i + (size_t)j];
+        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+        for (; i < n; i++) res += a[i];
+        return res;
+    }
+    size_t n2 = n / 2;
+    n2 -= n2 % 8;
+    return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
+}
+
+/* np.maximum and np.minimum (NaN propagates from either side) */
+static double np_max(double a, double b) { return (a >= b || isnan(a)) ? a : b; }
+static double np_min(double a, double b) { return (a <= b || isnan(a)) ? a : b; }
+
+static double cube(double z) { return pow(z, 3.0); }
+
+/* int_lo^hi min(L, mu p) dx, L(x) = ma + bs (x - xa) >= 0, mu p = c0 (l2 - x^2)
+ * (transient._capped_linear) */
+static double cap_int(double c0, double l2, double z) { return c0 * (l2 * z - cube(z) / 3.0); }
+
+static double lin_int(double ma, double bs, double xa, double z) {
+    double d = z - xa;
+    return ma * z + 0.5 * bs * (d * d);
+}
+
+static double capped_linear(double c0, double l2, double xa, double ma, double bs, double lo,
+                            double hi) {
+    double disc = bs * bs + 4.0 * c0 * (c0 * l2 - ma + bs * xa);
+    double sq = sqrt(np_max(disc, 0.0));
+    double r1 = (-bs - sq) / (2.0 * c0);
+    double r2 = (-bs + sq) / (2.0 * c0);
+    double o_lo = np_max(lo, r1);
+    double o_hi = np_max(np_min(hi, r2), o_lo);
+    if (!(disc > 0.0)) o_hi = o_lo;
+    double below = (cap_int(c0, l2, o_hi) - cap_int(c0, l2, o_lo)) -
+                   (lin_int(ma, bs, xa, o_hi) - lin_int(ma, bs, xa, o_lo));
+    return cap_int(c0, l2, hi) - cap_int(c0, l2, lo) - below;
+}
+
+static int all_finite(const double *a, size_t n) {
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(a[i])) return 0;
+    return 1;
+}
+
+static int field_ok(const cf_field *f) {
+    if (f == NULL || f->y == NULL || f->ell == NULL || f->p_strip == NULL || f->dy_w == NULL)
+        return 0;
+    if (f->nx < 2 || f->ny < 1) return 0;
+    const double pos[] = {f->dx, f->X, f->a1, f->p0, f->mu, f->k, f->c0};
+    for (size_t i = 0; i < sizeof pos / sizeof pos[0]; i++)
+        if (!(isfinite(pos[i]) && pos[i] > 0.0)) return 0;
+    size_t ny = (size_t)f->ny;
+    return all_finite(f->y, ny) && all_finite(f->ell, ny) && all_finite(f->p_strip, ny) &&
+           all_finite(f->dy_w, ny);
+}
+
+/* The weights of one strip i (LayerField._weights, its passes in its order). m: |tau|
+ * of the row, or NULL for area weights; cap_at: scratch of nx doubles. */
+static void row_weights(const cf_field *f, int i, const double *x, const unsigned char *in,
+                        const double *m, const unsigned char *sl_raw, double sign, double *w,
+                        double *cap_at) {
+    const int nx = f->nx;
+    const double dx = f->dx, ell = f->ell[i];
+    int j_lo = -1, j_hi = -1;
+    for (int j = 0; j < nx; j++) {
+        w[j] = 0.0;
+        if (in[j]) {
+            if (j_lo < 0) j_lo = j;
+            j_hi = j;
+        }
+    }
+    if (m == NULL) { /* area weights: each interval shared equally */
+        for (int j = 0; j + 1 < nx; j++)
+            if (in[j] && in[j + 1]) w[j] += 0.5 * dx;
+        for (int j = 1; j < nx; j++)
+            if (in[j - 1] && in[j]) w[j] += 0.5 * dx;
+        if (j_lo >= 0) {
+            w[j_lo] += x[j_lo] + ell;
+            w[j_hi] += ell - x[j_hi];
+        }
+        for (int j = 0; j < nx; j++) w[j] *= f->dy_w[i];
+        return;
+    }
+    const double c0 = f->c0, l2 = ell * ell;
+#define SL(j) (sl_raw != NULL && sl_raw[j] && in[j])
+#define ADH(j) (in[j] && !SL(j))
+#define PAIR(j) (in[j] && in[(j) + 1])
+#define INV(j) (m[j] > 0.0 ? 1.0 / m[j] : 0.0)
+    /* A-A: trapezoid */
+    for (int j = 0; j + 1 < nx; j++)
+        if (PAIR(j) && !SL(j) && !SL(j + 1)) w[j] += 0.5 * dx;
+    for (int j = 1; j < nx; j++)
+        if (PAIR(j - 1) && !SL(j - 1) && !SL(j)) w[j] += 0.5 * dx;
+    /* S-S: the cap, shared equally (added everywhere as numpy does: 0 * inv_m) */
+    for (int j = 0; j < nx; j++) cap_at[j] = cap_int(c0, l2, x[j]); /* antiderivative of mu p */
+    for (int j = 0; j + 1 < nx; j++) {
+        const double hc = PAIR(j) && SL(j) && SL(j + 1) ? 0.5 * (cap_at[j + 1] - cap_at[j]) : 0.0;
+        w[j] += hc * INV(j);
+    }
+    for (int j = 0; j + 1 < nx; j++) {
+        const double hc = PAIR(j) && SL(j) && SL(j + 1) ? 0.5 * (cap_at[j + 1] - cap_at[j]) : 0.0;
+        w[j + 1] += hc * INV(j + 1);
+    }
+    /* transitions: adhering node a, slipping neighbour on the side sd */
+    for (int sd = 1; sd >= -1; sd -= 2) {
+        for (int j0 = 0; j0 + 1 < nx; j0++) {
+            int hit = sd > 0 ? (PAIR(j0) && !SL(j0) && SL(j0 + 1))
+                             : (PAIR(j0) && SL(j0) && !SL(j0 + 1));
+            if (!hit) continue;
+            int a = sd > 0 ? j0 : j0 + 1, back = a - sd;
+            int ok = back >= 0 && back < nx && ADH(back);
+            double slope = ok ? (m[a] - m[back]) / dx : (m[a + sd] - m[a]) / dx;
+            double lo = np_min(x[a], x[a + sd]);
+            double seg = capped_linear(c0, l2, x[a], m[a], sd * slope, lo, lo + dx);
+            if (m[a] > 0.0)
+                w[a] += seg * INV(a);
+            else
+                w[a + sd] += seg * INV(a + sd);
+        }
+    }
+    /* end segments to the strip ends: j_lo towards -l, then j_hi towards +l */
+    if (j_lo >= 0) {
+        for (int side = -1; side <= 1; side += 2) {
+            int j = side < 0 ? j_lo : j_hi;
+            int is_lead = side < 0 ? sign < 0.0 : sign > 0.0;
+            double e = ell - side * x[j];
+            double lo = side > 0 ? x[j] : x[j] - e;
+            double mj = m[j];
+            double ci = cap_int(c0, l2, lo + e) - cap_int(c0, l2, lo);
+            int inner = j - side;
+            int ok = inner >= 0 && inner < nx && ADH(inner);
+            double slope = ok ? (mj - m[inner]) / dx : 0.0;
+            slope = np_max(slope, e > 0.0 ? -mj / e : 0.0); /* L >= 0 on the segment */
+            double seg;
+            if (SL(j))
+                seg = ci;
+            else if (is_lead)
+                seg = 0.5 * e * mj;
+            else
+                seg = capped_linear(c0, l2, x[j], mj, side * slope, lo, lo + e);
+            w[j] += mj > 0.0 ? seg * INV(j) : e;
+        }
+    }
+#undef SL
+#undef ADH
+#undef PAIR
+#undef INV
+    for (int j = 0; j < nx; j++) w[j] *= f->dy_w[i];
+}
+
+static int weights(const cf_field *f, const double *x, const unsigned char *inside,
+                   const double *tau_x, const double *tau_y, const unsigned char *slip,
+                   double sign, double *w, double *m) {
+    const size_t nx = (size_t)f->nx;
+    for (int i = 0; i < f->ny; i++) {
+        const size_t r = (size_t)i * nx;
+        if (tau_x != NULL)
+            for (size_t j = 0; j < nx; j++) m[j] = hypot(tau_x[r + j], tau_y[r + j]);
+        row_weights(f, i, x, inside + r, tau_x != NULL ? m : NULL,
+                    slip != NULL ? slip + r : NULL, sign, w + r, m + nx);
+    }
+    return all_finite(w, nx * (size_t)f->ny) ? CF_FIELD_OK : CF_FIELD_NONFINITE;
+}
+
+int cf_field_weights(const cf_field *f, const double *x, const unsigned char *inside,
+                     const double *tau_x, const double *tau_y, const unsigned char *slip,
+                     double sign, double *w, double *work) {
+    if (!field_ok(f) || x == NULL || inside == NULL || w == NULL || work == NULL ||
+        !isfinite(sign) || (tau_x == NULL) != (tau_y == NULL))
+        return CF_FIELD_BAD_INPUT;
+    const size_t nx = (size_t)f->nx, n = nx * (size_t)f->ny;
+    if (!all_finite(x, nx)) return CF_FIELD_BAD_INPUT;
+    if (tau_x != NULL && !(all_finite(tau_x, n) && all_finite(tau_y, n)))
+        return CF_FIELD_BAD_INPUT;
+    return weights(f, x, inside, tau_x, tau_y, slip, sign, w, work);
+}
+
+int cf_field_resultant(const cf_field *f, const double *x, const double *w,
+                       const double *tau_x, const double *tau_y, double *work, double T[3]) {
+    if (!field_ok(f) || x == NULL || w == NULL || tau_x == NULL || tau_y == NULL ||
+        work == NULL || T == NULL)
+        return CF_FIELD_BAD_INPUT;
+    const size_t nx = (size_t)f->nx, ny = (size_t)f->ny, n = nx * ny;
+    for (size_t k = 0; k < n; k++) work[k] = w[k] * tau_x[k];
+    T[0] = pairwise_sum(work, n);
+    for (size_t k = 0; k < n; k++) work[k] = w[k] * tau_y[k];
+    T[1] = pairwise_sum(work, n);
+    for (size_t k = 0; k < n; k++) work[k] = (w[k] * x[k % nx]) * tau_y[k];
+    double a = pairwise_sum(work, n);
+    for (size_t k = 0; k < n; k++) work[k] = (w[k] * f->y[k / nx]) * tau_x[k];
+    T[2] = a - pairwise_sum(work, n);
+    return all_finite(T, 3) ? CF_FIELD_OK : CF_FIELD_NONFINITE;
+}
+
+int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stage_out *out) {
+    if (!field_ok(f) || !(isfinite(f->min_speed_fraction) && f->min_speed_fraction >= 0.0))
+        return CF_FIELD_BAD_INPUT;
+    if (in == NULL || out == NULL || in->inside == NULL || in->hat_x == NULL ||
+        in->hat_y == NULL || out->x == NULL || out->tau_x == NULL || out->tau_y == NULL ||
+        out->w == NULL || out->slip == NULL || out->inside == NULL || out->work == NULL)
+        return CF_FIELD_BAD_INPUT;
+    const double scalars[] = {in->theta, in->ds,  in->elapsed, in->h_own,
+                              in->vx,    in->vy,  in->phi,     in->Vx};
+    if (!all_finite(scalars, sizeof scalars / sizeof scalars[0])) return CF_FIELD_BAD_INPUT;
+    const int nx = f->nx, ny = f->ny;
+    const size_t n = (size_t)nx * (size_t)ny;
+    if (!(all_finite(in->hat_x, n) && all_finite(in->hat_y, n))) return CF_FIELD_BAD_INPUT;
+    const double k = f->k, ds = in->ds, phi = in->phi;
+    /* the lattice after rolling ds: whole columns re-indexed, theta the remainder */
+    const double u = in->theta - ds / f->dx;
+    const double fl = floor(u);
+    if (!(fabs(fl) <= CF_FIELD_SHIFT_MAX)) return CF_FIELD_RANGE; /* inf and NaN too */
+    const long long shift = (long long)fl;
+    const double theta = u - fl;
+    out->theta = theta;
+    out->shift = shift;
+    const double sgn = ds > 0.0 ? 1.0 : (ds < 0.0 ? -1.0 : 0.0);
+    double *x = out->x;
+    for (int j = 0; j < nx; j++) x[j] = -f->X + ((double)j + theta) * f->dx;
+    /* scratch: the tangent's entries, the nodes' g, products for the sums, then the
+     * weights' two rows (prod + n) */
+    double *Dxx = out->work, *Dxy = Dxx + n, *Dyy = Dxy + n, *g = Dyy + n, *prod = g + n;
+    /* inside the ellipse now, and whether any material entered during the step */
+    int any_entered = 0;
+    for (int i = 0; i < ny; i++)
+        for (int j = 0; j < nx; j++) {
+            const size_t r = (size_t)i * (size_t)nx + (size_t)j;
+            const long long src = (long long)j - shift;
+            const int was = src >= 0 && src < nx && in->inside[(size_t)i * (size_t)nx + (size_t)src];
+            out->inside[r] = fabs(x[j]) < f->ell[i];
+            any_entered |= out->inside[r] && !was;
+        }
+    const int timed = ds != 0.0 && any_entered;
+    const int by_speed = fabs(in->Vx) * in->elapsed > f->min_speed_fraction * fabs(ds);
+    for (int i = 0; i < ny; i++) {
+        const double rvx = in->vx - phi * f->y[i];
+        for (int j = 0; j < nx; j++) {
+            const size_t r = (size_t)i * (size_t)nx + (size_t)j;
+            const long long src = (long long)j - shift;
+            const int valid = src >= 0 && src < nx;
+            const size_t rs = valid ? (size_t)i * (size_t)nx + (size_t)src : 0;
+            const int inside = out->inside[r];
+            const int entered = inside && !(valid && in->inside[rs]);
+            const double xa = x[j] / f->a1;
+            const double p = f->p_strip[i] - f->p0 * (xa * xa);
+            const double cap = f->mu * (inside ? np_max(p, 0.0) : 0.0);
+            const double d_in = f->ell[i] - sgn * x[j]; /* distance from the leading edge */
+            double rvy;
+            if (in->midpath && phi != 0.0) {
+                const double back = 0.5 * sgn * (entered ? d_in : fabs(ds));
+                rvy = in->vy + phi * (x[j] + back);
+            } else {
+                rvy = in->vy + phi * x[j];
+            }
+            double hx = valid ? in->hat_x[rs] : 0.0, hy = valid ? in->hat_y[rs] : 0.0;
+            double t_eff = in->h_own;
+            if (timed && entered) {
+                if (by_speed)
+                    t_eff = np_max(d_in, 0.0) / fabs(in->Vx);
+                else
+                    t_eff = np_min(np_max(in->elapsed * d_in / fabs(ds), 0.0), in->elapsed);
+                hx = 0.0;
+                hy = 0.0;
+            }
+            double tx = hx + rvx * (t_eff / k);
+            double ty = hy + rvy * (t_eff / k);
+            const double mag = hypot(tx, ty);
+            const int slip = mag > cap;
+            /* the radial return onto |tau| <= mu p and its tangent (cap/|t|)(I - n n^T) */
+            const double fct = slip ? cap / mag : 1.0;
+            const double nxn = slip ? tx / mag : 0.0, nyn = slip ? ty / mag : 0.0;
+            Dxx[r] = fct * (1.0 - nxn * nxn);
+            Dxy[r] = -fct * nxn * nyn;
+            Dyy[r] = fct * (1.0 - nyn * nyn);
+            g[r] = t_eff; /* until the weights are known */
+            out->tau_x[r] = tx * fct;
+            out->tau_y[r] = ty * fct;
+            out->slip[r] = (unsigned char)slip;
+        }
+    }
+    if (!(all_finite(out->tau_x, n) && all_finite(out->tau_y, n))) return CF_FIELD_NONFINITE;
+    int rc = weights(f, x, out->inside, out->tau_x, out->tau_y, out->slip, sgn, out->w, prod + n);
+    if (rc != CF_FIELD_OK) return rc;
+    for (size_t r = 0; r < n; r++) {
+        out->slip[r] = out->slip[r] && out->inside[r];
+        g[r] = out->w[r] * g[r] / k; /* d(node force)/d(trial) per unit slip velocity */
+    }
+    for (size_t r = 0; r < n; r++) prod[r] = g[r] * Dxx[r];
+    out->dTx_dvx = pairwise_sum(prod, n);
+    for (int c = 0; c < 9; c++) out->J[c] = 0.0;
+    if (in->jacobian) {
+        /* column c: d/dvx -> (Dxx, Dxy); d/dvy -> (Dxy, Dyy); d/dphi -> D (-y, x) */
+        for (int c = 0; c < 3; c++)
+            for (int row = 0; row < 3; row++) {
+                for (size_t r = 0; r < n; r++) {
+                    const double X = x[r % (size_t)nx], Y = f->y[r / (size_t)nx];
+                    double cx, cy;
+                    if (c == 0) {
+                        cx = Dxx[r];
+                        cy = Dxy[r];
+                    } else if (c == 1) {
+                        cx = Dxy[r];
+                        cy = Dyy[r];
+                    } else {
+                        cx = -Y * Dxx[r] + X * Dxy[r];
+                        cy = -Y * Dxy[r] + X * Dyy[r];
+                    }
+                    prod[r] = g[r] * (row == 0 ? cx : (row == 1 ? cy : X * cy - Y * cx));
+                }
+                out->J[3 * row + c] = pairwise_sum(prod, n);
+            }
+    }
+    rc = cf_field_resultant(f, x, out->w, out->tau_x, out->tau_y, prod, out->T);
+    if (rc != CF_FIELD_OK) return rc;
+    if (!(isfinite(out->dTx_dvx) && all_finite(out->J, 9))) return CF_FIELD_NONFINITE;
+    return CF_FIELD_OK;
+}
