@@ -841,6 +841,8 @@ class TransientRollingBody(BodyState):
         if substeps < 1:
             raise InputError("substeps", substeps, ">= 1")
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
+        if not callable(loads) and self._advance_compiled(h, loads, int(substeps)):
+            return
         saved = self.snapshot()
         try:
             dt = h / substeps
@@ -853,6 +855,32 @@ class TransientRollingBody(BodyState):
         except Exception:
             self.restore(saved)
             raise
+
+    def _advance_compiled(self, h: float, loads: Loads, substeps: int) -> bool:
+        """``advance`` under held loads in one C call (field.c, cf_field_advance: this
+        class's _step, _stage and _solve_scalar with the field's stage) where vx is the
+        only stage unknown and the field runs compiled; False (nothing changed) where
+        the Python steps must take it, which then word any error."""
+        if len(self._idx) != 1:
+            return False
+        c = self.field._compiled()
+        if c is None:
+            return False
+        b, law = self.body, self.law
+        body = {"M": b.M, "Rx": b.Rx, "A1": b.A1, "A2": b.A2, "m_slip": b.m_slip,
+                "ry": self.lateral.vy_ratio, "rz": self.lateral.spin_ratio,
+                "creep_full_slip": law.creep_full_slip, "gamma": GAMMA, "a21": A21,
+                "solve_rtol": SOLVE_RTOL, "v_scale_floor": V_SCALE_FLOOR,
+                "max_iterations": MAX_STAGE_ITERATIONS}  # fmt: skip
+        f = self.field
+        r = c.advance(body, self.y, self.t, self.impulse, (f.theta, f.tau_x, f.tau_y, f.slip),
+                      h, tuple(loads), substeps)  # fmt: skip
+        if r is None:
+            return False
+        self.y, self.t, self.impulse, fstate, T, sliding = r
+        f.theta, f.direction, f.tau_x, f.tau_y, f.slip = fstate
+        self.out = ContactOutputs(*T, sliding=sliding)
+        return True
 
     # ---- one SDIRK2 step -----------------------------------------------------------
     def _step(self, t_n: float, h: float, load_at: Callable[[float], Loads]) -> None:

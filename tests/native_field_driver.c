@@ -1,10 +1,13 @@
 /* A driver of field.c's functions for tests/test_native_field.py, built with the
  * sanitizers (AddressSanitizer, UBSan with float-to-int overflow, no recovery): random
  * and extreme stage inputs on the fig12_transient grid (32 x 16, the thin-layer law of
- * Section 4 at P = 1000 N), damaged field structs and NULL pointers. Every call must
- * answer one of field.h's codes, and an OK stage serves finite numbers and 0/1 masks.
+ * Section 4 at P = 1000 N), damaged field structs and NULL pointers; every eighth call
+ * also advances the body on the field (cf_field_advance) from a random state under
+ * random loads. Every call must answer one of field.h's codes, and an OK call serves
+ * finite numbers and 0/1 masks.
  *
- *   native_field_driver SEED CALLS   ->  "ok N bad_input N range N nonfinite N"
+ *   native_field_driver SEED CALLS
+ *   ->  "ok N bad_input N range N nonfinite N advance_ok N advance_declined N"
  * (exit status 1 on a broken promise, with the call printed). */
 #include <float.h>
 #include <math.h>
@@ -68,7 +71,7 @@ int main(int argc, char **argv) {
                   y, ell, p_strip, dy_w};
     static double hat_x[N], hat_y[N], x[NX], tau_x[N], tau_y[N], w[N], work[5 * N + 2 * NX];
     static unsigned char inside[N], slip[N], ins_out[N];
-    long counts[4] = {0, 0, 0, 0};
+    long counts[4] = {0, 0, 0, 0}, advances[5] = {0, 0, 0, 0, 0};
     for (long c = 0; c < calls; c++) {
         const double tau_scale = mu * p0 * (next() % 8 == 0 ? 1e6 : 1.0);
         for (int r = 0; r < N; r++) {
@@ -116,6 +119,32 @@ int main(int argc, char **argv) {
             printf("call %ld: weights code %d\n", c, rw);
             return 1;
         }
+        if (c % 8 == 0) { /* the body on the field: cf_field_advance */
+            static double sx[N], sy[N], swork[CF_FIELD_ADVANCE_WORK(NY, NX)];
+            static unsigned char ss[N], sbytes[CF_FIELD_ADVANCE_BYTES(NY, NX)];
+            for (int r = 0; r < N; r++) {
+                sx[r] = hat_x[r];
+                sy[r] = hat_y[r];
+                ss[r] = (unsigned char)(next() % 2);
+            }
+            const double M = next() % 16 ? 1.0 : pick(1.0), eta = 2.92;
+            cf_field_body b = {M, 0.05, 1.0 / (1.0 + eta), eta / (1.0 + eta),
+                               M * eta / (1.0 + eta), pick(0.002), pick(1.0),
+                               2.0 * mu * p0 * k / a1, 1.0 - 0.5 * sqrt(2.0), 0.5 * sqrt(2.0),
+                               1e-13, 1e-9, 50};
+            cf_field_body_state s = {{pick(V), pick(0.05), 0.0, 0.0}, pick(1.0), {0.0, 0.0, 0.0},
+                                     uniform(), 1.0, sx, sy, ss, {0.0, 0.0, 0.0}, 0, swork,
+                                     sbytes};
+            const double loads[4] = {pick(300.0), pick(300.0), pick(15.0), pick(15.0)};
+            const int ra = cf_field_advance(&g, &b, &s, pick(2e-5), loads, (int)(next() % 4));
+            if (ra < 0 || ra > 4 ||
+                (ra == CF_FIELD_OK && !(finite_all(s.y, 4) && finite_all(s.T, 3) &&
+                                        finite_all(sx, N) && finite_all(sy, N)))) {
+                printf("call %ld: advance code %d\n", c, ra);
+                return 1;
+            }
+            advances[ra]++;
+        }
         double T[3];
         const int rr = cf_field_resultant(&g, x, w, hat_x, hat_y, work, T);
         if (rr < 0 || rr > 3 || (rr == CF_FIELD_OK && !finite_all(T, 3))) {
@@ -131,7 +160,8 @@ int main(int argc, char **argv) {
         printf("NULL accepted\n");
         return 1;
     }
-    printf("ok %ld bad_input %ld range %ld nonfinite %ld\n", counts[0], counts[1], counts[2],
-           counts[3]);
+    printf("ok %ld bad_input %ld range %ld nonfinite %ld advance_ok %ld advance_declined %ld\n",
+           counts[0], counts[1], counts[2], counts[3], advances[0],
+           advances[1] + advances[2] + advances[3] + advances[4]);
     return 0;
 }

@@ -1,5 +1,7 @@
-"""The transient field's compiled stage (contact_fmu/native/field.c) against the Python
-reference it mirrors (transient.LayerField.stage, _weights), and its hostile inputs.
+"""The transient field in C (contact_fmu/native/field.c) against the Python reference it
+mirrors: the field's stage (transient.LayerField.stage, _weights: cf_field_stage,
+cf_field_weights) and the body's steps on it (TransientRollingBody.advance, _step,
+_stage, _solve_scalar: cf_field_advance), and their hostile inputs.
 
 Tolerances. field.c repeats the Python arithmetic in its order and sums as numpy does
 (pairwise); what differs is numpy's z**3 (its own SIMD power) against the C library's
@@ -49,15 +51,16 @@ V = SCENE.config.starts["Vx0"]
 
 def _count(monkeypatch) -> dict[str, int]:
     """Counts the stages served by the C (so that agreement is not with Python itself)."""
-    counts = {"compiled": 0}
-    stage = native_field.CompiledField.stage
+    counts = {"stage": 0, "advance": 0}
+    for name in counts:
+        method = getattr(native_field.CompiledField, name)
 
-    def counted(self, *a, **k):
-        r = stage(self, *a, **k)
-        counts["compiled"] += r is not None
-        return r
+        def counted(self, *a, _m=method, _n=name, **k):
+            r = _m(self, *a, **k)
+            counts[_n] += r is not None
+            return r
 
-    monkeypatch.setattr(native_field.CompiledField, "stage", counted)
+        monkeypatch.setattr(native_field.CompiledField, name, counted)
     return counts
 
 
@@ -94,7 +97,7 @@ def test_fig12_transient_compiled_repeats_the_python_field(monkeypatch, case):
             assert abs(a[key] - b[key]) <= TRAJ_RTOL * scale, (key, a[key], b[key])
         assert a["regime"] == b["regime"]
     assert slow.stepper.field.__dict__.get("_cf") is None  # the reference ran in Python
-    assert counts["compiled"] > 120 * 2 * 2 * 3  # stages of 2 steps of 2 stages, >= 3 each
+    assert counts["advance"] == 120  # each communication step in one C call
 
 
 def _developed_field(law: LayerContact = LAW) -> LayerField:
@@ -282,11 +285,13 @@ def _body(native_on: bool, Vx0: float = V) -> TransientRollingBody:
         ("from standstill", 0.0, 0.5, 60),  # the field at Vx = 0, then rolling
     ],
 )
-def test_bodies_in_sliding_reversal_and_standstill_agree(what, Vx0, Fx, steps):
-    """The body on the field (SDIRK2 with the field's stage) through gross sliding, a
-    reversal of the rolling direction (Vx through 0: the entering material's time from
-    the elapsed time) and a start from standstill: the compiled field within TRAJ_RTOL
-    of mu P of the reference, speeds within TRAJ_RTOL of the slip scale, same regime."""
+def test_bodies_in_sliding_reversal_and_standstill_agree(monkeypatch, what, Vx0, Fx, steps):
+    """The body on the field (SDIRK2 with the field's stage, cf_field_advance) through
+    gross sliding, a reversal of the rolling direction (Vx through 0: the entering
+    material's time from the elapsed time) and a start from standstill: the compiled
+    body within TRAJ_RTOL of mu P of the reference, speeds within TRAJ_RTOL of the slip
+    scale, same regime; every step taken in C."""
+    counts = _count(monkeypatch)
     a, b = _body(True, Vx0), _body(False, Vx0)
     loads = Loads(Fx_ex=Fx * MU_P)
     v_scale = LAW.creep_full_slip * V
@@ -299,6 +304,7 @@ def test_bodies_in_sliding_reversal_and_standstill_agree(what, Vx0, Fx, steps):
             assert abs(oa[key] - ob[key]) <= TRAJ_RTOL * scale, (key, oa[key], ob[key])
         assert oa["regime"] == ob["regime"]
         crossed |= oa["Vx"] < 0.0
+    assert counts["advance"] == steps  # every step of a in C
     if what == "reversal":
         assert crossed
     if what == "gross sliding":

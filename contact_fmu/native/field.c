@@ -345,3 +345,184 @@ int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stag
     if (!(isfinite(out->dTx_dvx) && all_finite(out->J, 9))) return CF_FIELD_NONFINITE;
     return CF_FIELD_OK;
 }
+
+/* ---- TransientRollingBody.advance, scalar path ---------------------------------------- */
+
+/* One SDIRK2 stage's problem (TransientRollingBody._stage for the unknown vx): the
+ * stage's field inputs and the body's numbers around them. */
+typedef struct {
+    const cf_field *f;
+    const cf_field_body *b;
+    double y_hat[4];
+    double Vx_base, u_hat, target, m_h, ds0, elapsed, hg;
+    cf_field_stage_in in;
+    cf_field_stage_out *out;
+    double yy[4]; /* the state at the last evaluation */
+} stage_problem;
+
+/* state(u) and evaluate(u): the stage's field at vx = u; r, d: the residual and its
+ * derivative (m_h + dTx/dvx) */
+static int evaluate(stage_problem *sp, double u, double *r, double *d) {
+    const cf_field_body *b = sp->b;
+    double *yy = sp->yy;
+    yy[0] = sp->Vx_base + (b->m_slip / b->M) * (u - sp->u_hat);
+    yy[1] = u;
+    yy[2] = b->ry * yy[0];
+    yy[3] = b->rz * yy[0];
+    sp->in.ds = sp->ds0 + sp->hg * yy[0];
+    sp->in.vx = yy[1];
+    sp->in.vy = yy[2];
+    sp->in.phi = yy[3];
+    sp->in.Vx = yy[0];
+    const int rc = cf_field_stage(sp->f, &sp->in, sp->out);
+    if (rc != CF_FIELD_OK) return rc;
+    *r = sp->m_h * (u - sp->u_hat) + sp->out->T[0] - sp->target;
+    *d = sp->m_h + sp->out->dTx_dvx;
+    return isfinite(*r) && isfinite(*d) ? CF_FIELD_OK : CF_FIELD_NONFINITE;
+}
+
+/* TransientRollingBody._solve_scalar: Newton's method with the field's tangent inside
+ * the bracket its iterates build; the stage's field is left at the root's evaluation */
+static int solve_scalar(stage_problem *sp, double scale) {
+    double lo = -INFINITY, hi = INFINITY, u = sp->u_hat, r, d;
+    int rc = evaluate(sp, u, &r, &d);
+    if (rc != CF_FIELD_OK) return rc;
+    for (int it = 0; it < sp->b->max_iterations; it++) {
+        if (r == 0.0) return CF_FIELD_OK;
+        if (r > 0.0)
+            hi = u;
+        else
+            lo = u;
+        const double step = d > 0.0 ? -r / d : copysign(scale, -r);
+        const double tol = sp->b->solve_rtol * (scale + fabs(u));
+        if (fabs(step) <= tol) return CF_FIELD_OK;
+        double un = u + step;
+        const int bracketed = isfinite(lo) && isfinite(hi);
+        if (!(lo < un && un < hi)) un = bracketed ? 0.5 * (lo + hi) : u + 4.0 * step;
+        if (bracketed && hi - lo <= tol) return CF_FIELD_OK;
+        u = un;
+        rc = evaluate(sp, u, &r, &d);
+        if (rc != CF_FIELD_OK) return rc;
+    }
+    return CF_FIELD_NO_ROOT;
+}
+
+/* TransientRollingBody._stage for the scalar path: the stage problem from y_hat */
+static int stage_solve(stage_problem *sp, const double y_hat[4], const double *L, double hg,
+                       double ds0, double elapsed) {
+    const cf_field_body *b = sp->b;
+    for (int i = 0; i < 4; i++) sp->y_hat[i] = y_hat[i];
+    sp->target = b->A2 * L[0] - b->A1 * L[2] / b->Rx;
+    sp->Vx_base = y_hat[0] + hg * b->A1 * (L[0] + L[2] / b->Rx) / b->M;
+    sp->u_hat = y_hat[1];
+    sp->m_h = b->m_slip / hg;
+    sp->hg = hg;
+    sp->ds0 = ds0;
+    sp->in.elapsed = elapsed;
+    sp->in.h_own = hg;
+    const double vscale = b->creep_full_slip * np_max(fabs(sp->Vx_base), b->v_scale_floor);
+    return solve_scalar(sp, vscale);
+}
+
+/* TransientRollingBody._step: one SDIRK2 step of h (Alexander's: c = (gamma, 1)) */
+static int sdirk_step(const cf_field *f, const cf_field_body *b, cf_field_body_state *s,
+                      double h, const double *L) {
+    const int nx = f->nx, ny = f->ny;
+    const size_t n = (size_t)nx * (size_t)ny;
+    double *hat_x = s->work, *hat_y = hat_x + n, *x = hat_y + n, *tx = x + nx, *ty = tx + n;
+    double *w = ty + n, *work = w + n;
+    unsigned char *inside = s->bytes, *slip = inside + n, *ins = slip + n;
+    cf_field_stage_out out = {0.0, 0, x, tx, ty, w, slip, ins, work, {0.0, 0.0, 0.0}, 0.0, {0.0}};
+    const double hg = h * b->gamma;
+    /* begin: the base of the step */
+    for (int i = 0; i < ny; i++)
+        for (int j = 0; j < nx; j++)
+            inside[(size_t)i * (size_t)nx + (size_t)j] =
+                fabs(-f->X + ((double)j + s->theta) * f->dx) < f->ell[i];
+    stage_problem sp;
+    sp.f = f;
+    sp.b = b;
+    sp.out = &out;
+    sp.in.theta = s->theta;
+    sp.in.inside = inside;
+    sp.in.hat_x = s->tau_x;
+    sp.in.hat_y = s->tau_y;
+    sp.in.midpath = 0;
+    sp.in.jacobian = 0;
+    const double y_n[4] = {s->y[0], s->y[1], s->y[2], s->y[3]};
+    int rc = stage_solve(&sp, y_n, L, hg, 0.0, hg);
+    if (rc != CF_FIELD_OK) return rc;
+    double y1[4], y_hat[4];
+    for (int i = 0; i < 4; i++) {
+        y1[i] = sp.yy[i];
+        const double k1 = (y1[i] - y_n[i]) / hg;
+        y_hat[i] = y_n[i] + h * b->a21 * k1;
+    }
+    const double T1[3] = {out.T[0], out.T[1], out.T[2]};
+    /* to_base: stage 1's field in base indexing; tau_hat = tau_n + c (b1 - tau_n) */
+    const double c = b->a21 / b->gamma;
+    for (int i = 0; i < ny; i++)
+        for (int j = 0; j < nx; j++) {
+            const size_t r = (size_t)i * (size_t)nx + (size_t)j;
+            double b1x = s->tau_x[r], b1y = s->tau_y[r];
+            if (inside[r]) {
+                const long long idx = (long long)j + out.shift;
+                const int valid = idx >= 0 && idx < nx;
+                b1x = valid ? tx[(size_t)i * (size_t)nx + (size_t)idx] : 0.0;
+                b1y = valid ? ty[(size_t)i * (size_t)nx + (size_t)idx] : 0.0;
+            }
+            hat_x[r] = s->tau_x[r] + c * (b1x - s->tau_x[r]);
+            hat_y[r] = s->tau_y[r] + c * (b1y - s->tau_y[r]);
+        }
+    const double ds1 = h * b->a21 * y1[0];
+    sp.in.hat_x = hat_x;
+    sp.in.hat_y = hat_y;
+    rc = stage_solve(&sp, y_hat, L, hg, ds1, h);
+    if (rc != CF_FIELD_OK) return rc;
+    /* stiffly accurate: the last stage is the step's result; commit its field */
+    for (int i = 0; i < 4; i++) s->y[i] = sp.yy[i];
+    s->theta = out.theta;
+    s->direction = sp.in.ds > 0.0 ? 1.0 : (sp.in.ds < 0.0 ? -1.0 : 0.0);
+    int any_inside = 0, any_adhesion = 0;
+    for (size_t r = 0; r < n; r++) {
+        s->tau_x[r] = tx[r];
+        s->tau_y[r] = ty[r];
+        s->slip[r] = slip[r];
+        any_inside |= ins[r];
+        any_adhesion |= ins[r] && !slip[r];
+    }
+    for (int i = 0; i < 3; i++) {
+        s->impulse[i] += h * (b->a21 * T1[i] + b->gamma * out.T[i]);
+        s->T[i] = out.T[i];
+    }
+    s->sliding = any_inside && !any_adhesion;
+    return CF_FIELD_OK;
+}
+
+int cf_field_advance(const cf_field *f, const cf_field_body *b, cf_field_body_state *s,
+                     double h, const double loads[4], int substeps) {
+    if (!field_ok(f) || b == NULL || s == NULL || loads == NULL || s->tau_x == NULL ||
+        s->tau_y == NULL || s->slip == NULL || s->work == NULL || s->bytes == NULL)
+        return CF_FIELD_BAD_INPUT;
+    const double numbers[] = {b->M,    b->Rx,        b->A1,    b->A2,         b->m_slip,
+                              b->ry,   b->rz,        b->gamma, b->a21,        b->creep_full_slip,
+                              b->solve_rtol, b->v_scale_floor, h, s->t, s->theta,
+                              loads[0], loads[1], loads[2], loads[3]};
+    if (!all_finite(numbers, sizeof numbers / sizeof numbers[0]) || !all_finite(s->y, 4) ||
+        !all_finite(s->impulse, 3))
+        return CF_FIELD_BAD_INPUT;
+    if (!(b->M > 0.0 && b->Rx > 0.0 && b->gamma > 0.0 && h > 0.0 && substeps >= 1 &&
+          b->max_iterations >= 1))
+        return CF_FIELD_BAD_INPUT;
+    const double dt = h / substeps, t0 = s->t;
+    for (int k = 0; k < substeps; k++) {
+        const double t_n = t0 + k * dt;
+        const int rc = sdirk_step(f, b, s, dt, loads);
+        if (rc != CF_FIELD_OK) return rc;
+        s->t = t_n + dt;
+    }
+    s->t = t0 + h;
+    return all_finite(s->y, 4) && all_finite(s->impulse, 3) && all_finite(s->T, 3)
+               ? CF_FIELD_OK
+               : CF_FIELD_NONFINITE;
+}

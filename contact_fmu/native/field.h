@@ -17,7 +17,8 @@ enum {
                                non-positive constant, a non-finite stage input */
     CF_FIELD_RANGE = 2,     /* the stage moves the lattice by more than CF_FIELD_SHIFT_MAX
                                columns (its index would not fit): Python's integers do */
-    CF_FIELD_NONFINITE = 3  /* a result overflowed (a huge finite input): not served */
+    CF_FIELD_NONFINITE = 3, /* a result overflowed (a huge finite input): not served */
+    CF_FIELD_NO_ROOT = 4    /* a stage equation without a root (StageSolveError) */
 };
 
 /* Largest |shift| (columns) a stage may move the lattice by: far beyond any grid (a
@@ -76,5 +77,41 @@ CF_HIDDEN int cf_field_weights(const cf_field *f, const double *x, const unsigne
 CF_HIDDEN int cf_field_resultant(const cf_field *f, const double *x, const double *w,
                                  const double *tau_x, const double *tau_y, double *work,
                                  double T[3]);
+
+
+/* ---- the body on the field: TransientRollingBody.advance, scalar path ----------------- */
+/* The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and
+ * Omega_z held at the ratios ry, rz to Vx (Lateral). Body: M (kg), Rx (m), A1, A2,
+ * m_slip = M A2 (kg); the law's creep_full_slip; SDIRK2's gamma and a21 = 1 - gamma;
+ * transient.SOLVE_RTOL, V_SCALE_FLOOR (m/s), MAX_STAGE_ITERATIONS. */
+typedef struct {
+    double M, Rx, A1, A2, m_slip, ry, rz, creep_full_slip, gamma, a21;
+    double solve_rtol, v_scale_floor;
+    int max_iterations;
+} cf_field_body;
+
+/* Scratch of cf_field_advance: doubles and bytes for an ny x nx field. */
+#define CF_FIELD_ADVANCE_WORK(ny, nx) (10 * (size_t)(ny) * (size_t)(nx) + 3 * (size_t)(nx))
+#define CF_FIELD_ADVANCE_BYTES(ny, nx) (3 * (size_t)(ny) * (size_t)(nx))
+
+/* The state: y = (Vx, vx, Vy, Omega_z), t (s), the contact impulse (N s, N s, N m s),
+ * the field (theta, direction, tau_x, tau_y, slip: ny x nx, advanced in place), and the
+ * contact at the end of the last step (T = (Tx, Ty, Mz), sliding: no adhesion). */
+typedef struct {
+    double y[4], t, impulse[3];
+    double theta, direction;
+    double *tau_x, *tau_y;
+    unsigned char *slip;
+    double T[3];
+    int sliding;
+    double *work;         /* CF_FIELD_ADVANCE_WORK(ny, nx) doubles */
+    unsigned char *bytes; /* CF_FIELD_ADVANCE_BYTES(ny, nx) */
+} cf_field_body_state;
+
+/* TransientRollingBody.advance(h, loads, substeps) under held loads (Fx_ex, Fy_ex,
+ * My_ex, Mz_ex): substeps SDIRK2 steps of h/substeps. Anything but CF_FIELD_OK leaves
+ * the state partly advanced: the caller restores it and takes the Python path. */
+CF_HIDDEN int cf_field_advance(const cf_field *f, const cf_field_body *b, cf_field_body_state *s,
+                               double h, const double loads[4], int substeps);
 
 #endif

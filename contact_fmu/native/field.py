@@ -52,6 +52,25 @@ class StageOut(ctypes.Structure):
     ] + [("T", _D * 3), ("dTx_dvx", _D), ("J", _D * 9)]  # fmt: skip
 
 
+class Body(ctypes.Structure):
+    """field.h's cf_field_body: the body of a TransientRollingBody's scalar path."""
+
+    _fields_ = [
+        (n, _D)
+        for n in ("M", "Rx", "A1", "A2", "m_slip", "ry", "rz", "creep_full_slip", "gamma",
+                  "a21", "solve_rtol", "v_scale_floor")
+    ] + [("max_iterations", ctypes.c_int)]  # fmt: skip
+
+
+class BodyState(ctypes.Structure):
+    """field.h's cf_field_body_state: the body's and the field's state, and scratch."""
+
+    _fields_ = [("y", _D * 4), ("t", _D), ("impulse", _D * 3), ("theta", _D),
+                ("direction", _D), ("tau_x", _P), ("tau_y", _P), ("slip", _P),
+                ("T", _D * 3), ("sliding", ctypes.c_int), ("work", _P),
+                ("bytes", _P)]  # fmt: skip
+
+
 def library() -> Any:
     """The kernel library with field.c's functions typed, or None (no library, or one
     without them)."""
@@ -67,6 +86,11 @@ def library() -> Any:
         lib.cf_field_weights.restype = ctypes.c_int
         lib.cf_field_resultant.argtypes = [ctypes.POINTER(Field), _P, _P, _P, _P, _P, _P]
         lib.cf_field_resultant.restype = ctypes.c_int
+        lib.cf_field_advance.argtypes = [
+            ctypes.POINTER(Field), ctypes.POINTER(Body), ctypes.POINTER(BodyState), _D, _P,
+            ctypes.c_int,
+        ]  # fmt: skip
+        lib.cf_field_advance.restype = ctypes.c_int
     return lib
 
 
@@ -96,6 +120,12 @@ class CompiledField:
         self.sout_ref = ctypes.byref(self.sout)
         self.struct_ref = ctypes.byref(self.struct)
         self.sout.work = _ptr(self.work)
+        n = f.ny * f.nx
+        self.step_work = np.empty(10 * n + 3 * f.nx)  # field.h: CF_FIELD_ADVANCE_WORK
+        self.step_bytes = np.empty(3 * n, np.uint8)
+        self.body, self.state = Body(), BodyState()
+        self.loads = (_D * 4)()
+        self.state.work, self.state.bytes = _ptr(self.step_work), _ptr(self.step_bytes)
 
     def matches(self, f: Any) -> bool:
         """Whether this was built for f's present law, strips and lattice."""
@@ -167,3 +197,49 @@ class CompiledField:
         rc = self.lib.cf_field_weights(self.struct_ref, _ptr(x), _ptr(inside), *ptrs,
                                        float(sign), _ptr(w), _ptr(self.work))  # fmt: skip
         return w if rc == OK else None
+
+    def advance(
+        self,
+        body: dict[str, float],
+        y: np.ndarray,
+        t: float,
+        impulse: np.ndarray,
+        field: tuple[float, np.ndarray, np.ndarray, np.ndarray],
+        h: float,
+        loads: tuple[float, float, float, float],
+        substeps: int,
+    ) -> tuple | None:
+        """cf_field_advance: TransientRollingBody.advance on its scalar path. body: the
+        fields of ``Body``; field: (theta, tau_x, tau_y, slip) at the start. Returns (y,
+        t, impulse, (theta, direction, tau_x, tau_y, slip), T, sliding), new arrays, or
+        None where the C declines (the caller's state is untouched either way)."""
+        ny, nx = self.shape
+        theta, tau_x, tau_y, slip = field
+        if any(np.shape(a) != (ny, nx) for a in (tau_x, tau_y, slip)):
+            return None
+        b = self.body
+        for k, v in body.items():
+            setattr(b, k, v)
+        st = self.state
+        st.y[:] = [float(v) for v in y]
+        st.t = t
+        st.impulse[:] = [float(v) for v in impulse]
+        st.theta = theta
+        tx, ty = np.array(tau_x, float, order="C"), np.array(tau_y, float, order="C")
+        sl = np.array(slip, np.bool_, order="C")
+        st.tau_x, st.tau_y, st.slip = _ptr(tx), _ptr(ty), _ptr(sl)
+        self.loads[:] = [float(v) for v in loads]
+        rc = self.lib.cf_field_advance(self.struct_ref, ctypes.byref(b), ctypes.byref(st), h,
+                                       ctypes.addressof(self.loads), substeps)  # fmt: skip
+        st.tau_x = st.tau_y = st.slip = None
+        if rc != OK:
+            return None
+        fstate = (st.theta, st.direction, tx, ty, sl)
+        return (
+            np.array(st.y[:]),
+            st.t,
+            np.array(st.impulse[:]),
+            fstate,
+            tuple(st.T[:]),
+            bool(st.sliding),
+        )
