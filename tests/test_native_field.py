@@ -419,3 +419,23 @@ def test_sanitized_driver_runs_random_and_extreme_inputs_cleanly(tmp_path):
         for k, v in zip(words[::2], words[1::2], strict=True):
             totals[k] = totals.get(k, 0) + int(v)
     assert totals["ok"] > 3000 and min(totals.values()) > 50, totals
+
+
+def test_the_transient_fmu_carries_the_field_in_its_compiled_library(tmp_path):
+    """The pythonfmu FMU of fig12_transient vendors field.c, field.h and the binding with
+    the kernel library, and that library (built from stepper.c and field.c) has the
+    field's functions: inside the FMU the field steps compiled."""
+    import zipfile
+
+    import fmu_build
+
+    path = fmu_build.build(SCENE.config, ROOT / "out" / "fmu").path
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+        native_files = {n.rsplit("/native/", 1)[1] for n in names if "/native/" in n}
+        assert {"field.c", "field.h", "field.py", native.library_name()} <= native_files
+        lib = z.read(next(n for n in names if n.endswith("/native/" + native.library_name())))
+    copy = tmp_path / native.library_name()
+    copy.write_bytes(lib)
+    loaded = ctypes.CDLL(str(copy))
+    assert all(hasattr(loaded, f) for f in ("cf_field_stage", "cf_field_advance"))
