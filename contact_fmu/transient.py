@@ -201,7 +201,7 @@ class LayerField:
 
     def _compiled(self) -> native_field.CompiledField | None:
         """field.c for this grid and law, or None (``native`` off, or no library)."""
-        if not self.native:
+        if not getattr(self, "native", True):  # (absent in a field pickled before it)
             return None
         c = self.__dict__.get("_cf")
         if c is not None and c.matches(self):

@@ -69,7 +69,7 @@ int main(int argc, char **argv) {
     }
     cf_field f = {NY, NX, 2.0 * a1 / NX, a1, a1, p0, mu, k, mu * p0 / (a1 * a1), 0.1,
                   y, ell, p_strip, dy_w};
-    static double hat_x[N], hat_y[N], x[NX], tau_x[N], tau_y[N], w[N], work[5 * N + 2 * NX];
+    static double hat_x[N], hat_y[N], x[NX], tau_x[N], tau_y[N], w[N], work[5 * N + 3 * NX];
     static unsigned char inside[N], slip[N], ins_out[N];
     long counts[4] = {0, 0, 0, 0}, advances[5] = {0, 0, 0, 0, 0};
     for (long c = 0; c < calls; c++) {

@@ -87,10 +87,10 @@ static int field_ok(const cf_field *f) {
 }
 
 /* The weights of one strip i (LayerField._weights, its passes in its order). m: |tau|
- * of the row, or NULL for area weights; cap_at: scratch of nx doubles. */
+ * of the row, or NULL for area weights; cap_at, inv: scratch of nx doubles each. */
 static void row_weights(const cf_field *f, int i, const double *x, const unsigned char *in,
                         const double *m, const unsigned char *sl_raw, double sign, double *w,
-                        double *cap_at) {
+                        double *cap_at, double *inv) {
     const int nx = f->nx;
     const double dx = f->dx, ell = f->ell[i];
     int j_lo = -1, j_hi = -1;
@@ -117,7 +117,8 @@ static void row_weights(const cf_field *f, int i, const double *x, const unsigne
 #define SL(j) (sl_raw != NULL && sl_raw[j] && in[j])
 #define ADH(j) (in[j] && !SL(j))
 #define PAIR(j) (in[j] && in[(j) + 1])
-#define INV(j) (m[j] > 0.0 ? 1.0 / m[j] : 0.0)
+#define INV(j) inv[j]
+    for (int j = 0; j < nx; j++) inv[j] = m[j] > 0.0 ? 1.0 / m[j] : 0.0;
     /* A-A: trapezoid */
     for (int j = 0; j + 1 < nx; j++)
         if (PAIR(j) && !SL(j) && !SL(j + 1)) w[j] += 0.5 * dx;
@@ -187,9 +188,12 @@ static int weights(const cf_field *f, const double *x, const unsigned char *insi
     for (int i = 0; i < f->ny; i++) {
         const size_t r = (size_t)i * nx;
         if (tau_x != NULL)
-            for (size_t j = 0; j < nx; j++) m[j] = hypot(tau_x[r + j], tau_y[r + j]);
+            for (size_t j = 0; j < nx; j++) { /* hypot(+-0, +-0) = +0: no call for it */
+                const double a = tau_x[r + j], b = tau_y[r + j];
+                m[j] = a == 0.0 && b == 0.0 ? 0.0 : hypot(a, b);
+            }
         row_weights(f, i, x, inside + r, tau_x != NULL ? m : NULL,
-                    slip != NULL ? slip + r : NULL, sign, w + r, m + nx);
+                    slip != NULL ? slip + r : NULL, sign, w + r, m + nx, m + 2 * nx);
     }
     return all_finite(w, nx * (size_t)f->ny) ? CF_FIELD_OK : CF_FIELD_NONFINITE;
 }
@@ -217,9 +221,11 @@ int cf_field_resultant(const cf_field *f, const double *x, const double *w,
     T[0] = pairwise_sum(work, n);
     for (size_t k = 0; k < n; k++) work[k] = w[k] * tau_y[k];
     T[1] = pairwise_sum(work, n);
-    for (size_t k = 0; k < n; k++) work[k] = (w[k] * x[k % nx]) * tau_y[k];
+    for (size_t i = 0; i < ny; i++)
+        for (size_t j = 0, k = i * nx; j < nx; j++, k++) work[k] = (w[k] * x[j]) * tau_y[k];
     double a = pairwise_sum(work, n);
-    for (size_t k = 0; k < n; k++) work[k] = (w[k] * f->y[k / nx]) * tau_x[k];
+    for (size_t i = 0; i < ny; i++)
+        for (size_t j = 0, k = i * nx; j < nx; j++, k++) work[k] = (w[k] * f->y[i]) * tau_x[k];
     T[2] = a - pairwise_sum(work, n);
     return all_finite(T, 3) ? CF_FIELD_OK : CF_FIELD_NONFINITE;
 }
@@ -263,6 +269,12 @@ int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stag
             any_entered |= out->inside[r] && !was;
         }
     const int timed = ds != 0.0 && any_entered;
+    double *p_col = prod; /* p0 (x/a1)^2 by column (prod is free until the weights) */
+    for (int j = 0; j < nx; j++) {
+        const double xa = x[j] / f->a1;
+        p_col[j] = f->p0 * (xa * xa);
+    }
+    const double own_k = in->h_own / k;
     const int by_speed = fabs(in->Vx) * in->elapsed > f->min_speed_fraction * fabs(ds);
     for (int i = 0; i < ny; i++) {
         const double rvx = in->vx - phi * f->y[i];
@@ -273,8 +285,7 @@ int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stag
             const size_t rs = valid ? (size_t)i * (size_t)nx + (size_t)src : 0;
             const int inside = out->inside[r];
             const int entered = inside && !(valid && in->inside[rs]);
-            const double xa = x[j] / f->a1;
-            const double p = f->p_strip[i] - f->p0 * (xa * xa);
+            const double p = f->p_strip[i] - p_col[j];
             const double cap = f->mu * (inside ? np_max(p, 0.0) : 0.0);
             const double d_in = f->ell[i] - sgn * x[j]; /* distance from the leading edge */
             double rvy;
@@ -294,8 +305,18 @@ int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stag
                 hx = 0.0;
                 hy = 0.0;
             }
-            double tx = hx + rvx * (t_eff / k);
-            double ty = hy + rvy * (t_eff / k);
+            const double tk = t_eff == in->h_own ? own_k : t_eff / k;
+            double tx = hx + rvx * tk;
+            double ty = hy + rvy * tk;
+            g[r] = t_eff; /* until the weights are known */
+            if (!inside) { /* cap 0: any trial slips to 0; no weight, so no tangent */
+                const int slip = tx != 0.0 || ty != 0.0; /* hypot > 0 */
+                out->tau_x[r] = slip ? tx * 0.0 : tx;
+                out->tau_y[r] = slip ? ty * 0.0 : ty;
+                out->slip[r] = (unsigned char)slip;
+                Dxx[r] = Dxy[r] = Dyy[r] = 0.0;
+                continue;
+            }
             const double mag = hypot(tx, ty);
             const int slip = mag > cap;
             /* the radial return onto |tau| <= mu p and its tangent (cap/|t|)(I - n n^T) */
@@ -304,7 +325,6 @@ int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stag
             Dxx[r] = fct * (1.0 - nxn * nxn);
             Dxy[r] = -fct * nxn * nyn;
             Dyy[r] = fct * (1.0 - nyn * nyn);
-            g[r] = t_eff; /* until the weights are known */
             out->tau_x[r] = tx * fct;
             out->tau_y[r] = ty * fct;
             out->slip[r] = (unsigned char)slip;
@@ -325,7 +345,8 @@ int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stag
         for (int c = 0; c < 3; c++)
             for (int row = 0; row < 3; row++) {
                 for (size_t r = 0; r < n; r++) {
-                    const double X = x[r % (size_t)nx], Y = f->y[r / (size_t)nx];
+                    const size_t i = r / (size_t)nx;
+                    const double X = x[r - i * (size_t)nx], Y = f->y[i];
                     double cx, cy;
                     if (c == 0) {
                         cx = Dxx[r];

@@ -51,7 +51,7 @@ typedef struct {
 /* A stage's results (StageField): theta and shift, column positions x (nx), traction,
  * weights (ny x nx), the slip (slip & inside) and inside masks (bytes 0/1), the
  * resultant T = (Tx, Ty, Mz), dTx/dvx and (with jacobian) J = d(Tx, Ty, Mz)/d(vx, vy,
- * Omega_z), 3 x 3 row major. work: scratch of 5 ny nx + 2 nx doubles. */
+ * Omega_z), 3 x 3 row major. work: scratch of 5 ny nx + 3 nx doubles. */
 typedef struct {
     double theta;
     long long shift;
@@ -67,7 +67,7 @@ CF_HIDDEN int cf_field_stage(const cf_field *f, const cf_field_stage_in *in,
                              cf_field_stage_out *out);
 /* LayerField._weights: w (ny x nx) at positions x (nx) for the masks inside and slip and
  * the traction (tau_x, tau_y), the leading edge by sign (> 0: +l, < 0: -l, 0: none);
- * tau_x = tau_y = slip = NULL: area weights. work: scratch of 2 nx doubles. */
+ * tau_x = tau_y = slip = NULL: area weights. work: scratch of 3 nx doubles. */
 CF_HIDDEN int cf_field_weights(const cf_field *f, const double *x, const unsigned char *inside,
                                const double *tau_x, const double *tau_y,
                                const unsigned char *slip, double sign, double *w,
@@ -91,7 +91,7 @@ typedef struct {
 } cf_field_body;
 
 /* Scratch of cf_field_advance: doubles and bytes for an ny x nx field. */
-#define CF_FIELD_ADVANCE_WORK(ny, nx) (10 * (size_t)(ny) * (size_t)(nx) + 3 * (size_t)(nx))
+#define CF_FIELD_ADVANCE_WORK(ny, nx) (10 * (size_t)(ny) * (size_t)(nx) + 4 * (size_t)(nx))
 #define CF_FIELD_ADVANCE_BYTES(ny, nx) (3 * (size_t)(ny) * (size_t)(nx))
 
 /* The state: y = (Vx, vx, Vy, Omega_z), t (s), the contact impulse (N s, N s, N m s),

@@ -114,14 +114,14 @@ class CompiledField:
         self.struct = Field(f.ny, f.nx, f.dx, f.X, law.a1, law.p0, law.mu, law.k, c0,
                             min_speed_fraction, *(_ptr(a) for a in self.arrays))  # fmt: skip
         self.shape = (f.ny, f.nx)
-        self.work = np.empty(5 * f.ny * f.nx + 2 * f.nx)
+        self.work = np.empty(5 * f.ny * f.nx + 3 * f.nx)
         self.sin, self.sout = StageIn(), StageOut()
         self.sin_ref = ctypes.byref(self.sin)
         self.sout_ref = ctypes.byref(self.sout)
         self.struct_ref = ctypes.byref(self.struct)
         self.sout.work = _ptr(self.work)
         n = f.ny * f.nx
-        self.step_work = np.empty(10 * n + 3 * f.nx)  # field.h: CF_FIELD_ADVANCE_WORK
+        self.step_work = np.empty(10 * n + 4 * f.nx)  # field.h: CF_FIELD_ADVANCE_WORK
         self.step_bytes = np.empty(3 * n, np.uint8)
         self.body, self.state = Body(), BodyState()
         self.loads = (_D * 4)()
