@@ -143,8 +143,8 @@ def report(stages: dict, steps: dict, args: argparse.Namespace) -> str:
         " internal step is two stage solves of 3-5 field stages each, all in C on the"
         " compiled path (the stage rows include the binding's cost, the internal step"
         " does not pay it per stage). The communication step adds to its two internal"
-        " steps the outputs, whose field summary (weights and areas, compiled) runs from"
-        " Python.",
+        " steps the outputs (the field's summary compiled too: cf_field_summary) and the"
+        " range check, in Python around one C call each.",
     ]
     return "\n".join(lines) + "\n"
 

@@ -603,8 +603,15 @@ class LayerField:
         """Adhesion fraction (-), slip-area centroid (m; 0 without slip) and peak |tau| (Pa).
 
         Areas are measured with the quadrature weights: adhesion = sum of the weights
-        of non-slipping nodes / sum over the contact.
+        of non-slipping nodes / sum over the contact. Compiled where the library is
+        (field.c, cf_field_summary).
         """
+        c = self._compiled()
+        if c is not None:
+            r = c.summary(self.theta, self.tau_x, self.tau_y, self.slip)
+            if r is not None:
+                keys = ("adhesion", "slip_centroid_x", "slip_centroid_y", "tau_peak")
+                return dict(zip(keys, r, strict=True))
         st = self.current()
         w = self._weights(st.x, st.inside, None, None, 0.0)  # areas
         total = float(np.sum(w))

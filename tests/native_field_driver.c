@@ -145,6 +145,13 @@ int main(int argc, char **argv) {
             }
             advances[ra]++;
         }
+        double S[4];
+        const int rs = cf_field_summary(&g, next() % 16 ? uniform() : pick(1.0), hat_x, hat_y,
+                                        slip, S, work, ins_out);
+        if (rs < 0 || rs > 3 || (rs == CF_FIELD_OK && !finite_all(S, 4))) {
+            printf("call %ld: summary code %d\n", c, rs);
+            return 1;
+        }
         double T[3];
         const int rr = cf_field_resultant(&g, x, w, hat_x, hat_y, work, T);
         if (rr < 0 || rr > 3 || (rr == CF_FIELD_OK && !finite_all(T, 3))) {

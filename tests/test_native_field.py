@@ -199,8 +199,9 @@ def test_stage_agrees_with_the_python_stage_over_hostile_stages(change):
 
 def test_weights_of_the_field_at_rest_agree():
     """LayerField.current and summary (the FMU's outputs each step): the compiled
-    weights and area weights equal the Python ones to rounding, after rolling either
-    way."""
+    weights, area weights and summary (cf_field_summary: adhesion fraction, slip-area
+    centroid, peak traction; sums of the same weights) equal the Python ones to
+    rounding, after rolling either way."""
     for direction in (1.0, -1.0):
         f = _developed_field()
         f.roll(2.5 * f.dx / V, 0.3 * LAW.creep_full_slip * V, 0.0, direction * V)
@@ -217,7 +218,10 @@ def test_weights_of_the_field_at_rest_agree():
         f.native = False
         s_p = f.summary()
         assert abs(s_c["adhesion"] - s_p["adhesion"]) <= 1e-12
-        assert abs(s_c["slip_centroid_x"] - s_p["slip_centroid_x"]) <= 1e-12 * LAW.a1
+        for key in ("slip_centroid_x", "slip_centroid_y"):
+            assert abs(s_c[key] - s_p[key]) <= 1e-12 * LAW.a1
+        assert abs(s_c["tau_peak"] - s_p["tau_peak"]) <= STAGE_RTOL * LAW.mu * LAW.p0
+        assert 0.0 < s_c["adhesion"] < 1.0 and s_c["tau_peak"] > 0.0  # slip and adhesion
 
 
 def _stage_rc(f: LayerField, base, ds: float, vx: float) -> int:

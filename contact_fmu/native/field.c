@@ -549,3 +549,41 @@ int cf_field_advance(const cf_field *f, const cf_field_body *b, cf_field_body_st
                ? CF_FIELD_OK
                : CF_FIELD_NONFINITE;
 }
+
+int cf_field_summary(const cf_field *f, double theta, const double *tau_x, const double *tau_y,
+                     const unsigned char *slip, double out[4], double *work,
+                     unsigned char *bytes) {
+    if (!field_ok(f) || tau_x == NULL || tau_y == NULL || slip == NULL || out == NULL ||
+        work == NULL || bytes == NULL || !isfinite(theta))
+        return CF_FIELD_BAD_INPUT;
+    const size_t nx = (size_t)f->nx, ny = (size_t)f->ny, n = nx * ny;
+    if (!(all_finite(tau_x, n) && all_finite(tau_y, n))) return CF_FIELD_BAD_INPUT;
+    /* current(): positions and the inside mask; then the area weights w */
+    double *w = work, *prod = w + n, *x = prod + n;
+    for (size_t j = 0; j < nx; j++) x[j] = -f->X + ((double)j + theta) * f->dx;
+    for (size_t i = 0; i < ny; i++)
+        for (size_t j = 0; j < nx; j++) bytes[i * nx + j] = fabs(x[j]) < f->ell[i];
+    const int rc = weights(f, x, bytes, NULL, NULL, NULL, 0.0, w, x + nx);
+    if (rc != CF_FIELD_OK) return rc;
+    const double total = pairwise_sum(w, n);
+    for (size_t k = 0; k < n; k++) w[k] = slip[k] ? w[k] : 0.0; /* ws: the slip area's */
+    const double slip_area = pairwise_sum(w, n);
+    double cx = 0.0, cy = 0.0, peak = 0.0;
+    for (size_t k = 0; k < n; k++) {
+        const double m = hypot(tau_x[k], tau_y[k]);
+        peak = m > peak ? m : peak;
+    }
+    if (slip_area > 0.0) {
+        for (size_t i = 0; i < ny; i++)
+            for (size_t j = 0; j < nx; j++) prod[i * nx + j] = w[i * nx + j] * x[j];
+        cx = pairwise_sum(prod, n) / slip_area;
+        for (size_t i = 0; i < ny; i++)
+            for (size_t j = 0; j < nx; j++) prod[i * nx + j] = w[i * nx + j] * f->y[i];
+        cy = pairwise_sum(prod, n) / slip_area;
+    }
+    out[0] = total > 0.0 ? (total - slip_area) / total : 0.0;
+    out[1] = cx;
+    out[2] = cy;
+    out[3] = peak;
+    return all_finite(out, 4) ? CF_FIELD_OK : CF_FIELD_NONFINITE;
+}

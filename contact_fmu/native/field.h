@@ -78,6 +78,12 @@ CF_HIDDEN int cf_field_resultant(const cf_field *f, const double *x, const doubl
                                  const double *tau_x, const double *tau_y, double *work,
                                  double T[3]);
 
+/* LayerField.summary of the field at rest at theta (tau_x, tau_y, slip: ny x nx):
+ * out = (adhesion fraction, slip-area centroid x, y (m), peak |tau| (Pa)); work:
+ * scratch of 2 ny nx + 4 nx doubles, bytes: of ny nx. */
+CF_HIDDEN int cf_field_summary(const cf_field *f, double theta, const double *tau_x,
+                               const double *tau_y, const unsigned char *slip, double out[4],
+                               double *work, unsigned char *bytes);
 
 /* ---- the body on the field: TransientRollingBody.advance, scalar path ----------------- */
 /* The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and

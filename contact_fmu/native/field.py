@@ -91,6 +91,8 @@ def library() -> Any:
             ctypes.c_int,
         ]  # fmt: skip
         lib.cf_field_advance.restype = ctypes.c_int
+        lib.cf_field_summary.argtypes = [ctypes.POINTER(Field), _D, _P, _P, _P, _P, _P, _P]
+        lib.cf_field_summary.restype = ctypes.c_int
     return lib
 
 
@@ -126,6 +128,7 @@ class CompiledField:
         self.body, self.state = Body(), BodyState()
         self.loads = (_D * 4)()
         self.state.work, self.state.bytes = _ptr(self.step_work), _ptr(self.step_bytes)
+        self.summary_out = (_D * 4)()
 
     def matches(self, f: Any) -> bool:
         """Whether this was built for f's present law, strips and lattice."""
@@ -243,3 +246,22 @@ class CompiledField:
             tuple(st.T[:]),
             bool(st.sliding),
         )
+
+    def summary(
+        self, theta: float, tau_x: np.ndarray, tau_y: np.ndarray, slip: np.ndarray
+    ) -> tuple[float, float, float, float] | None:
+        """cf_field_summary (LayerField.summary): (adhesion, slip_centroid_x,
+        slip_centroid_y, tau_peak), or None where the C declines."""
+        ny, nx = self.shape
+        arrays = (np.ascontiguousarray(tau_x, float), np.ascontiguousarray(tau_y, float),
+                  np.ascontiguousarray(slip, np.bool_))  # fmt: skip
+        if any(a.shape != (ny, nx) for a in arrays):
+            return None
+        # scratch: the step's (2 ny nx + 4 nx doubles, ny nx bytes fit in it)
+        rc = self.lib.cf_field_summary(self.struct_ref, theta, *(_ptr(a) for a in arrays),
+                                       ctypes.addressof(self.summary_out),
+                                       _ptr(self.step_work), _ptr(self.step_bytes))  # fmt: skip
+        if rc != OK:
+            return None
+        a, cx, cy, peak = self.summary_out[:]
+        return a, cx, cy, peak
