@@ -39,7 +39,10 @@ from contact_fmu.transient import LayerField, TransientRollingBody
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = load(ROOT / "scenarios" / "fig12_transient.toml")
-pytestmark = pytest.mark.skipif(native_field.library() is None, reason="no C compiler")
+# what runs the library (the compile and sanitizer tests at the end need only a compiler)
+needs_library = pytest.mark.skipif(
+    native_field.library() is None, reason="no compiled library (no C compiler, or disabled)"
+)
 
 STAGE_RTOL = 1e-12  # of mu P (forces), mu p0 (tractions): see the module docstring
 TRAJ_RTOL = 1e-9  # of mu P, over a trajectory
@@ -75,6 +78,7 @@ def _model(case, native_on: bool, **inputs: float):
     return model, ins
 
 
+@needs_library
 @pytest.mark.parametrize("case", SCENE.cases, ids=[c.name for c in SCENE.cases])
 def test_fig12_transient_compiled_repeats_the_python_field(monkeypatch, case):
     """Fig. 12's transient phase (the field forming after Fx_ex = 3 mu p0 a1 a2, 32 x
@@ -164,6 +168,7 @@ def _stage_inputs(rng: np.random.Generator, f: LayerField) -> tuple:
     return ds, h, h * (1.0 - 0.5 * math.sqrt(2.0)), vx, vy, phi, Vx
 
 
+@needs_library
 @pytest.mark.parametrize("change", ["none", "load down", "load up", "mu", "cattaneo", "tiny P"])
 def test_stage_agrees_with_the_python_stage_over_hostile_stages(change):
     """300 random stages of a developed field (adhesion and slip, spin) after a change
@@ -197,6 +202,7 @@ def test_stage_agrees_with_the_python_stage_over_hostile_stages(change):
     assert served == 300  # every one of these stages ran in C
 
 
+@needs_library
 def test_weights_of_the_field_at_rest_agree():
     """LayerField.current and summary (the FMU's outputs each step): the compiled
     weights, area weights and summary (cf_field_summary: adhesion fraction, slip-area
@@ -240,6 +246,7 @@ def _stage_rc(f: LayerField, base, ds: float, vx: float) -> int:
     return c.lib.cf_field_stage(ctypes.byref(c.struct), ctypes.byref(s), ctypes.byref(o))
 
 
+@needs_library
 @pytest.mark.filterwarnings("ignore:overflow:RuntimeWarning", "ignore:invalid:RuntimeWarning")
 @pytest.mark.parametrize(
     ("ds_cells", "vx", "code"),
@@ -284,6 +291,7 @@ def _body(native_on: bool, Vx0: float = V) -> TransientRollingBody:
     return rb
 
 
+@needs_library
 @pytest.mark.parametrize(
     ("what", "Vx0", "Fx", "steps"),
     [
@@ -318,6 +326,7 @@ def test_bodies_in_sliding_reversal_and_standstill_agree(monkeypatch, what, Vx0,
         assert oa["adhesion"] == 0.0 and abs(abs(oa["Tx"]) - MU_P) < 1e-3 * MU_P
 
 
+@needs_library
 @pytest.mark.parametrize(
     ("call", "error", "words"),
     [
@@ -342,6 +351,7 @@ def test_refusals_are_the_python_paths(call, error, words):
     assert messages[0] == messages[1] and words in messages[0]
 
 
+@needs_library
 def test_no_stage_root_is_refused_the_same_way():
     """eta = inf (Iy = 0): Tx = -My/Rx is algebraic (Eq. 26), a moment beyond mu P Rx
     has no root: StageSolveError with the same message on both paths."""
@@ -369,6 +379,7 @@ def test_without_the_library_the_field_runs_in_python(monkeypatch):
     assert f.current().T is None and abs(f.resultant()[0]) > 0.0
 
 
+@needs_library
 def test_field_pickles_and_deepcopies_without_its_ctypes_struct():
     """A LayerField that ran compiled keeps its struct out of pickle and deepcopy (FMU
     state, multiprocessing studies) and rebuilds it on use."""
@@ -425,6 +436,7 @@ def test_sanitized_driver_runs_random_and_extreme_inputs_cleanly(tmp_path):
     assert totals["ok"] > 3000 and min(totals.values()) > 50, totals
 
 
+@needs_library
 def test_the_transient_fmu_carries_the_field_in_its_compiled_library(tmp_path):
     """The pythonfmu FMU of fig12_transient vendors field.c, field.h and the binding with
     the kernel library, and that library (built from stepper.c and field.c) has the
