@@ -45,8 +45,8 @@ import numpy as np
 
 SOURCE = Path(__file__).with_name("stepper.c")
 HEADER = Path(__file__).with_name("stepper.h")  # its types and functions (the FMU's too)
-# The transient field's stage (field.c, field.h), built into the same library; its
-# binding is native/field.py.
+# The transient field (field.c, field.h: its stage, summary, the body's advance on it),
+# built into the same library; its binding is native/field.py.
 FIELD_SOURCES = (Path(__file__).with_name("field.c"), Path(__file__).with_name("field.h"))
 # No contraction into fused multiply-adds, no fast math: the Python path's roundings.
 # CF_GLIBC_COMPAT: the oldest glibc symbol versions of hypot and pow (stepper.h).

@@ -1,7 +1,7 @@
-/* The thin-layer transient traction field's stage in C (field.h): transient.py's
- * LayerField.stage, LayerField._weights, _capped_linear and StageField.resultant,
- * expression by expression and in the same order, so that a stage agrees with the
- * Python reference to rounding. Two sources of difference remain, both of a few ulp:
+/* The thin-layer transient traction field in C (field.h): transient.py's
+ * LayerField.stage, LayerField._weights, _capped_linear, StageField.resultant,
+ * LayerField.summary and TransientRollingBody's scalar step, expression by expression
+ * and in the same order, so that they agree with the Python reference to rounding. Two sources of difference remain, both of a few ulp:
  * numpy's power z**3 (its own SIMD routine where the CPU has one; z z z here, a third of
  * the cost of pow and as close to it) and hypot.
  * The sums over the grid are numpy's pairwise summation (np.add.reduce over a

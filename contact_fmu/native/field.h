@@ -1,7 +1,8 @@
 /* The thin-layer transient traction field (transient.py, LayerField) in C: a stage of
- * the field's step (LayerField.stage with LayerField._weights and StageField.resultant)
- * and the quadrature weights and resultant of a field at rest in its step
- * (LayerField.current, summary). field.c; used through ctypes by
+ * the field's step (LayerField.stage with LayerField._weights and StageField.resultant),
+ * the quadrature weights, resultant and summary of a field at rest in its step
+ * (LayerField.current, summary), and the body's advance on the field where vx is the
+ * only stage unknown (TransientRollingBody.advance). field.c; used through ctypes by
  * contact_fmu/native/field.py, built into the kernel library with stepper.c (the same
  * flags: no contraction into fused multiply-adds, CF_HIDDEN but for CF_KERNEL_EXPORT). */
 #ifndef CF_FIELD_H

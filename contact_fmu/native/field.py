@@ -1,16 +1,18 @@
-"""ctypes binding of field.c: the thin-layer transient field's stage in C.
+"""ctypes binding of field.c: the thin-layer transient field in C.
 
 ``transient.LayerField`` hands a stage of its step (``LayerField.stage``: the
 re-indexed lattice, the load of each material point, the radial return, the slip-aware
-quadrature weights of ``LayerField._weights``, the resultant and its tangent) and the
-weights of a field at rest (``current``, ``summary``) to these functions when the
+quadrature weights of ``LayerField._weights``, the resultant and its tangent), the
+weights of a field at rest (``current``) and its ``summary`` to these functions, and
+``TransientRollingBody.advance`` its whole advance when vx is its only stage unknown
+and the loads are held (cf_field_advance: _step, _stage, _solve_scalar), when the
 kernel library is there (native.library(): field.c is built into it with stepper.c).
 The C follows the Python expression by expression and sums as numpy does (pairwise),
-so a stage agrees with the Python one to rounding (numpy's own z**3 and hypot differ
-from the C library's by an ulp or so). A call that the C declines (a non-finite or
-out-of-range input, a result that overflows) is taken by the Python path, which stays
-the reference: without the library, with CONTACT_FMU_NATIVE=0, or with
-``LayerField.native = False``, nothing changes but speed.
+so it agrees with the Python path to rounding (numpy's own z**3 and hypot differ from
+the C's by an ulp or so). A call that the C declines (a non-finite or out-of-range
+input, a result that overflows, a stage without a root) is taken by the Python path,
+which stays the reference and words any error: without the library, with
+CONTACT_FMU_NATIVE=0, or with ``LayerField.native = False``, nothing changes but speed.
 """
 
 from __future__ import annotations
