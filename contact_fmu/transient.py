@@ -42,6 +42,12 @@ theory of the transient and the measured durations.
 The half-space version (Kalker's transient rolling with influence coefficients) can
 replace ``LayerField``: the body stepper needs of a field only ``begin``, ``stage``,
 ``to_base``, ``commit``, ``resultant`` and the export/state methods.
+
+Compiled path: where the kernel library is there, the field's stage, weights and summary
+and, when vx is the only stage unknown under held loads, the body's whole ``advance``
+run in C (contact_fmu/native/field.c through native/field.py), agreeing with this code
+to rounding (tests/test_native_field.py); this code is the reference and takes every
+call the C declines.
 """
 
 from __future__ import annotations
@@ -162,9 +168,11 @@ class LayerField:
     without loss of order. "uniform": the strips of ``LayerContact.traction``
     (midpoint rule in y, order 1.5 for a field that does not vanish at y = +-a2).
 
-    ``native``: the stage and the weights run compiled (contact_fmu/native/field.c, the
-    same arithmetic to rounding) where the kernel library is there; False keeps this
-    object on the Python path, the reference (as CONTACT_FMU_NATIVE=0 does for all).
+    ``native``: the stage, the weights and the summary run compiled (and so does
+    ``TransientRollingBody.advance`` on this field where vx is its only stage unknown;
+    contact_fmu/native/field.c, the same arithmetic to rounding) where the kernel
+    library is there; False keeps this object and its body on the Python path, the
+    reference (as CONTACT_FMU_NATIVE=0 does for all).
     """
 
     def __init__(
@@ -840,7 +848,8 @@ class TransientRollingBody(BodyState):
         """Advance by h (s) in ``substeps`` equal steps under the load history.
 
         Constant ``loads`` are held over the interval (zero-order hold); a callable is
-        sampled at the stage times. On error the state is left unchanged.
+        sampled at the stage times. On error the state is left unchanged. Compiled
+        where vx is the only stage unknown and the loads are held (cf_field_advance).
         """
         h = positive("h", h)
         if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)):
