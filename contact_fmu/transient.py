@@ -42,6 +42,12 @@ theory of the transient and the measured durations.
 The half-space version (Kalker's transient rolling with influence coefficients) can
 replace ``LayerField``: the body stepper needs of a field only ``begin``, ``stage``,
 ``to_base``, ``commit``, ``resultant`` and the export/state methods.
+
+Compiled path: where the kernel library is there, the field's stage, weights and summary
+and, when vx is the only stage unknown under held loads, the body's whole ``advance``
+run in C (contact_fmu/native/field.c through native/field.py), agreeing with this code
+to rounding (tests/test_native_field.py); this code is the reference and takes every
+call the C declines.
 """
 
 from __future__ import annotations
@@ -60,6 +66,7 @@ from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import EvalBudget, LoadInput, StageSolveError
 from .kinematics import ROLLING, SLIDING, creepage
 from .layer import LayerContact, TractionField
+from .native import field as native_field
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -124,9 +131,14 @@ class StageField:
     dTx_dvx: float = 0.0
     # d(Tx, Ty, Mz)/d(vx, vy, Omega_z) at fixed geometry, (3, 3), when asked for
     jacobian: FloatArray | None = None
+    # (Tx, Ty, Mz) over the field's strips, where the compiled stage computed it
+    T: tuple[float, float, float] | None = None
 
     def resultant(self, y: FloatArray) -> tuple[float, float, float]:
-        """(Tx, Ty, Mz) = int (tau_x, tau_y, x tau_y - y tau_x) dA (N, N, N m)."""
+        """(Tx, Ty, Mz) = int (tau_x, tau_y, x tau_y - y tau_x) dA (N, N, N m); ``y``:
+        the strips of the field that made this stage."""
+        if self.T is not None:
+            return self.T
         w = self.weights
         Tx = float(np.sum(w * self.tau_x))
         Ty = float(np.sum(w * self.tau_y))
@@ -155,6 +167,12 @@ class LayerField:
     midpoint rule in phi integrates the square-root ends of the ellipse (Eq. 37)
     without loss of order. "uniform": the strips of ``LayerContact.traction``
     (midpoint rule in y, order 1.5 for a field that does not vanish at y = +-a2).
+
+    ``native``: the stage, the weights and the summary run compiled (and so does
+    ``TransientRollingBody.advance`` on this field where vx is its only stage unknown;
+    contact_fmu/native/field.c, the same arithmetic to rounding) where the kernel
+    library is there; False keeps this object and its body on the Python path, the
+    reference (as CONTACT_FMU_NATIVE=0 does for all).
     """
 
     def __init__(
@@ -182,7 +200,25 @@ class LayerField:
         self.tau_x = np.zeros((ny, nx))
         self.tau_y = np.zeros((ny, nx))
         self.slip = np.zeros((ny, nx), dtype=bool)
+        self.native = True
         self._update_contact()
+
+    def __getstate__(self) -> dict:
+        """Pickle and deepcopy without the compiled stage's ctypes struct (rebuilt on use)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_cf"}
+
+    def _compiled(self) -> native_field.CompiledField | None:
+        """field.c for this grid and law, or None (``native`` off, or no library)."""
+        if not getattr(self, "native", True):  # (absent in a field pickled before it)
+            return None
+        c = self.__dict__.get("_cf")
+        if c is not None and c.matches(self):
+            return c
+        lib = native_field.library()
+        if lib is None:
+            return None
+        c = self._cf = native_field.CompiledField(lib, self, MIN_SPEED_FRACTION)
+        return c
 
     # ---- geometry ------------------------------------------------------------------
     @property
@@ -247,8 +283,13 @@ class LayerField:
         This is exact along x for the steady field without spin and for the Cattaneo
         field; the weights depend on tau. Across strips: midpoint rule.
         ``tau_x = None``: area weights (each interval shared equally, the end
-        segments to the end nodes).
+        segments to the end nodes). Compiled where the library is (field.c).
         """
+        c = self._compiled()
+        if c is not None:
+            w = c.weights(x, inside, tau_x, tau_y, slip, sign)
+            if w is not None:
+                return w
         dx = self.dx
         pair = inside[:, :-1] & inside[:, 1:]
         w = np.zeros(inside.shape)
@@ -385,7 +426,16 @@ class LayerField:
         node's path in this stage instead of at its end (exact for one stage under
         constant kinematics, used by ``roll``). ``jacobian``: also return the tangent
         d(Tx, Ty, Mz)/d(vx, vy, Omega_z) of the stage force at fixed positions.
+        Compiled where the library is (field.c, cf_field_stage; this code where it
+        declines).
         """
+        c = self._compiled()
+        if c is not None:
+            args = (ds, elapsed, h_own, vx, vy, phi, Vx)
+            r = c.stage(base.theta, base.inside, *tau_hat, args, midpath, jacobian)
+            if r is not None:
+                theta, shift, x, tx, ty, slip, inside, w, T, dT, J = r
+                return StageField(theta, shift, ds, x, tx, ty, slip, inside, w, dT, J, T)
         k = self.law.k
         u = base.theta - ds / self.dx
         shift = math.floor(u)
@@ -561,8 +611,15 @@ class LayerField:
         """Adhesion fraction (-), slip-area centroid (m; 0 without slip) and peak |tau| (Pa).
 
         Areas are measured with the quadrature weights: adhesion = sum of the weights
-        of non-slipping nodes / sum over the contact.
+        of non-slipping nodes / sum over the contact. Compiled where the library is
+        (field.c, cf_field_summary).
         """
+        c = self._compiled()
+        if c is not None:
+            r = c.summary(self.theta, self.tau_x, self.tau_y, self.slip)
+            if r is not None:
+                keys = ("adhesion", "slip_centroid_x", "slip_centroid_y", "tau_peak")
+                return dict(zip(keys, r, strict=True))
         st = self.current()
         w = self._weights(st.x, st.inside, None, None, 0.0)  # areas
         total = float(np.sum(w))
@@ -791,7 +848,8 @@ class TransientRollingBody(BodyState, EvalBudget):
         """Advance by h (s) in ``substeps`` equal steps under the load history.
 
         Constant ``loads`` are held over the interval (zero-order hold); a callable is
-        sampled at the stage times. On error the state is left unchanged.
+        sampled at the stage times. On error the state is left unchanged. Compiled
+        where vx is the only stage unknown and the loads are held (cf_field_advance).
         """
         h = positive("h", h)
         if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)):
@@ -799,6 +857,8 @@ class TransientRollingBody(BodyState, EvalBudget):
         if substeps < 1:
             raise InputError("substeps", substeps, ">= 1")
         load_at = loads if callable(loads) else (lambda _t, L=loads: L)
+        if not callable(loads) and self._advance_compiled(h, loads, int(substeps)):
+            return
         saved = self.snapshot()
         self.evals = 0
         try:
@@ -812,6 +872,32 @@ class TransientRollingBody(BodyState, EvalBudget):
         except Exception:
             self.restore(saved)
             raise
+
+    def _advance_compiled(self, h: float, loads: Loads, substeps: int) -> bool:
+        """``advance`` under held loads in one C call (field.c, cf_field_advance: this
+        class's _step, _stage and _solve_scalar with the field's stage) where vx is the
+        only stage unknown and the field runs compiled; False (nothing changed) where
+        the Python steps must take it, which then word any error."""
+        if len(self._idx) != 1:
+            return False
+        c = self.field._compiled()
+        if c is None:
+            return False
+        b, law = self.body, self.law
+        body = {"M": b.M, "Rx": b.Rx, "A1": b.A1, "A2": b.A2, "m_slip": b.m_slip,
+                "ry": self.lateral.vy_ratio, "rz": self.lateral.spin_ratio,
+                "creep_full_slip": law.creep_full_slip, "gamma": GAMMA, "a21": A21,
+                "solve_rtol": SOLVE_RTOL, "v_scale_floor": V_SCALE_FLOOR,
+                "max_iterations": MAX_STAGE_ITERATIONS}  # fmt: skip
+        f = self.field
+        r = c.advance(body, self.y, self.t, self.impulse, (f.theta, f.tau_x, f.tau_y, f.slip),
+                      h, tuple(loads), substeps)  # fmt: skip
+        if r is None:
+            return False
+        self.y, self.t, self.impulse, fstate, T, sliding = r
+        f.theta, f.direction, f.tau_x, f.tau_y, f.slip = fstate
+        self.out = ContactOutputs(*T, sliding=sliding)
+        return True
 
     # ---- one SDIRK2 step -----------------------------------------------------------
     def _step(self, t_n: float, h: float, load_at: Callable[[float], Loads]) -> None:

@@ -94,7 +94,8 @@ def closure(roots: list[str]) -> list[str]:
 # Files other than Python a module reads next to itself, by module.
 COMPANIONS = {
     "native": tuple(
-        f"native/{n}" for n in ("stepper.c", "stepper.h", "cf_abi.h", "fmi.c", "cf_core.h")
+        f"native/{n}"
+        for n in ("stepper.c", "stepper.h", "cf_abi.h", "fmi.c", "cf_core.h", "field.c", "field.h")
     )
 }
 

@@ -48,6 +48,9 @@ from . import abi
 SOURCE = Path(__file__).with_name("stepper.c")
 HEADER = Path(__file__).with_name("stepper.h")  # its types and functions (the FMU's too)
 ABI = abi.HEADER  # cf_abi.h, included by stepper.h: the structs and constants shared here
+# The transient field (field.c, field.h: its stage, summary, the body's advance on it),
+# built into the same library; its binding is native/field.py.
+FIELD_SOURCES = (Path(__file__).with_name("field.c"), Path(__file__).with_name("field.h"))
 # No contraction into fused multiply-adds, no fast math: the Python path's roundings.
 # CF_GLIBC_COMPAT: the oldest glibc symbol versions of hypot and pow (stepper.h).
 CFLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math", "-DCF_GLIBC_COMPAT")
@@ -110,6 +113,7 @@ def _key(source: Path) -> str:
     text = source.read_bytes() + CORE.read_bytes() + " ".join(KERNEL_FLAGS).encode()
     if source == SOURCE:
         text += HEADER.read_bytes() + ABI.read_bytes()
+        text += b"".join(p.read_bytes() for p in FIELD_SOURCES)
     return hashlib.sha256(text).hexdigest()[:12]
 
 
@@ -138,7 +142,8 @@ def compile_to(target: Path, source: Path = SOURCE, flags: tuple[str, ...] = KER
     os.close(fd)
     try:
         cc = os.environ.get("CC", "cc")
-        cmd = [cc, *flags, "-o", tmp, str(source), "-lm"]
+        extra = [str(FIELD_SOURCES[0])] if source == SOURCE else []  # the kernel: + field.c
+        cmd = [cc, *flags, "-o", tmp, str(source), *extra, "-lm"]
         subprocess.run(cmd, check=True, capture_output=True)
         os.replace(tmp, target)
     finally:
