@@ -5,7 +5,7 @@ persistent worker subprocess per FMU (``fmu_fuzz.pool``), so that a crash is cou
 and the worker replaced; the call records are checked against the target behaviour
 (``fmu_fuzz.invariants``, whose docstring lists the rules and their tolerances).
 
-Every session first replays the runs that showed issue 19's failures (``fmu_fuzz.known``,
+Every session first replays the runs that once broke the contract (``fmu_fuzz.known``,
 hypothesis explicit examples). Default suite: a short fixed-seed run (derandomized,
 CONTACT_FMU_FUZZ_SHORT examples per kind, 15 unless set); the first violation fails the
 kind's test with the run as its reproducer (no shrinking: set CONTACT_FMU_FUZZ_SHRINK=1
@@ -60,7 +60,7 @@ PROFILE = settings.get_profile("fmu-fuzz-long" if LONG else "fmu-fuzz-short")
 
 
 class FuzzViolationError(AssertionError):
-    """A run broke an invariant of issue 19 (the message holds the reproducer)."""
+    """A run broke an invariant of the FMUs' contract (the message holds the reproducer)."""
 
 
 @pytest.fixture(scope="module")
@@ -104,7 +104,7 @@ def test_fmu_under_hostile_calls(kind, pool, stats):
         if violations and not COLLECT:
             raise FuzzViolationError(_report(kind, ops, violations, res))
 
-    for ops in reversed(KNOWN.get(kind, [])):  # issue 19's runs, replayed first
+    for ops in reversed(KNOWN.get(kind, [])):  # the runs that once failed, replayed first
         run = example(ops=ops)(run)
     run = PROFILE(given(ops=strategies.runs(k))(run))
     try:

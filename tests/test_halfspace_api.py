@@ -134,7 +134,7 @@ def test_transient_rolling_at_a_held_force():
 
 
 def test_richardson_error_estimate_for_a_spin_case():
-    """solve(richardson=True): the combined lateral creepage and spin case of issue 20
+    """solve(richardson=True): the combined lateral creepage and spin case of a railway user
     (ellipse a/b = 2, 7 x 3.5 mm, steel, 50 kN, mu = 0.3, eta = -6e-4, phi = 0.6 rad/m)
     converges at first order with a large constant (Ty/(mu P) 0.575, 0.594, 0.603 on
     34, 66, 130 per side, docs/validation.md). The coarse grid's elements are exactly

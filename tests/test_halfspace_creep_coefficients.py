@@ -41,7 +41,7 @@ def contact(aob: float, nu: float, elements: int = ELEMENTS) -> HalfSpaceContact
 
 
 def test_c23_is_the_slope_of_full_solves_at_nu_0_28():
-    """The bug of issue 20: C23 loaded only the lateral part x phi of the spin's rigid
+    """A bug once found: C23 loaded only the lateral part x phi of the spin's rigid
     slip and came out 4.4 % low at nu = 0.28. The coefficients now equal the slopes of
     full (Coulomb) solves at a creepage small enough for full adhesion (1e-6 of
     mu P/(G c^2)) on the same grid, to 1e-5 (Newton to 1e-12 of mu p, GMRES to 1e-10), and the

@@ -193,7 +193,7 @@ def test_a_refused_step_leaves_the_field_unchanged():
 
 
 def test_the_issue_examples():
-    """The two calls of issue 20 that raised a raw TypeError."""
+    """Two calls that once raised a raw TypeError."""
     with pytest.raises(InputError, match="n = "):
         _hsc(n=(48, 44.0))
     assert _hsc(n=(48, 44)).patch.grid.shape == (44, 48)

@@ -40,7 +40,7 @@ NUS = (0.0, 0.25, 0.5)
 # The convergence cases: elements per side.
 GRIDS = (16, 32, 64, 128)
 # The spin case: ellipse a/b = 2 (7 x 3.5 mm, steel, 50 kN), eta = -6e-4, phi = 0.6
-# rad/m, mu = 0.3 (the kind of case of issue 20); the creepage case: the railway wheel,
+# rad/m, mu = 0.3 (a railway user's kind of case); the creepage case: the railway wheel,
 # xi = 0.3 mu P/(G c^2).
 SPIN_CASE = dict(a1=7e-3, a2=3.5e-3, P=5e4, w=(0.0, -6e-4, 0.6))
 

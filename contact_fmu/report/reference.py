@@ -99,7 +99,8 @@ def law(p: dict, P: float) -> LayerContact:
 def _halfspace_law(scene: Scene, p: dict, P: float) -> Any:
     """The half-space law as its FMU evaluates it: the creep-force table the build
     generates for the scene's [halfspace] declaration (fmu_build.tables, cached), so the
-    reference integrates the same equations (the table's own accuracy is issue 4's)."""
+    reference integrates the same equations (the table's own accuracy is measured apart:
+    docs/halfspace.md)."""
     try:
         from fmu_build import tables
 

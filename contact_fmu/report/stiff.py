@@ -119,7 +119,7 @@ def config(lateral: bool = False) -> ModelConfig:
         outputs=("Tx", "vx", "xi_x", "Vx", "Omega_y", "adhesion", "regime"),
         methods=METHODS,
         schemes=SCHEMES,
-        description="Stiff and extreme cases (issue 6)",
+        description="Stiff and extreme cases",
     )
 
 

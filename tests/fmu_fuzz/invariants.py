@@ -1,4 +1,4 @@
-"""What must hold after every call of a run (issue 19's target behaviour).
+"""What must hold after every call of a run (the FMUs' contract: docs/reliability.md).
 
 ``check(kind, ops, result)`` replays the run's call records against a model of the
 instance (its phase, the values it holds, the parameters in force, its time, the load

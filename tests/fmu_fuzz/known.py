@@ -1,4 +1,4 @@
-"""Runs that showed issue 19's failures, replayed first in every fuzz session (hypothesis
+"""Runs that once broke the FMUs' contract, replayed first in every fuzz session (hypothesis
 explicit examples): the fuzzer's draws need not find them again to keep them checked."""
 
 from __future__ import annotations
