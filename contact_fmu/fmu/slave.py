@@ -43,8 +43,7 @@ import ctypes
 import importlib
 import math
 import sys
-from functools import partial
-from operator import getitem, itemgetter
+from operator import itemgetter
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -61,35 +60,30 @@ from pythonfmu import (
 from pythonfmu.enums import Fmi2Status
 
 from . import variables as fv
-from .call_state import CallState
+from .call_state import TIME_RTOL, CallState
 from .config import ModelConfig
+from .package_loader import PACKAGE as _PACKAGE
+from .package_loader import load_package
+from .slave_fast import FMI_CALLS, FastPathMixin
 from .slave_state import FmuStateMixin, describe
 
-# Relative tolerance between doStep's currentCommunicationPoint and the FMU's time: a
-# master that accumulates steps, multiplies or converts integer nanoseconds differs
-# from t + h by a few units in the last place of t, never by more (64 ulp).
-TIME_RTOL = 1.4210854715202004e-14  # 64 * 2**-52 (the C code's CF_TIME_RTOL: native/abi.py)
 # The value reference through which the FMU's binary (pythonfmu_shim.c, CF_CELL_VR)
 # hands over the address of its status cell; no variable has it.
 CELL_VR = 2147483647
 _INF = math.inf
 
-# the FMI calls a compiled binding takes over (native/fmi.c)
-_FMI_CALLS = ("do_step", "set_real", "get_real")
 _CAUSALITY = {
     fv.PARAMETER: Fmi2Causality.parameter,
     fv.INPUT: Fmi2Causality.input,
     fv.OUTPUT: Fmi2Causality.output,
 }
 _TYPES = {"Real": Real, "Integer": Integer, "String": String}
-# This FMU's package (cfmu_<content hash> when built): the owner named in its state bytes
-_PACKAGE = __name__.split(".")[0]
 # the String parameters' choices (integrator.RollingBody checks them at set-up; refused
 # at once here, as by the native FMU, in RollingBody's words)
 _CHOICES = {"method": ("full", "quasistationary"), "scheme": ("lobatto3c", "sdirk2")}
 
 
-class ContactSlave(FmuStateMixin, Fmi2Slave):
+class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
     """Rolling/sliding contact after Spector & Batra (1995); the model follows CONFIG."""
 
     CONFIG: ClassVar[dict[str, Any]] = {}
@@ -100,7 +94,7 @@ class ContactSlave(FmuStateMixin, Fmi2Slave):
         # the shim's status cell (set through CELL_VR); None under pythonfmu's binary alone
         self._cell: Any = None
         super().__init__(**kwargs)
-        _load_package(self.resources)
+        load_package(self.resources)
         cfg = ModelConfig.from_dict(self.CONFIG)
         self.cfg = cfg
         self.description = cfg.description or f"Spector & Batra (1995) contact, {cfg.mode} mode"
@@ -402,64 +396,6 @@ class ContactSlave(FmuStateMixin, Fmi2Slave):
         self._fast_enable()
         return True
 
-    # ---- the compiled step --------------------------------------------------------------
-    def _fast_enable(self) -> None:
-        """Use the model's compiled step if it has one (and the FMU no feedthrough)."""
-        fast = getattr(self._model, "fast", None)
-        compiled = fast is not None and not self._model.feedthrough and not self._terminated
-        self._fast = fast() if compiled else None
-        self._fast_out, self._fast_step, self._call.out_stale = None, None, False
-        self._fast_io, self._fast_inputs, self._fast_reads = None, frozenset(), {}
-        for name in _FMI_CALLS:  # the class's methods again
-            self.__dict__.pop(name, None)
-        self._fast_fmi = None
-        reals = {
-            vr: v for vr, v in self.vars.items() if v.name in self._out and isinstance(v, Real)
-        }
-        if self._fast is None:
-            for v in reals.values():
-                v.getter = self._getters[v.name]
-            return
-        self._fast_out, self._fast_step = self._fast.io.out, self._fast.stepper()
-        self._fast_io, self._fast_inputs = self._fast.io, frozenset(self._fast.INPUTS)
-        self._fast_index = {n: self._fast.index(n) for n in self._out}
-        self._fast_vr = {vr: self._fast_index[v.name] for vr, v in reals.items()}
-        for v in reals.values():  # read straight from the struct: no Python frame per value
-            v.getter = partial(getitem, self._fast_out, self._fast_index[v.name])
-        self._fast_push()
-        # the per-step FMI calls in C where the extension is built (native/fmi.c): on the
-        # instance, in place of the class's methods, to which they hand all else (a step
-        # to the Python path: the binding has just tried the compiled one)
-        cls = type(self)
-        methods = (self._python_step, cls.set_real.__get__(self), cls.get_real.__get__(self))
-        slots = [(vr, *slot) for vr, slot in self._input_slots.items()]
-        outs = [(vr, v.name) for vr, v in reals.items()]
-        self._fast_fmi = self._fast.bind_fmi(self._call, methods, TIME_RTOL, slots, outs)
-        if self._fast_fmi is not None:
-            for name in _FMI_CALLS:
-                setattr(self, name, getattr(self._fast_fmi, name))
-
-    def _fast_push(self) -> None:
-        """After Python changed the model: its state, the inputs and the outputs (those
-        of _out, as Python computed them) into the compiled step's struct."""
-        self._fast.push()
-        for n, v in self._call.inputs.items():
-            self._to_fast(n, v)
-        for n, i in self._fast_index.items():
-            self._fast_out[i] = self._out[n]
-
-    def _fast_pull(self) -> None:
-        """Before Python reads or steps the model: the state and outputs back."""
-        if self._fast is not None:
-            self._fast.pull()
-            self._sync_out()
-
-    def _sync_out(self) -> None:
-        if self._call.out_stale:
-            self._out = {n: self._fast_out[i] for n, i in self._fast_index.items()}
-            self._out_mu = self._call.values.get("mu")  # _tune pulls before mu changes
-            self._call.out_stale = False
-
     def _collect(self, outputs: dict[str, float]) -> dict[str, float]:
         """The declared outputs, checked finite."""
         out = {}
@@ -521,7 +457,7 @@ class ContactSlave(FmuStateMixin, Fmi2Slave):
         which refuse it."""
         self._terminated = True
         self._fast_step = None
-        for name in _FMI_CALLS:
+        for name in FMI_CALLS:
             self.__dict__.pop(name, None)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
@@ -589,50 +525,3 @@ class ContactSlave(FmuStateMixin, Fmi2Slave):
         if note:
             self.log(note, Fmi2Status.warning)
         return True
-
-
-def _load_package(resources: str | Path | None) -> None:
-    """Everything this FMU's vendored package holds, imported and loaded now, from this
-    instance's own copy (``resources``/cfmu_<key>).
-
-    The package's modules are shared by all instances of the FMU in a process and stay in
-    sys.modules, but the folder they were first imported from belongs to one instance:
-    fmpy (or any importer) deletes it when that instance is freed. A module imported
-    later (the model at exitInitializationMode) or a compiled library looked for later
-    (next to native/__init__.py) would be sought in a folder that may be gone. So at every
-    instantiation the package's ``__path__`` points at the copy of the instance being
-    made, which exists now, and every module of it is imported and the compiled libraries
-    loaded: after that nothing is read from the package's folders but the instance's own
-    data (``_data_dir``). An import that fails here (a host without scipy) is left to
-    exitInitializationMode, which repeats it and answers fmi2Error with its message.
-    Nothing to do outside an FMU (the source tree's contact_fmu)."""
-    if not resources:
-        return
-    root = Path(resources) / _PACKAGE
-    if _PACKAGE == "contact_fmu" or not root.is_dir():
-        return
-    prefix = _PACKAGE + "."
-    for name, module in list(sys.modules.items()):
-        if (name == _PACKAGE or name.startswith(prefix)) and hasattr(module, "__path__"):
-            module.__path__[:] = [str(root.joinpath(*name.split(".")[1:]))]
-    if _LOADED_FROM:
-        return
-    complete = True
-    for file in sorted(root.rglob("*.py")):
-        parts = file.relative_to(root).with_suffix("").parts
-        if parts[-1] == "__init__":
-            parts = parts[:-1]
-        try:
-            importlib.import_module(".".join((_PACKAGE, *parts)))
-            if parts == ("native",):  # looked for next to its file: in this copy, now
-                native = sys.modules[prefix + "native"]
-                native.library()
-                native.fmi_module()
-        except Exception:  # repeated, and reported, at exitInitializationMode
-            complete = False
-    if complete:
-        _LOADED_FROM.append(str(root))
-
-
-# the copy of this package from which all of it was imported and loaded (_load_package)
-_LOADED_FROM: list[str] = []

@@ -18,9 +18,8 @@ from typing import Any
 
 from . import state_bytes
 from . import variables as fv
+from .package_loader import PACKAGE as _PACKAGE  # the owner named in the state bytes
 
-# This FMU's package (cfmu_<content hash> when built): the owner named in its state bytes
-_PACKAGE = __name__.split(".")[0]
 # the entry of CallState.bad that a refused FMU state holds (no variable has this name)
 STATE = "FMU state"
 # the fields of an FMU state (_get_fmu_state)

@@ -222,7 +222,7 @@ CONSTANTS: tuple[tuple[str, str, str, str], ...] = (
     ("CF_LOAD_LIMIT", "double", "integrator.LOAD_LIMIT", "|Fx_ex|, |My_ex|/Rx <= this mu P"),
     ("CF_SPEED_MAX", "double", "fmu.variables.SPEED_MAX", "(m/s; ranges.within_range)"),
     ("CF_RATE_MAX", "double", "fmu.variables.RATE_MAX", "(rad/s)"),
-    ("CF_TIME_RTOL", "double", "fmu.slave.TIME_RTOL", "(doStep's time check, cf_time_ok)"),
+    ("CF_TIME_RTOL", "double", "fmu.call_state.TIME_RTOL", "(doStep's time check, cf_time_ok)"),
     ("CF_V_STANDSTILL", "double", "integrator.V_STANDSTILL", "(m/s)"),
     ("CF_V_SCALE_FLOOR", "double", "integrator.V_SCALE_FLOOR", "(m/s)"),
     ("CF_Z_ALGEBRAIC", "double", "integrator.Z_ALGEBRAIC", ""),

@@ -12,7 +12,7 @@
 #define CF_LOAD_LIMIT 1000000000.0 /* integrator.LOAD_LIMIT: |Fx_ex|, |My_ex|/Rx <= this mu P */
 #define CF_SPEED_MAX 10000.0 /* fmu.variables.SPEED_MAX (m/s; ranges.within_range) */
 #define CF_RATE_MAX 10000000.0               /* fmu.variables.RATE_MAX (rad/s) */
-/* fmu.slave.TIME_RTOL (doStep's time check, cf_time_ok) */
+/* fmu.call_state.TIME_RTOL (doStep's time check, cf_time_ok) */
 #define CF_TIME_RTOL 1.4210854715202004e-14
 #define CF_V_STANDSTILL 1e-09                /* integrator.V_STANDSTILL (m/s) */
 #define CF_V_SCALE_FLOOR 1e-09               /* integrator.V_SCALE_FLOOR (m/s) */

@@ -27,7 +27,7 @@ static inline int cf_value_check(double x, double lo, double hi, int open_lo) {
 /* slave._do_step: a communication step size h in (0, inf) (NaN is not) */
 static inline int cf_step_size_ok(double h) { return h > 0.0 && h <= DBL_MAX; }
 
-/* slave._do_step: t, finite, is the FMU's time to rtol (slave.TIME_RTOL, 64 ulp) of
+/* slave._do_step: t, finite, is the FMU's time to rtol (call_state.TIME_RTOL, 64 ulp) of
  * max(|t|, |time|) */
 static inline int cf_time_ok(double t, double time, double rtol) {
     return isfinite(t) && fabs(t - time) <= rtol * fmax(fabs(t), fabs(time));
