@@ -41,6 +41,7 @@ from contact_fmu.fmu.body_model import (
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.fmu.slave import CELL_VR, ContactSlave
 from contact_fmu.integrator import EvalBudget, RollingBody
+from contact_fmu.native import field as native_field
 from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import DISCARD, OK, Instance
 from contact_fmu.transient import TransientRollingBody
@@ -149,8 +150,9 @@ def test_a_slow_call_returns_within_the_budget(target, case):
 # ---- in process: the internal steps counted where they are taken ----------------------
 class Counter:
     """Internal steps taken: in Python (RollingBody._step, TransientRollingBody._step)
-    and in C (the n of the compiled vector path's cf_advance_vector; the scalar path's
-    are the fast path's, counted by its note's n)."""
+    and in C (the n of the compiled vector path's cf_advance_vector, the substeps of
+    the transient body's compiled advance, cf_field_advance; the scalar path's are the
+    fast path's, counted by its note's n)."""
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
         self.python = 0
@@ -178,6 +180,13 @@ class Counter:
             return advance(kernel, rb, h, loads, n)
 
         monkeypatch.setattr(native.VectorKernel, "advance", counted_advance)
+        field_advance = native_field.CompiledField.advance
+
+        def counted_field_advance(compiled, *a):  # the transient body's internal steps in C
+            self.compiled.append(a[-1])  # substeps
+            return field_advance(compiled, *a)
+
+        monkeypatch.setattr(native_field.CompiledField, "advance", counted_field_advance)
 
 
 def slave(cfg: ModelConfig, params: dict) -> tuple[ContactSlave, ctypes.c_int]:
