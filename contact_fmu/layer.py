@@ -138,6 +138,20 @@ class TractionField:
     la: FloatArray
     weights: FloatArray = field(repr=False)
 
+    def arrays(self) -> dict[str, FloatArray]:
+        """The field as plain arrays, e.g. for ``numpy.savez``: x (nx,), y (ny,) in m;
+        tau_x, tau_y, p (ny, nx) in Pa; slip, inside (ny, nx) as 0/1; weights m^2."""
+        return {
+            "x": self.x,
+            "y": self.y,
+            "tau_x": self.tau_x,
+            "tau_y": self.tau_y,
+            "p": self.p,
+            "slip": self.slip.astype(np.int8),
+            "inside": self.inside.astype(np.int8),
+            "weights": self.weights,
+        }
+
     def resultant(self) -> tuple[float, float, float]:
         """(Tx, Ty, Mz) = int (tau_x, tau_y, x tau_y - y tau_x) dA by the grid quadrature."""
         X, Y = np.meshgrid(self.x, self.y)

@@ -61,12 +61,12 @@ from numpy.typing import NDArray
 from scipy.optimize import root
 
 from ._validate import InputError, count, finite, positive
-from .body_state import BodyState, ContactOutputs
+from .body_state import ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import EvalBudget, LoadInput, StageSolveError
-from .kinematics import ROLLING, SLIDING, creepage
 from .layer import LayerContact, TractionField
 from .native import field as native_field
+from .transient_body import TransientBody
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -639,19 +639,9 @@ class LayerField:
         }
 
     def arrays(self) -> dict[str, FloatArray]:
-        """The present field as plain arrays, e.g. for ``numpy.savez``: x (nx,), y (ny,)
-        in m; tau_x, tau_y, p (ny, nx) in Pa; slip, inside (ny, nx) as 0/1; weights m^2."""
-        f = self.traction_field()
-        return {
-            "x": f.x,
-            "y": f.y,
-            "tau_x": f.tau_x,
-            "tau_y": f.tau_y,
-            "p": f.p,
-            "slip": f.slip.astype(np.int8),
-            "inside": f.inside.astype(np.int8),
-            "weights": f.weights,
-        }
+        """The present field as plain arrays (``TractionField.arrays``: for
+        ``numpy.savez``)."""
+        return self.traction_field().arrays()
 
     # ---- state -------------------------------------------------------------------------
     def state(self) -> tuple:
@@ -719,7 +709,7 @@ def _strips(rule: str, ny: int, a2: float) -> tuple[FloatArray, FloatArray]:
     return a2 * np.sin(phi), a2 * np.cos(phi) * dphi
 
 
-class TransientRollingBody(BodyState, EvalBudget):
+class TransientRollingBody(TransientBody, EvalBudget):
     """The rolling body of Eqs. (8)-(11) on the transient thin-layer field.
 
     The same interface as ``integrator.RollingBody`` (advance, set_load, outputs,
@@ -758,24 +748,6 @@ class TransientRollingBody(BodyState, EvalBudget):
     def law(self) -> LayerContact:
         return self.field.law
 
-    def cell_time(self) -> float:
-        """dx/|Vx| (s): the step that rolls one grid cell (inf at Vx = 0)."""
-        return self.field.dx / abs(self.Vx) if self.Vx != 0.0 else math.inf
-
-    def substeps_for(self, h: float, cells: float = 1.0) -> int:
-        """Substeps that keep each step within ``cells`` grid cells rolled at the
-        present speed: a suggestion for accuracy (any step is stable and transport is
-        exact for any step)."""
-        h = positive("h", h)
-        cells = positive("cells", cells)
-        return max(1, math.ceil(h * abs(self.Vx) / (cells * self.field.dx) - 1e-9))
-
-    def set_shift(self, delta_x: float, delta_y: float = 0.0) -> None:
-        """Field after a static tangential shift delta (m) at Vx = 0 (Cattaneo): the
-        layer is sheared by delta, tau = proj(delta/k); see ``LayerField.set_shift``."""
-        self.field.set_shift(delta_x, delta_y)
-        self.out = self._outputs_now()
-
     def start_steady(self) -> None:
         """Replace the field by the steady field of the present rigid slip (Eqs. 36-38):
         the field after rolling one contact length (plus two cells) at constant
@@ -788,41 +760,6 @@ class TransientRollingBody(BodyState, EvalBudget):
         for _ in range(f.nx + 2):
             f.roll(h, self.vx, self.vy, self.Vx, self.Omega_z)
         self.out = self._outputs_now()
-
-    def outputs(self) -> dict[str, float]:
-        """The keys of RollingBody.outputs() (from the field where they describe it:
-        forces, adhesion, regime) and summary quantities of the field: slip-area
-        centroid (m) and peak traction (Pa)."""
-        s = self.field.summary()
-        law = self.law
-        o = self.kinematics()
-        o.update(
-            {
-                "Tx": self.out.Tx,
-                "Ty": self.out.Ty,
-                "Mz": self.out.Mz,
-                "xi_x": creepage(self.vx, self.Vx),
-                "xi_y": creepage(self.vy, self.Vx),
-                "xi_sp": creepage(self.Omega_z, self.Vx),
-                "a1": law.a1,
-                "a2": law.a2,
-                "p0": law.p0,
-                "adhesion": s["adhesion"],
-                "regime": SLIDING if self.out.sliding else ROLLING,
-            }
-        )
-        o.update({k: v for k, v in s.items() if k != "adhesion"})
-        return o
-
-    def traction_field(self) -> TractionField:
-        """The traction field at the current time (see ``LayerField.traction_field``)."""
-        return self.field.traction_field()
-
-    def field_arrays(self) -> dict[str, FloatArray]:
-        """The field at the current time as arrays, plus t (s): for ``numpy.savez``."""
-        a = self.field.arrays()
-        a["t"] = np.array(self.t)
-        return a
 
     def snapshot(self) -> tuple:
         """The whole internal state, field included: restore(snapshot()) is exact."""

@@ -78,12 +78,12 @@ from numpy.typing import NDArray
 from scipy.optimize import root
 
 from .._validate import InputError, count, finite, positive
-from ..body_state import BodyState, ContactOutputs
+from ..body_state import ContactOutputs
 from ..dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from ..integrator import LoadInput
-from ..kinematics import ROLLING, SLIDING, creepage
 from ..layer import LayerContact, TractionField
 from ..solvers import StageSolveError
+from ..transient_body import TransientBody
 from .contact import HalfSpaceContact
 from .influence import BlockConvolution, Grid, tangential_operator
 from .krylov import gmres
@@ -656,19 +656,9 @@ class HalfSpaceField:
         return la
 
     def arrays(self) -> dict[str, FloatArray]:
-        """The committed field as plain arrays (for ``numpy.savez``): x (nx,), y (ny,) in
-        m; tau_x, tau_y, p (ny, nx) in Pa; slip, inside (ny, nx) as 0/1; weights m^2."""
-        f = self.traction_field()
-        return {
-            "x": f.x,
-            "y": f.y,
-            "tau_x": f.tau_x,
-            "tau_y": f.tau_y,
-            "p": f.p,
-            "slip": f.slip.astype(np.int8),
-            "inside": f.inside.astype(np.int8),
-            "weights": f.weights,
-        }
+        """The present field as plain arrays (``TractionField.arrays``: for
+        ``numpy.savez``)."""
+        return self.traction_field().arrays()
 
     def displacement(self) -> FloatArray:
         """U = (A + k) tau of the committed field (m), (2, ny, nx)."""
@@ -740,7 +730,7 @@ class HalfSpaceField:
 
 
 # ---- the body on the field -----------------------------------------------------------------
-class TransientHalfSpaceBody(BodyState):
+class TransientHalfSpaceBody(TransientBody):
     """The rolling body of Eqs. (8)-(9) on Kalker's transient half-space field.
 
     RollingBody's interface (advance, set_load, outputs, snapshot/restore) with the
@@ -792,27 +782,11 @@ class TransientHalfSpaceBody(BodyState):
     def law(self) -> HalfSpaceContact | LayerContact:
         return self.field.contact
 
-    def cell_time(self) -> float:
-        """dx/|Vx| (s): the step that rolls one element (inf at Vx = 0)."""
-        return self.field.dx / abs(self.Vx) if self.Vx != 0.0 else math.inf
-
-    def substeps_for(self, h: float, cells: float = 1.0) -> int:
-        """Substeps that keep each step within ``cells`` elements rolled at the present
-        speed (``advance`` splits further only beyond MAX_CELLS_PER_STEP)."""
-        h = positive("h", h)
-        cells = positive("cells", cells)
-        return max(1, math.ceil(h * abs(self.Vx) / (cells * self.field.dx) - 1e-9))
-
     @cached_property
     def stiffness(self) -> float:
         """Tangential stiffness of the contact in full adhesion (N/m), see
         ``HalfSpaceField.adhesion_stiffness``; cached per load."""
         return self.field.adhesion_stiffness()
-
-    def set_shift(self, delta_x: float, delta_y: float = 0.0) -> None:
-        """Field after a static tangential shift (m) at Vx = 0 (Cattaneo)."""
-        self.field.set_shift(delta_x, delta_y)
-        self.out = self._outputs_now()
 
     def start_steady(self) -> None:
         """Replace the field by the steady rolling field of the present rigid slip: the
@@ -824,37 +798,6 @@ class TransientHalfSpaceBody(BodyState):
             raise InputError("Vx", self.Vx, "> 0 for start_steady")
         self.field.set_steady(self.vx / aV, self.vy / aV, self.Omega_z / aV)
         self.out = self._outputs_now()
-
-    def outputs(self) -> dict[str, float]:
-        """RollingBody's keys (forces, adhesion and regime from the field) and the field's
-        slip-area centroid (m) and peak traction (Pa)."""
-        s = self.field.summary()
-        law = self.law
-        o = self.kinematics()
-        o.update(
-            Tx=self.out.Tx,
-            Ty=self.out.Ty,
-            Mz=self.out.Mz,
-            xi_x=creepage(self.vx, self.Vx),
-            xi_y=creepage(self.vy, self.Vx),
-            xi_sp=creepage(self.Omega_z, self.Vx),
-            a1=law.a1,
-            a2=law.a2,
-            p0=law.p0,
-            adhesion=s["adhesion"],
-            regime=SLIDING if self.out.sliding else ROLLING,
-        )
-        o.update({k: v for k, v in s.items() if k != "adhesion"})
-        return o
-
-    def traction_field(self) -> TractionField:
-        return self.field.traction_field()
-
-    def field_arrays(self) -> dict[str, FloatArray]:
-        """The field at the current time as arrays, plus t (s): for ``numpy.savez``."""
-        a = self.field.arrays()
-        a["t"] = np.array(self.t)
-        return a
 
     def snapshot(self) -> tuple:
         """The whole internal state, field included: restore(snapshot()) is exact."""
