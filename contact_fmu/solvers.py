@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,6 +60,52 @@ def increasing_root(
     lo, hi = (a, b) if a < b else (b, a)
     tol = SOLVE_RTOL * (scale + abs(lo) + abs(hi))
     return float(brentq(r, lo, hi, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
+
+
+def bracketed_newton(
+    f: Callable[[float], tuple[float, float, Any]],
+    u0: float,
+    scale: float,
+    rtol: float,
+    max_iterations: int,
+    failure: Callable[[], str],
+    max_search: float = math.inf,
+) -> tuple[float, Any]:
+    """Root of a non-decreasing residual f(u) -> (r, dr/du, payload) from u0: Newton's
+    method with the tangent given, kept inside the bracket its iterates build
+    (bisection when a step leaves it; before a bracket exists, steps of 4 times the
+    Newton step, a geometric search); where the slope vanishes (saturation: full slip)
+    a step of ``scale`` toward the root. Converged when the Newton step, or the
+    bracket, is below rtol (scale + |u|). Returns (u, payload) of the last evaluation.
+    StageSolveError(failure()) after max_iterations evaluations, or once the search
+    is max_search scales from u0 without a bracket (no root within any plausible u).
+    The transient bodies' stage and step solves (field.c's solve_scalar mirrors it).
+    """
+    lo, hi = -math.inf, math.inf
+    u = u0
+    r, d, payload = f(u)
+    for _ in range(max_iterations):
+        if r == 0.0:
+            return u, payload
+        if r > 0.0:
+            hi = u
+        else:
+            lo = u
+        step = -r / d if d > 0.0 else math.copysign(scale, -r)
+        tol = rtol * (scale + abs(u))
+        if abs(step) <= tol:
+            return u, payload
+        bracketed = math.isfinite(lo) and math.isfinite(hi)
+        if not bracketed and abs(u - u0) > max_search * scale:
+            break
+        un = u + step
+        if not lo < un < hi:
+            un = 0.5 * (lo + hi) if bracketed else u + 4.0 * step
+        if bracketed and hi - lo <= tol:
+            return u, payload
+        u = un
+        r, d, payload = f(u)
+    raise StageSolveError(failure())
 
 
 # Safeguarded Newton: at most this many iterations before the bracketing fallback.

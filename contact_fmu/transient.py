@@ -63,9 +63,10 @@ from scipy.optimize import root
 from ._validate import InputError, count, finite, positive
 from .body_state import ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
-from .integrator import EvalBudget, LoadInput, StageSolveError
+from .integrator import V_SCALE_FLOOR, EvalBudget, LoadInput, StageSolveError
 from .layer import LayerContact, TractionField
 from .native import field as native_field
+from .solvers import SOLVE_RTOL, bracketed_newton
 from .transient_body import TransientBody
 
 FloatArray = NDArray[np.float64]
@@ -88,11 +89,6 @@ STRIP_RULES = ("sine", "uniform")
 # Smallest grids accepted: fewer cells cannot represent adhesion and slip in a strip.
 MIN_NX = 4
 MIN_NY = 2
-# Relative tolerance of the stage solves on the slip velocity (in units of its scale
-# creep_full_slip |Vx| plus its magnitude): far below the discretisation errors.
-SOLVE_RTOL = 1e-13
-# Floor of |Vx| (m/s) for the velocity scale of the stage solver (not the physics).
-V_SCALE_FLOOR = 1e-9
 # Entering material: its time in the contact is d_in/|Vx| (creepage form) unless the
 # stage speed is below this fraction of the step's mean speed (Vx crossing 0).
 MIN_SPEED_FRACTION = 0.1
@@ -954,42 +950,21 @@ class TransientRollingBody(TransientBody, EvalBudget):
         return self._solve_vector(vector, residual, u_hat.copy(), scale, evaluate)
 
     def _solve_scalar(self, f, u0: float, target: float, scale: float) -> tuple:
-        """Root of the non-decreasing stage residual: Newton's method with the field's
-        tangent (``StageField.dTx_dvx``), kept inside the bracket the iterates build
-        (bisection when a step leaves it). Returns the evaluation at the root.
+        """Root of the non-decreasing stage residual (``solvers.bracketed_newton`` with
+        the field's tangent ``StageField.dTx_dvx``): the evaluation at the root.
 
         f(u) -> (r, dr/du, payload). Converged when the Newton correction is below
         SOLVE_RTOL (scale + |u|).
         """
-        lo, hi = -math.inf, math.inf
-        u = u0
-        r, d, ev = f(u)
-        for _ in range(MAX_STAGE_ITERATIONS):
-            if r == 0.0:
-                return ev
-            if r > 0.0:
-                hi = u
-            else:
-                lo = u
-            step = -r / d if d > 0.0 else math.copysign(scale, -r)
-            tol = SOLVE_RTOL * (scale + abs(u))
-            if abs(step) <= tol:
-                return ev
-            un = u + step
-            if not lo < un < hi:
-                if math.isfinite(lo) and math.isfinite(hi):
-                    un = 0.5 * (lo + hi)
-                else:  # the root lies beyond the open end: move out geometrically
-                    un = u + 4.0 * step
-            if math.isfinite(lo) and math.isfinite(hi) and hi - lo <= tol:
-                return ev
-            u = un
-            r, d, ev = f(u)
         cap = self.law.mu * self.law.P
-        raise StageSolveError(
-            f"no slip velocity satisfies the stage equation (target force {target:.6g} N "
-            f"against mu P = {cap:.6g} N)"
-        )
+
+        def failure() -> str:
+            return (
+                f"no slip velocity satisfies the stage equation (target force {target:.6g} "
+                f"N against mu P = {cap:.6g} N)"
+            )
+
+        return bracketed_newton(f, u0, scale, SOLVE_RTOL, MAX_STAGE_ITERATIONS, failure)[1]
 
     def _solve_vector(self, f, residual, u0: FloatArray, scale: FloatArray, evaluate) -> tuple:
         """Stage solve with dynamic Vy and/or Omega_z: Newton's method with the field's

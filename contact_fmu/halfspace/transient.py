@@ -80,9 +80,9 @@ from scipy.optimize import root
 from .._validate import InputError, count, finite, positive
 from ..body_state import ContactOutputs
 from ..dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
-from ..integrator import LoadInput
+from ..integrator import V_SCALE_FLOOR, LoadInput
 from ..layer import LayerContact, TractionField
-from ..solvers import StageSolveError
+from ..solvers import StageSolveError, bracketed_newton
 from ..transient_body import TransientBody
 from .contact import HalfSpaceContact
 from .influence import BlockConvolution, Grid, tangential_operator
@@ -117,7 +117,7 @@ SHIFT_FORCE_TOL = 1e-7
 TANGENT_RTOL = 1e-8
 # Outer (slip velocity) iteration: relative tolerance on vx in units of its scale, and
 # the iteration cap (typically 2 to 4 iterations).
-SOLVE_RTOL = 1e-11
+OUTER_RTOL = 1e-11
 MAX_OUTER = 100
 # Columns to spare on each side of the contact, and the most cells a step may roll (the
 # material in the contact after a step must have been on the lattice before it). Two
@@ -135,8 +135,6 @@ MAX_SEARCH = 1e6
 # of the slip mass on the contact's stiffness K resolved by at least pi steps per
 # period), 1 - 1/z beyond (tending to backward Euler, L-stable). docs/halfspace.md.
 THETA_Z = 2.0
-# Floor of |Vx| (m/s) in the velocity scale of the outer solve (not the physics).
-V_SCALE_FLOOR = 1e-9
 
 
 # ---- the contact problem of one step ---------------------------------------------------
@@ -927,8 +925,16 @@ class TransientHalfSpaceBody(TransientBody):
             return r, m_h + th * slope, res
 
         vscale = self._velocity_scale(h)
-        vx, res = _increasing_root(
-            evaluate, vn + h * self._dv, vscale, self.law.mu * self.law.P, target
+        cap = self.law.mu * self.law.P
+
+        def failure() -> str:
+            return (
+                f"no slip velocity satisfies the step equation (target force {target:.6g} N "
+                f"against mu P = {cap:.6g} N)"
+            )
+
+        vx, res = bracketed_newton(
+            evaluate, vn + h * self._dv, vscale, OUTER_RTOL, MAX_OUTER, failure, MAX_SEARCH
         )
         self._dv = (vx - vn) / h
         Vx = Vx_base + b.A2 * (vx - vn)
@@ -964,45 +970,6 @@ def _checked(L: Loads) -> Loads:
     for name, val in zip(Loads._fields, L, strict=True):
         finite(name, val)
     return L
-
-
-def _increasing_root(f, u0: float, scale: float, cap: float, target: float) -> tuple[float, object]:
-    """Root of the non-decreasing residual f(u) -> (r, r', payload): Newton's method with
-    the exact tangent, kept inside the bracket its iterates build (bisection when a step
-    leaves it; geometric search before a bracket exists). Returns (u, payload)."""
-    lo, hi = -math.inf, math.inf
-    u = u0
-    r, d, ev = f(u)
-    for _ in range(MAX_OUTER):
-        if r == 0.0:
-            return u, ev
-        if r > 0.0:
-            hi = u
-        else:
-            lo = u
-        tol = SOLVE_RTOL * (scale + abs(u))
-        if d > 0.0:
-            step = -r / d
-            if abs(step) <= tol:
-                return u, ev
-        else:  # saturated (full slip, no slip inertia): no slope to follow
-            step = math.copysign(scale, -r)
-        if not (math.isfinite(lo) and math.isfinite(hi)) and abs(u - u0) > MAX_SEARCH * scale:
-            break  # no root within any plausible slip: the loads exceed mu P
-        un = u + step
-        if not lo < un < hi:
-            if math.isfinite(lo) and math.isfinite(hi):
-                un = 0.5 * (lo + hi)
-            else:
-                un = u + 4.0 * step
-        if math.isfinite(lo) and math.isfinite(hi) and hi - lo <= tol:
-            return u, ev
-        u = un
-        r, d, ev = f(u)
-    raise StageSolveError(
-        f"no slip velocity satisfies the step equation (target force {target:.6g} N "
-        f"against mu P = {cap:.6g} N)"
-    )
 
 
 __all__ = [
