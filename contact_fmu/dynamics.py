@@ -94,9 +94,14 @@ class Body:
         """Effective mass M/(1 + eta) = M A2 (kg) of the slip equation (Eq. 20)."""
         return self.M * self.A2
 
+    def tx_demand(self, Fx_ex: float, My_ex: float) -> float:
+        """Tx = A2 Fx_ex - A1 My_ex / Rx (N): the force Eq. (26) asks of the contact, the
+        right-hand side of the slip equation's stages (Eq. 20); floats in, float out."""
+        return self.A2 * Fx_ex - self.A1 * My_ex / self.Rx
+
     def tx_quasistationary(self, Fx_ex: ArrayLike, My_ex: ArrayLike) -> NDArray[np.float64]:
-        """Tx = A2 Fx_ex - A1 My_ex / Rx (N), Eq. (26) in dimensional form."""
-        return self.A2 * np.asarray(Fx_ex, float) - self.A1 * np.asarray(My_ex, float) / self.Rx
+        """Tx = A2 Fx_ex - A1 My_ex / Rx (N), Eq. (26) in dimensional form (arrays)."""
+        return self.tx_demand(np.asarray(Fx_ex, float), np.asarray(My_ex, float))
 
 
 def load_utilisation(

@@ -375,13 +375,11 @@ class RollingBody(BodyState, EvalBudget):
 
     def _targets(self, L: Loads) -> FloatArray:
         """Forces the stages balance: Eqs. (26), (29), (30) in the QS limit."""
-        b = self.body
-        return np.array([b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx, L.Fy_ex, L.Mz_ex])[self._act]
+        return np.array([self._target_x(L), L.Fy_ex, L.Mz_ex])[self._act]
 
     def _target_x(self, L: Loads) -> float:
         """Eq. (26)'s demand A2 Fx_ex - A1 My_ex/Rx (N), the first of ``_targets``."""
-        b = self.body
-        return b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx
+        return self.body.tx_demand(L.Fx_ex, L.My_ex)
 
     def _drive(self, L: Loads) -> float:
         """A1 (Fx_ex + My_ex/Rx): the force that accelerates Vx once T is eliminated."""

@@ -860,8 +860,7 @@ class TransientRollingBody(TransientBody, EvalBudget):
     def _targets(self, L: Loads) -> FloatArray:
         """Right-hand sides of the stage equations: Eq. (20) (A2 Fx - A1 My/Rx), Eqs.
         (10)-(11) where dynamic (N, N m)."""
-        b = self.body
-        t = [b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx]
+        t = [self.body.tx_demand(L.Fx_ex, L.My_ex)]
         if self.lateral.dynamic_vy:
             t.append(L.Fy_ex)
         if self.lateral.dynamic_spin:

@@ -349,7 +349,7 @@ def _step_case(eta: float, Fx_units: float, case: str, transits: float) -> Durat
         tb.start_steady()
         T0 = b.A2 * Fx
         L1 = Loads(Fx_ex=1.25 * Fx) if case == "Fx" else Loads(Fx_ex=Fx, My_ex=-0.2 * unit * b.Rx)
-    target = b.A2 * L1.Fx_ex - b.A1 * L1.My_ex / b.Rx  # Eq. (26)
+    target = b.tx_demand(L1.Fx_ex, L1.My_ex)  # Eq. (26)
     xi = steady_creepage(c, target, 0.002)
     # On the quasistationary manifold vx = xi* Vx(t), so the full slip equation keeps
     # m dvx/dt = m xi* dVx/dt = m xi* A1 (Fx + My/Rx)/M, which Eq. (26) drops (O(eps)).

@@ -866,8 +866,7 @@ class TransientHalfSpaceBody(TransientBody):
 
     def _target(self, L: Loads) -> float:
         """A2 Fx_ex - A1 My_ex/Rx (N): the force of Eq. (26)."""
-        b = self.body
-        return b.A2 * L.Fx_ex - b.A1 * L.My_ex / b.Rx
+        return self.body.tx_demand(L.Fx_ex, L.My_ex)
 
     def theta_weight(self, h: float) -> float:
         """Weight of the step's end in the time integration (-): 1/2 (the trapezoidal
