@@ -642,8 +642,10 @@ class RollingBody(BodyState, EvalBudget):
             y = states(u[None, :])[0]
             if i == 0:
                 y_hat = self.y + (1 - GAMMA) / GAMMA * (y - self.y)
-                if algebraic:
-                    y_hat[self._idx] = y[self._idx]  # no memory in the QS limit
+                # no memory where an unknown has no mass (the QS limit; the slip of an
+                # eta = inf body): its stage is algebraic, started from stage 1's root
+                massless = [i for i, mass in zip(self._idx, m, strict=True) if mass == 0.0]
+                y_hat[massless] = y[massless]
         T = self._forces(y[None, :])[0]
         T[self._act] = target - m * (u - u_hat) / hg
         return y, T

@@ -1412,7 +1412,7 @@ static int snewton(const vstage *s, const double *scale, double *u) {
 
 /* RollingBody._step with _sdirk_vector, held loads L = (Fx_ex, Fy_ex, My_ex, Mz_ex): the
  * two stages in turn, each from its explicit part, y_hat_2 = y_n + (1 - gamma)/gamma
- * (Y1 - y_n) (the unknowns Y1's in the algebraic limit: no memory there); the forces
+ * (Y1 - y_n) (an unknown without mass, Y1's: no memory there); the forces
  * close the last stage's balance. The kept Newton matrix is Lobatto's alone. */
 static int sdirk_vstep(const cf_params *p, cf_vstate *w, double h, const double L[4],
                        int algebraic) {
@@ -1445,8 +1445,8 @@ static int sdirk_vstep(const cf_params *p, cf_vstate *w, double h, const double 
         vstate_at(&s, u, 1, Y);
         if (st == 0) {
             for (int k = 0; k < 4; k++) s.y[k] = yn[k] + (1.0 - g) / g * (Y[k] - yn[k]);
-            if (algebraic)
-                for (int i = 0; i < s.n; i++) s.y[s.act[i] + 1] = Y[s.act[i] + 1];
+            for (int i = 0; i < s.n; i++) /* no memory where an unknown has no mass */
+                if (s.m[i] == 0.0) s.y[s.act[i] + 1] = Y[s.act[i] + 1];
         }
     }
     forces_at(p, Y, T, &cache);
