@@ -558,15 +558,18 @@ class RollingBody(BodyState, EvalBudget):
         Y2 = states(UU[None, n:], 1)
         return Y2[0], self._forces(Y2)[0]
 
-    def _creep_start(self, un: FloatArray, V: float) -> FloatArray:
+    def _creep_start(self, un: FloatArray, V: float, base: FloatArray | None = None) -> FloatArray:
         """A start for a stage's unknowns at the speed V: the last state's creepages
         (u/Vx: the law is a function of them, and Vx may change much in one step of
         Eq. 28, or reverse), with the slip (vx[, Vy]) pulled back to half the onset of
         full slip where it is beyond it (the law is flat in the slip's magnitude there,
-        and Newton finds no direction). The algebraic stage's first start."""
-        ratio = _signed(V) / _signed(self.y[0])
+        and Newton finds no direction). The algebraic stage's first start. ``base``: the
+        state the unknowns un belong to (default the last state; SDIRK2's second stage
+        gives its explicit part)."""
+        base = self.y if base is None else base
+        ratio = _signed(V) / _signed(base[0])
         u = un * ratio
-        Y = self.y.copy()
+        Y = base.copy()
         Y[0] = V
         Y[self._idx] = u
         Y = self._apply_ratios(Y)
@@ -638,7 +641,16 @@ class RollingBody(BodyState, EvalBudget):
             def residuals(U: FloatArray, states=states, target=target, u_hat=u_hat):
                 return m * (U - u_hat) / hg + self._forces(states(U))[:, self._act] - target
 
-            u = newton(residuals, u_hat, self._scale(Vb))
+            # from the explicit part; where that fails (a start beyond full slip, where
+            # the law is flat), from its creepages pulled back, then without slip
+            starts = (
+                lambda u_hat=u_hat: u_hat,
+                lambda u_hat=u_hat, Vb=Vb, y_hat=y_hat: self._creep_start(u_hat, Vb, y_hat),
+                lambda u_hat=u_hat, Vb=Vb, y_hat=y_hat: self._no_slip(
+                    self._creep_start(u_hat, Vb, y_hat)
+                ),
+            )
+            u = _newton_starts(residuals, starts, self._scale(Vb))
             y = states(u[None, :])[0]
             if i == 0:
                 y_hat = self.y + (1 - GAMMA) / GAMMA * (y - self.y)
@@ -672,6 +684,18 @@ def _newton_from(residuals, starts, scale, jacobian, memo) -> tuple[FloatArray, 
         except StageSolveError:
             memo = {}
     return newton(residuals, starts[-1](), scale, jacobian, memo), memo
+
+
+def _newton_starts(residuals, starts, scale) -> FloatArray:
+    """solvers.newton (no kept Jacobian) from each start (a function forming it) in turn
+    until one converges; scipy's hybrid method only from the last; StageSolveError if
+    none does. The SDIRK2 stages (stepper.c's sdirk_vstep tries the same starts)."""
+    for start in starts[:-1]:
+        try:
+            return newton(residuals, start(), scale, hybrid=False)
+        except StageSolveError:
+            pass
+    return newton(residuals, starts[-1](), scale)
 
 
 def _signed(V: float) -> float:

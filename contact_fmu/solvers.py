@@ -165,7 +165,10 @@ def newton(
     that Jacobian (n, n) for the steps du instead (a caller that knows which residuals
     an unknown moves evaluates fewer). Newton with backtracking on |r|; scipy's hybrid
     method if that stalls (``hybrid``; else StageSolveError, for a caller that tries
-    another start first).
+    another start first). A step along which the backtracking finds no decrease of |r|
+    is a stall unless the full step is already within the stopping rule: on a
+    saturated law (full slip: a flat residual) it would otherwise walk u off to
+    1e200 and stop there on the relative step test.
 
     ``memo``: a Jacobian kept from an earlier solve (memo["J"]) and the one this solve
     forms last, written back. A kept Jacobian (and the last fresh one, in later
@@ -201,6 +204,12 @@ def newton(
             if kept or norm < norm0 or lam < LINE_SEARCH_MIN:
                 break
             lam *= 0.5
+        if (
+            not kept
+            and not norm < norm0
+            and not np.all(np.abs(step) <= SOLVE_RTOL * (np.abs(u) + scale))
+        ):
+            break  # no descent along a step that is not small: no root here (saturation)
         if kept and not norm <= CONTRACTION_MAX * norm0:
             J = None  # the step is dropped; a new Jacobian at u
             continue

@@ -1266,6 +1266,14 @@ static double norm2(int N, const double *r) {
     return sqrt(q);
 }
 
+/* every |step_i| <= rtol (|u_i| + scale_i): solvers.newton's stopping rule on a full step */
+static int small_step(int n, const double *step, const double *u, const double *scale,
+                      double rtol) {
+    for (int i = 0; i < n; i++)
+        if (!(fabs(step[i]) <= rtol * (fabs(u[i]) + scale[i]))) return 0;
+    return 1;
+}
+
 /* solvers.newton on the Lobatto stage system (u0 = (un, un)) with its memo: Jk (valid if
  * *kept) the Jacobian kept from the last step, replaced by the last one formed;
  * CF_FALLBACK where Python goes on with scipy's hybrid method */
@@ -1298,6 +1306,8 @@ static int vnewton(const vstage *s, const double *scale, double *u, double *Jk, 
             if (kept || norm < norm0 || lam < p->line_search_min) break;
             lam *= 0.5;
         }
+        if (!kept && !(norm < norm0) && !small_step(N, step, u, scale, p->solve_rtol))
+            return CF_FALLBACK; /* no descent along a step that is not small (solvers.newton) */
         if (kept && !(norm <= p->contraction_max * norm0)) {
             have = 0; /* the step is dropped; a new Jacobian at u */
             continue;
@@ -1399,6 +1409,8 @@ static int snewton(const vstage *s, const double *scale, double *u) {
             if (norm < norm0 || lam < p->line_search_min) break;
             lam *= 0.5;
         }
+        if (!(norm < norm0) && !small_step(n, step, u, scale, p->solve_rtol))
+            return CF_FALLBACK; /* no descent along a step that is not small (solvers.newton) */
         int done = 1;
         for (int i = 0; i < n; i++) {
             u[i] = un[i];
@@ -1441,7 +1453,17 @@ static int sdirk_vstep(const cf_params *p, cf_vstate *w, double h, const double 
             u[i] = s.un[i] = s.y[s.act[i] + 1];
             scale[i] = sc[s.act[i]];
         }
-        if (snewton(&s, scale, u)) return CF_FALLBACK;
+        /* from the explicit part; else from its creepages pulled back, then without slip
+         * (RollingBody._sdirk_vector's starts) */
+        if (snewton(&s, scale, u)) {
+            creep_start(&s, s.Vb[1], u);
+            if (snewton(&s, scale, u)) {
+                creep_start(&s, s.Vb[1], u);
+                for (int i = 0; i < s.n; i++)
+                    if (s.act[i] < 2) u[i] = 0.0; /* _no_slip: vx, Vy; not the spin */
+                if (snewton(&s, scale, u)) return CF_FALLBACK;
+            }
+        }
         vstate_at(&s, u, 1, Y);
         if (st == 0) {
             for (int k = 0; k < 4; k++) s.y[k] = yn[k] + (1.0 - g) / g * (Y[k] - yn[k]);
