@@ -1,7 +1,7 @@
 """Benchmark of the steady-rolling half-space solver: FFT against a dense influence matrix.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace.py [--grids 16 32 64 128]
-        [--repeat 3] [--dense-limit-mb 1500] [--json out.json]
+        [--repeat 3] [--dense-limit-mb 1500] [--json out.json] [--write]
     ... bench_halfspace.py --table N N1 N2 N3 [--points 60]       (``table_report``)
 
 Steady rolling of the railway wheel on rail (contact_fmu.halfspace.railway, Hertz,
@@ -23,6 +23,9 @@ iteration (single level, slip rows preconditioned by their diagonal alone, no
 oversolving guard), all three timed alternately. Newton and GMRES counts are the fine
 grid's; "GMRES all levels" weights each coarse level's iterations by its share of the
 elements.
+
+``--write`` replaces the blocks BLOCK (times) and ITERATIONS_BLOCK (Newton and GMRES
+counts) of docs/performance.md.
 
 Threaded BLAS is switched off (the environment variables below are set before numpy
 is imported): on the shared 2-core machine OpenBLAS threads contend with the other
@@ -49,6 +52,15 @@ import numpy as np  # noqa: E402
 from contact_fmu.halfspace import rolling  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
+
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
+DOC = harness.PERFORMANCE
+BLOCK = "bench_halfspace.py"  # the marker blocks it writes
+ITERATIONS_BLOCK = "bench_halfspace.py iterations"
 
 CASES = {"longitudinal": (0.3, 0.0, 0.0), "combined+spin": (0.2, 0.2, 0.3)}
 # CONTACT's published steady-rolling timings, Hertzian cases (references.md; 2016
@@ -238,6 +250,39 @@ def markdown(res: dict) -> str:
     return "\n".join(lines)
 
 
+def _s(t: float | None) -> str:
+    return "skipped" if t is None else f"{t:.3g}"
+
+
+def doc_tables(res: dict, command: str) -> tuple[str, str]:
+    """The blocks of docs/performance.md: the times per grid (FFT, single-level,
+    baseline, dense; both cases side by side) and the fine-grid Newton / GMRES counts of
+    the default against the baseline."""
+    long, comb = (res["cases"][k] for k in CASES)
+    head = "| grid | elements in contact | longitudinal: FFT (s) | single-level (s) | baseline (s) "
+    head += "| dense (s) | combined + spin: FFT (s) | single-level (s) | baseline (s) | dense (s) |"
+    times = [harness.made_by(command), "", head, "|---|---|---|---|---|---|---|---|---|---|"]
+    counts = [
+        f"Made by the same run (`{command}`).",
+        "",
+        "| grid | longitudinal | baseline | combined + spin | baseline |",
+        "|---|---|---|---|---|",
+    ]
+    for n in res["grids"]:
+        cells = [f"{n} x {n}", str(res["setup"][n]["elements_in_contact"])]
+        its = [f"{n} x {n}"]
+        for e in (long[n], comb[n]):
+            cells += [_s(e[k]) for k in ("fft_s", "single_s", "previous_s")]
+            cells.append(_s(e.get("dense_s")))
+            its += [
+                f"{e['newton']} / {e['gmres']}",
+                f"{e['previous_newton']} / {e['previous_gmres']}",
+            ]
+        times.append("| " + " | ".join(cells) + " |")
+        counts.append("| " + " | ".join(its) + " |")
+    return "\n".join(times), "\n".join(counts)
+
+
 def table_report(n: int, nodes: tuple[int, int, int], points: int, seed: int = 1) -> dict:
     """Build the railway creep-force table on an n x n solver grid and measure its
     interpolation error against direct solves at random points of the table box."""
@@ -294,6 +339,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dense-limit-mb", type=float, default=1500.0)
     ap.add_argument("--json", type=str, default=None)
+    ap.add_argument("--write", action="store_true", help="update docs/performance.md")
     ap.add_argument(
         "--table",
         type=int,
@@ -312,8 +358,15 @@ def main(argv: list[str] | None = None) -> None:
             with open(args.json, "w") as f:
                 json.dump(rep, f, indent=1)
         return
-    res = run(args.grids or [16, 32, 64, 128], args.repeat, args.dense_limit_mb)
+    grids = args.grids or [16, 32, 64, 128]
+    res = run(grids, args.repeat, args.dense_limit_mb)
     print(markdown(res))
+    if args.write:
+        cmd = "python benchmarks/bench_halfspace.py"
+        cmd += f" --grids {' '.join(map(str, grids))}" if args.grids else ""
+        times, counts = doc_tables(res, f"{cmd} --repeat {args.repeat} --write")
+        harness.write_block(DOC, BLOCK, times)
+        harness.write_block(DOC, ITERATIONS_BLOCK, counts)
     print("\nCONTACT (published, 2016 hardware, one thread):", CONTACT_PUBLISHED)
     if args.json:
         with open(args.json, "w") as f:

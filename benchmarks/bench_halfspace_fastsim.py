@@ -62,12 +62,12 @@ def cpu(f, repeat: int) -> float:
     return statistics.median(times)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=66)
     ap.add_argument("--points", type=int, default=12)
     ap.add_argument("--repeat", type=int, default=7)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     print(f"# {platform.processor() or platform.machine()}, python {platform.python_version()}")
     print(f"# exact solver and FASTSIM on {args.grid} x {args.grid}; max |dT| in % of mu P")
     print("| contact | curve | parabolic: max dT (where) | elliptic: max dT (where) |")

@@ -37,10 +37,15 @@ from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import Instance
 from fmu_build import native_fmu
 
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "reliability.md"
-MARKS = ("<!-- bench_hunt_step.py: table -->", "<!-- bench_hunt_step.py: end -->")
+BLOCK = "bench_hunt_step.py"  # the marker block it writes
 NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
 LOAD_LIMIT = 1e9  # integrator.LOAD_LIMIT
 
@@ -167,23 +172,13 @@ def table(rows: list[tuple[str, str, dict]], args: argparse.Namespace) -> str:
     return "\n".join(lines)
 
 
-def write(text: str) -> None:
-    page = DOC.read_text()
-    begin, end = MARKS
-    head, sep, rest = page.partition(begin)
-    _, sep2, tail = rest.partition(end)
-    if not (sep and sep2):
-        raise SystemExit(f"{DOC} lacks the markers {begin} ... {end}")
-    DOC.write_text(head + begin + "\n" + text + "\n" + end + tail)
-
-
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=6)
     ap.add_argument("--calls", type=int, default=30)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     rows = []
     for label, target, path in kinds():
@@ -194,7 +189,7 @@ def main() -> None:
     text = table(rows, args)
     print(text)
     if args.write:
-        write(text)
+        harness.write_block(DOC, BLOCK, text)
 
 
 if __name__ == "__main__":
