@@ -129,7 +129,8 @@ BENCHMARKS = [
         quick=("--grids", "8", "--skip-coupled"),
     ),
     Benchmark(
-        "report", "", "contact-fmu report: work-precision, stiff and extreme cases",
+        "report", "",
+        "contact-fmu report: work-precision, stiff cases (whole sections; also docs/accuracy.md)",
         quick=("--quick",), call=_report,
         # whole sections by heading (contact_fmu/report/command.py), not marker blocks
     ),

@@ -32,7 +32,6 @@ import contextlib
 import dataclasses
 import datetime
 import importlib
-import platform
 import shutil
 import subprocess
 import sys
@@ -441,11 +440,10 @@ def throughput(trivial: Path, repeats: int) -> list[dict]:
 # ---- markdown ----------------------------------------------------------------------------
 def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
     today = datetime.date.today().isoformat()
-    cpu = platform.processor() or platform.machine()
     out = [
         f"Measured by `.venv/bin/python benchmarks/bench_cosim.py --steps {steps} --repeats "
-        f"{repeats} --write` on {today} ({cpu}, Python {platform.python_version()}, shared "
-        "2-core machine; all numbers of one run, in one process). Absolute times move with "
+        f"{repeats} --write` on {today} ({harness.machine()}; all numbers of one run, in one "
+        "process). Absolute times move with "
         "the machine's load by up to 2x; the ratios, measured side by side, much less.",
         "",
         "### FMU step cost against a trivial FMU",

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import platform
 import subprocess
 import sys
 import tempfile
@@ -75,8 +74,7 @@ def report(costs: dict[int, dict[str, float]], step: float) -> str:
     small = min(costs)
     lines = [
         f"Made by `benchmarks/bench_fmu_states.py --write` on {datetime.date.today()} "
-        f"({platform.machine()}, Python {platform.python_version()}; a shared 2-core "
-        "machine: the ratios are the result).",
+        f"({harness.machine()}; the ratios are the result).",
         "",
         "The native Fig. 13 FMU from the C importer (tests/native_importer.c, mode `states`):"
         " N states got, set in a shuffled order, sized in another (the lookup alone) and"

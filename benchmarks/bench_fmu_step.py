@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import importlib
-import platform
 import sys
 import time
 from pathlib import Path
@@ -198,12 +197,10 @@ def table(rows: list[dict]) -> str:
 def markdown(rows: list[dict], steps: int, repeats: int) -> str:
     """The body of the docs section: how it was measured, then the table."""
     today = datetime.date.today().isoformat()
-    cpu = platform.processor() or platform.machine()
     return (
-        f"Measured by `benchmarks/bench_fmu_step.py --write` on {today} ({cpu}, "
-        f"Python {platform.python_version()}, {steps} steps; each step the fastest of "
-        f"{repeats} runs after {WARMUP} untimed, full FMU {max(2, repeats // 2)}; shared "
-        "2-core machine). Per "
+        f"Measured by `benchmarks/bench_fmu_step.py --write` on {today} ({harness.machine()}; "
+        f"{steps} steps; each step the fastest of "
+        f"{repeats} runs after {WARMUP} untimed, full FMU {max(2, repeats // 2)}). Per "
         "communication step: setReal of the inputs, doStep, getReal of the scene's outputs "
         "through fmpy's FMU2Slave. The full FMU of a mode holds every variable and model "
         "part (Eqs. 10-11 integrated, both steppers); it runs the scene's inputs with its "

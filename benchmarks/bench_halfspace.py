@@ -43,7 +43,6 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
-import statistics  # noqa: E402
 import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 
@@ -66,27 +65,6 @@ CASES = {"longitudinal": (0.3, 0.0, 0.0), "combined+spin": (0.2, 0.2, 0.3)}
 # CONTACT's published steady-rolling timings, Hertzian cases (references.md; 2016
 # hardware, one thread): elements per side -> seconds
 CONTACT_PUBLISHED = {11: 1.9e-3, 19: 9.7e-3, 35: 0.134}
-
-
-def _time(fn, repeat: int) -> tuple[float, object]:
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
-
-
-def _time_interleaved(fns: list, repeat: int) -> list[tuple[float, object]]:
-    """Median times of several solves run alternately (the same machine load for each)."""
-    times: list[list[float]] = [[] for _ in fns]
-    outs: list[object] = [None] * len(fns)
-    for _ in range(repeat):
-        for k, fn in enumerate(fns):
-            t0 = time.perf_counter()
-            outs[k] = fn()
-            times[k].append(time.perf_counter() - t0)
-    return [(statistics.median(t), o) for t, o in zip(times, outs, strict=True)]
 
 
 def _previous(patch, *args):
@@ -147,13 +125,16 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
         }
         for name, w in CASES.items():
             args = (w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
-            (t_fft, sol), (t_single, s1), (t_prev, s0) = _time_interleaved(
-                [
-                    lambda a=args, p=patch: solve_rolling(p, *a, method="iterative"),
-                    lambda a=args, p=single: solve_rolling(p, *a, method="iterative"),
-                    lambda a=args, p=single: _previous(p, *a),
-                ],
+            timed = harness.interleaved(  # median of each, the same machine load for each
+                {
+                    "fft": lambda a=args, p=patch: solve_rolling(p, *a, method="iterative"),
+                    "single": lambda a=args, p=single: solve_rolling(p, *a, method="iterative"),
+                    "previous": lambda a=args, p=single: _previous(p, *a),
+                },
                 repeat,
+            )
+            (t_fft, sol), (t_single, s1), (t_prev, s0) = (
+                (timed[k].median, timed[k].result) for k in ("fft", "single", "previous")
             )
             g = float(patch.g.max())
             entry = {
@@ -175,7 +156,8 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
                 "adhesion": sol.adhesion_fraction,
             }
             if dense_patch is not None:
-                t_dense, sd = _time(lambda a=args, p=dense_patch: solve_rolling(p, *a), repeat)
+                dense = harness.repeated(lambda a=args, p=dense_patch: solve_rolling(p, *a), repeat)
+                t_dense, sd = dense.median, dense.result
                 entry["dense_s"] = t_dense
                 entry["dense_over_fft"] = t_dense / t_fft
                 entry["max_dtau_over_g"] = float(np.abs(sd.tau - sol.tau).max() / patch.g.max())

@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import math
-import platform
 import time
 from pathlib import Path
 
@@ -152,8 +151,7 @@ def table(rows: list[tuple[str, str, dict]], args: argparse.Namespace) -> str:
     lines = [
         f"Made by `python benchmarks/bench_hunt_step.py --instances {args.instances} "
         f"--calls {args.calls} --seed {args.seed} --write` on {datetime.date.today()} "
-        f"({platform.machine()}, Python {platform.python_version()}, the shared 2-core "
-        "machine with other jobs running), max_work at its default 10,000.",
+        f"({harness.machine()}), max_work at its default 10,000.",
         "",
         "| FMU | target | calls (OK/Warning/Discard) | slowest doStep (s) | its status | its t, h "
         "(s) | its parameters and inputs |",

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import platform
 import subprocess
 import sys
 import tempfile
@@ -184,9 +183,8 @@ def full_body_costs(steps: int, repeats: int) -> dict[str, float]:
 def full_report(full: dict[str, float], args) -> str:
     lines = [
         f"Made by `benchmarks/bench_native.py --steps {args.steps} --repeats {args.repeats}"
-        f" --full-body-only --write` on {datetime.date.today()} ({platform.machine()}, "
-        f"Python {platform.python_version()}; a shared 2-core machine: the ratios are the "
-        "result).",
+        f" --full-body-only --write` on {datetime.date.today()} ({harness.machine()}; the "
+        "ratios are the result).",
         "",
         "The full body FMU (`--full body`: Eqs. 8-11 with the law's spin, stepper.c's vector "
         "step on both targets) through fmpy's FMU2Slave, the full method: Fx_ex = 0.3 mu P, "
@@ -206,6 +204,7 @@ def full_report(full: dict[str, float], args) -> str:
         "(integrator._sdirk_vector, mirrored in C: the same iteration), Lobatto IIIC's "
         "coupled pair keeps its matrix from step to step (simplified Newton).",
     ]
+    return "\n".join(lines) + "\n"
 
 
 def spin_costs(steps: int, repeats: int) -> dict[str, float]:
@@ -241,8 +240,8 @@ def spin_report(cost: dict[str, float], args) -> str:
     us = {k: 1e6 * v for k, v in cost.items()}
     lines = [
         f"Made by `benchmarks/bench_native.py --spin --steps {args.steps} --repeats "
-        f"{args.repeats} --write` on {datetime.date.today()} ({platform.machine()}, Python "
-        f"{platform.python_version()}; a shared 2-core machine: the ratios are the result).",
+        f"{args.repeats} --write` on {datetime.date.today()} ({harness.machine()}; the ratios "
+        "are the result).",
         "",
         "The full contact FMU (`python -m fmu_build --full contact`, and `--native`) with "
         "new kinematics and spin every step (partial slip, the load held), through fmpy's "
@@ -308,8 +307,8 @@ def report(cost: dict[str, float], rates: dict[str, float], size: dict[str, int]
     q = us["native quasistationary"]
     lines = [
         f"Made by `benchmarks/bench_native.py --steps {args.steps} --repeats {args.repeats}"
-        f" --write` on {datetime.date.today()} ({platform.machine()}, Python "
-        f"{platform.python_version()}; a shared 2-core machine: the ratios are the result).",
+        f" --write` on {datetime.date.today()} ({harness.machine()}; the ratios are the "
+        "result).",
         "",
         "Step cost through fmpy's FMU2Slave (setReal, doStep, getReal; Fig. 13, eta = 3, "
         f"the first {args.steps} steps of 1.75e-4 s; mean of each step's fastest of "

@@ -31,7 +31,6 @@ for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import datetime  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -164,8 +163,7 @@ def main(argv: list[str] | None = None) -> int:
         body = "\n\n".join(
             [
                 f"Measured by `benchmarks/bench_study.py --workers {args.workers} --repeats "
-                f"{args.repeats} --write` ({when}, {platform.machine()}, {os.cpu_count()} "
-                "cores shared with other developers' CPU-heavy work at the time, 1-minute load "
+                f"{args.repeats} --write` ({when}, {harness.machine()}; 1-minute load "
                 f"average {load_before:.1f} before and {load_after:.1f} after: the numbers "
                 "vary with the load, each is the fastest of the repeats (sweeps "
                 f"{SWEEP_REPEATS * args.repeats}, tables {args.repeats}), serial and Dask "

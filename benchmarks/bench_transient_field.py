@@ -28,7 +28,6 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import datetime  # noqa: E402
-import platform  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -126,8 +125,7 @@ def report(stages: dict, steps: dict, args: argparse.Namespace) -> str:
         " `LayerField.native = False`."
         " Scene fig12_transient, case eta = 2.92, 32 x 16 cells, both paths in one run"
         f" (`benchmarks/bench_transient_field.py --steps {args.steps} --repeats"
-        f" {args.repeats} --write` on {when}, {platform.machine()}, Python"
-        f" {platform.python_version()}, the shared 2-core machine; fastest repeat):",
+        f" {args.repeats} --write` on {when}, {harness.machine()}; fastest repeat):",
         "",
         "| measured | compiled | Python | ratio |",
         "|---|---|---|---|",

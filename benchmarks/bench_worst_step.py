@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import platform
 import re
 import time
 from pathlib import Path
@@ -94,8 +93,7 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     lines = [
         f"Made by `python benchmarks/bench_worst_step.py --repeat {args.repeat} --write` on "
-        f"{datetime.date.today()} ({platform.machine()}, Python {platform.python_version()}, "
-        f"the shared 2-core machine with other jobs running), max_work = {MAX_WORK}.",
+        f"{datetime.date.today()} ({harness.machine()}), max_work = {MAX_WORK}.",
         "",
         "| FMU | target | h (s) | status | internal steps taken | wall of one doStep (s) |",
         "|---|---|---|---|---|---|",

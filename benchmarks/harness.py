@@ -21,9 +21,11 @@ import math
 import os
 import platform
 import re
+import statistics
 import subprocess
 import time
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -56,26 +58,49 @@ def wall_time(f: Callable[[], Any]) -> tuple[float, Any]:
     return time.perf_counter() - t, out
 
 
+@dataclass
+class Timed:
+    """Seconds of each call of one candidate, and the result of its last call."""
+
+    times: list[float] = field(default_factory=list)
+    result: Any = None
+
+    @property
+    def best(self) -> float:
+        return min(self.times)
+
+    @property
+    def median(self) -> float:
+        return statistics.median(self.times)
+
+
+def repeated(f: Callable[[], Any], repeats: int, clock=wall_time) -> Timed:
+    """``f`` called ``repeats`` times (at least once), each call timed by ``clock``."""
+    out = Timed()
+    for _ in range(max(1, repeats)):
+        t, out.result = clock(f)
+        out.times.append(t)
+    return out
+
+
 def best_of(f: Callable[[], Any], repeats: int, clock=wall_time) -> tuple[float, Any]:
     """The fastest of ``repeats`` calls of ``f`` by ``clock``, and the last result."""
-    best, out = float("inf"), None
-    for _ in range(max(1, repeats)):
-        t, out = clock(f)
-        best = min(best, t)
-    return best, out
+    t = repeated(f, repeats, clock)
+    return t.best, t.result
 
 
 def interleaved(
     candidates: dict[str, Callable[[], Any]], repeats: int, clock=wall_time
-) -> dict[str, list[float]]:
+) -> dict[str, Timed]:
     """Each candidate timed ``repeats`` times, round-robin (A B C A B C ...), so that a
     change of the machine's load falls on all of them alike: the baseline of a
-    comparison runs in the same run as what it is compared with. Seconds per call."""
-    times: dict[str, list[float]] = {k: [] for k in candidates}
+    comparison runs in the same run as what it is compared with."""
+    out = {k: Timed() for k in candidates}
     for _ in range(max(1, repeats)):
         for k, f in candidates.items():
-            times[k].append(clock(f)[0])
-    return times
+            t, out[k].result = clock(f)
+            out[k].times.append(t)
+    return out
 
 
 # --- the machine ----------------------------------------------------------------------
