@@ -438,11 +438,12 @@ def throughput(trivial: Path, repeats: int) -> list[dict]:
 
 
 # ---- markdown ----------------------------------------------------------------------------
-def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
+def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int, scenes=None) -> str:
     today = datetime.date.today().isoformat()
+    only = f" --scenes {' '.join(scenes)}" if scenes else ""
     out = [
         f"Measured by `.venv/bin/python benchmarks/bench_cosim.py --steps {steps} --repeats "
-        f"{repeats} --write` on {today} ({harness.machine()}; all numbers of one run, in one "
+        f"{repeats}{only} --write` on {today} ({harness.machine()}; all numbers of one run, in one "
         "process). Absolute times move with "
         "the machine's load by up to 2x; the ratios, measured side by side, much less.",
         "",
@@ -569,7 +570,7 @@ def main(argv: list[str] | None = None) -> None:
     s = step_costs(trivial, args.steps, args.repeats, args.scenes)
     law = law_rates(args.repeats)
     tp = throughput(trivial, max(2, args.repeats // 2))
-    text = markdown(s, law, tp, args.steps, args.repeats)
+    text = markdown(s, law, tp, args.steps, args.repeats, args.scenes)
     print(text)
     if args.write:
         harness.write_block(DOC, BLOCK, text)

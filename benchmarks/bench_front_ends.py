@@ -201,7 +201,10 @@ def main(argv: list[str] | None = None) -> int:
                         f"per step, ratio {n / b:.3f} to {args.base}'s FMI 2.0 FMU"
                     )
     if args.write:
-        cmd = f"python benchmarks/bench_front_ends.py --base {args.base} --repeats {args.repeats}"
+        cmd = (
+            f"python benchmarks/bench_front_ends.py --base {args.base} --steps {args.steps} "
+            f"--importer-steps {args.importer_steps} --repeats {args.repeats}"
+        )
         harness.write_block(DOC, BLOCK, instruction_table(counts, args.base, cmd))
     return 0
 
