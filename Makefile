@@ -6,7 +6,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 SCENE  ?= scenarios/fig13.toml
 
-.PHONY: run test test-alt-cpu fuzz lint figures report docs venv clean
+.PHONY: run test test-alt-cpu fuzz lint figures report bench docs venv clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -51,6 +51,12 @@ figures: venv
 
 report: venv
 	$(VENV)/bin/contact-fmu report
+
+# the benchmarks (benchmarks/__main__.py): BENCH="NAME ... [--write] [--quick]"; with
+# --write they rewrite their tables in docs/performance.md and docs/reliability.md
+BENCH ?=
+bench: venv
+	$(PY) -m benchmarks $(BENCH)
 
 # the documentation site from docs/ into site/ (mkdocs.yml)
 docs: venv

@@ -22,7 +22,7 @@ All in one process and one run, so that ratios are fair on a shared, noisy machi
    (fastest of R), steps per second and real-time factor (simulated time over wall
    time), against the trivial FMU simulated over the same grid.
 
-``--write`` replaces the section SECTION of docs/performance.md.
+``--write`` replaces the block BLOCK of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -32,7 +32,6 @@ import contextlib
 import dataclasses
 import datetime
 import importlib
-import platform
 import shutil
 import subprocess
 import sys
@@ -46,14 +45,18 @@ import numpy as np
 import fmu_build
 from contact_fmu import examples as ex
 from contact_fmu import native
-from contact_fmu.report.output import replace_section
 from contact_fmu.scenario import discover, load, runner
 from contact_fmu.scenario.instance import OK, Instance
+
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
-SECTION = "## Co-simulation cost: against a trivial FMU, law evaluations, fmpy throughput"
+BLOCK = "bench_cosim.py"  # the marker block it writes
 TARGET_RATIO = 1.5  # issue 6: thin-layer body FMU step at most 1.5 x the trivial FMU's
 TARGET_RATE = 1e6  # issue 6: vectorised creep-law evaluations per second
 
@@ -435,13 +438,13 @@ def throughput(trivial: Path, repeats: int) -> list[dict]:
 
 
 # ---- markdown ----------------------------------------------------------------------------
-def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
+def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int, scenes=None) -> str:
     today = datetime.date.today().isoformat()
-    cpu = platform.processor() or platform.machine()
+    only = f" --scenes {' '.join(scenes)}" if scenes else ""
     out = [
         f"Measured by `.venv/bin/python benchmarks/bench_cosim.py --steps {steps} --repeats "
-        f"{repeats} --write` on {today} ({cpu}, Python {platform.python_version()}, shared "
-        "2-core machine; all numbers of one run, in one process). Absolute times move with "
+        f"{repeats}{only} --write` on {today} ({harness.machine()}; all numbers of one run, in one "
+        "process). Absolute times move with "
         "the machine's load by up to 2x; the ratios, measured side by side, much less.",
         "",
         "### FMU step cost against a trivial FMU",
@@ -556,21 +559,21 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int) -> str:
     return "\n".join(out)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=40)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--scenes", nargs="*", help="step cost of these scenes only")
     ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     trivial = build_trivial(ROOT / "out" / "bench")
     s = step_costs(trivial, args.steps, args.repeats, args.scenes)
     law = law_rates(args.repeats)
     tp = throughput(trivial, max(2, args.repeats // 2))
-    text = markdown(s, law, tp, args.steps, args.repeats)
-    print(SECTION + "\n\n" + text)
+    text = markdown(s, law, tp, args.steps, args.repeats, args.scenes)
+    print(text)
     if args.write:
-        replace_section(DOC, SECTION, text)
+        harness.write_block(DOC, BLOCK, text)
 
 
 if __name__ == "__main__":

@@ -10,30 +10,31 @@ another (fmi2SerializedFMUstateSize: the lookup alone) and freed (lookup, remova
 per call, the fastest of three runs. The baseline, in
 the same run: one communication step of the same FMU from the same importer (``bench``
 mode). The cost per call should not grow with N (a linear scan would make it grow in
-proportion). ``--write`` replaces the section SECTION of docs/performance.md.
+proportion). ``--write`` replaces the block BLOCK of docs/performance.md.
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
-import platform
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from contact_fmu.report.output import replace_section
 from contact_fmu.scenario import load
-from fmu_build import native_fmu
+from fmu_build import c_importer, native_fmu
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_native import compile_importer, importer_rate  # noqa: E402
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
-SECTION = "## Native FMU: FMU states held at once"
+BLOCK = "bench_fmu_states.py"  # the marker block it writes
 
 
 def measure(held: list[int], runs: int = 3) -> tuple[dict[int, dict[str, float]], float]:
@@ -41,19 +42,16 @@ def measure(held: list[int], runs: int = 3) -> tuple[dict[int, dict[str, float]]
     communication step (setReal, doStep, getReal) of the same FMU."""
     import fmpy
 
-    sys.path.insert(0, str(ROOT / "tests"))
-    from test_native_fmu import _spec
-
     scene = load(ROOT / "scenarios" / "fig13.toml")
     case = scene.case("eta = 3")
     with tempfile.TemporaryDirectory() as work:
         work = Path(work)
-        exe = compile_importer(work)
+        exe = harness.compile_importer(work)
         fmpy.extract(str(native_fmu.build(scene.config, OUT).path), str(work / "fmu"))
         md = fmpy.read_model_description(str(work / "fmu"))
         spec, rows = work / "spec.txt", work / "rows.txt"
-        spec.write_text(_spec(md, scene, case, rows=False))
-        rows.write_text(_spec(md, scene, case))  # the case's steps, for the bench run
+        spec.write_text(c_importer.spec(md, scene, case, rows=False))
+        rows.write_text(c_importer.spec(md, scene, case))  # the case's steps, for the bench run
         ident = md.coSimulation.modelIdentifier
         lib = work / "fmu" / "binaries" / "linux64" / f"{ident}.so"
         base = [str(exe), str(lib), md.guid, ident]
@@ -68,7 +66,7 @@ def measure(held: list[int], runs: int = 3) -> tuple[dict[int, dict[str, float]]
                 pairs = zip(words[::2], words[1::2], strict=True)
                 got = {k.removesuffix("_ns"): float(v) for k, v in pairs}
                 costs[n] = {k: min(v, costs.get(n, got)[k]) for k, v in got.items()}
-        step = 1e9 / importer_rate([*base, "bench", str(rows), "20000"])
+        step = 1e9 / harness.importer_rate([*base, "bench", str(rows), "20000"])
     return costs, step
 
 
@@ -76,8 +74,7 @@ def report(costs: dict[int, dict[str, float]], step: float) -> str:
     small = min(costs)
     lines = [
         f"Made by `benchmarks/bench_fmu_states.py --write` on {datetime.date.today()} "
-        f"({platform.machine()}, Python {platform.python_version()}; a shared 2-core "
-        "machine: the ratios are the result).",
+        f"({harness.machine()}; the ratios are the result).",
         "",
         "The native Fig. 13 FMU from the C importer (tests/native_importer.c, mode `states`):"
         " N states got, set in a shuffled order, sized in another (the lookup alone) and"
@@ -106,15 +103,15 @@ def report(costs: dict[int, dict[str, float]], step: float) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--held", type=int, nargs="+", default=[100, 1000, 10000, 30000])
     ap.add_argument("--write", action="store_true")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     text = report(*measure(args.held))
     print(text)
     if args.write:
-        replace_section(DOC, SECTION, text)
+        harness.write_block(DOC, BLOCK, text)
     return 0
 
 

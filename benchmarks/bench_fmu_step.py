@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import importlib
-import platform
 import sys
 import time
 from pathlib import Path
@@ -28,14 +27,18 @@ import numpy as np
 
 import fmu_build
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.report.output import replace_section
 from contact_fmu.scenario import discover, load, runner
 from contact_fmu.scenario.instance import OK, Instance
+
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
-SECTION = "## FMU step cost"
+BLOCK = "bench_fmu_step.py"  # the marker block it writes
 # Untimed runs before the timed ones: the first runs in a process are slower (caches,
 # lazy imports), measured up to 1.8x for the model stepped outside the FMU.
 WARMUP = 1
@@ -194,12 +197,10 @@ def table(rows: list[dict]) -> str:
 def markdown(rows: list[dict], steps: int, repeats: int) -> str:
     """The body of the docs section: how it was measured, then the table."""
     today = datetime.date.today().isoformat()
-    cpu = platform.processor() or platform.machine()
     return (
-        f"Measured by `benchmarks/bench_fmu_step.py --write` on {today} ({cpu}, "
-        f"Python {platform.python_version()}, {steps} steps; each step the fastest of "
-        f"{repeats} runs after {WARMUP} untimed, full FMU {max(2, repeats // 2)}; shared "
-        "2-core machine). Per "
+        f"Measured by `benchmarks/bench_fmu_step.py --write` on {today} ({harness.machine()}; "
+        f"{steps} steps; each step the fastest of "
+        f"{repeats} runs after {WARMUP} untimed, full FMU {max(2, repeats // 2)}). Per "
         "communication step: setReal of the inputs, doStep, getReal of the scene's outputs "
         "through fmpy's FMU2Slave. The full FMU of a mode holds every variable and model "
         "part (Eqs. 10-11 integrated, both steppers); it runs the scene's inputs with its "
@@ -229,17 +230,17 @@ def cornering(rows: list[dict]) -> str:
     )
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--steps", type=int, default=40)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rows = measure(args.steps, args.repeats)
     section = markdown(rows, args.steps, args.repeats)
     print(section)
     if args.write:
-        replace_section(DOC, SECTION, section)
+        harness.write_block(DOC, BLOCK, section)
 
 
 if __name__ == "__main__":

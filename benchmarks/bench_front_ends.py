@@ -1,6 +1,7 @@
 """The cost of a step through both front ends of the C core, this tree against a revision.
 
     .venv/bin/python benchmarks/bench_front_ends.py [--base REV] [--steps N] [--repeats R]
+        [--callgrind [--write]]
 
 The checks of a call and the step are C code that both FMUs share (contact_fmu/native:
 cf_core.h, stepper.c's cf_body_check). This measures what a change to them costs, in one
@@ -20,6 +21,8 @@ Each figure is the best of R processes; the ratio is this tree's over REV's. Wit
 --callgrind the native FMUs' steps are also counted in machine instructions (valgrind's
 callgrind: the importer's bench run of 2000 and of 12000 steps, the difference over the
 30000 steps between them; the same for the same binary and inputs, whatever else runs).
+``--write`` (with --callgrind) replaces the block BLOCK of docs/performance.md: the
+instructions per step of each FMU.
 """
 
 from __future__ import annotations
@@ -34,8 +37,15 @@ from pathlib import Path
 
 import fmpy
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_native import compile_importer, importer_rate  # noqa: E402
+from fmu_build import c_importer
+
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
+DOC = harness.PERFORMANCE
+BLOCK = "bench_front_ends.py"  # the marker block it writes (with --callgrind)
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = ("quasistationary", "full")
@@ -102,14 +112,11 @@ def _run(tree: Path, *args: str) -> str:
 def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple, list]:
     """The C importers' command lines (FMI 2.0, FMI 3.0) for each tree's native FMUs of
     each method: (tree, method, version) -> argv."""
-    sys.path.insert(0, str(ROOT / "tests"))
-    from native_c import spec
-
     from contact_fmu.scenario import load
 
     scene = load(ROOT / "scenarios" / "fig13.toml")
     case = scene.case("eta = 3")
-    exe = {"2": compile_importer(work), "3": compile_importer(work, fmi3=True)}
+    exe = {"2": harness.compile_importer(work), "3": harness.compile_importer(work, fmi3=True)}
     runs = {}
     for label, tree in trees.items():
         built = _run(tree, "-c", BUILD, str(work / label), *METHODS).splitlines()
@@ -118,7 +125,7 @@ def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple, li
             fmpy.extract(path, str(unzip))
             md = fmpy.read_model_description(str(unzip))
             spec_file = unzip / "spec.txt"
-            spec_file.write_text(spec(md, scene, case))
+            spec_file.write_text(c_importer.spec(md, scene, case))
             ident = md.coSimulation.modelIdentifier
             folder = f"{platform.machine()}-linux" if v == "3" else "linux64"
             lib = str(unzip / "binaries" / folder / f"{ident}.so")
@@ -141,14 +148,18 @@ def instructions_per_step(argv: list[str], work: Path) -> float:
     return (counts[1] - counts[0]) / 30000
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--base", default="HEAD", help="the revision to compare with")
     ap.add_argument("--steps", type=int, default=3000, help="steps of the adapter's C path")
     ap.add_argument("--importer-steps", type=int, default=20_000)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--callgrind", action="store_true", help="count instructions per step")
-    args = ap.parse_args()
+    ap.add_argument("--write", action="store_true", help="update docs/performance.md")
+    args = ap.parse_args(argv)
+    if args.write and not args.callgrind:
+        ap.error("--write needs --callgrind: the block gives instructions per step")
+    counts: dict[tuple[str, str], dict[str, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         base = work / "base"
@@ -172,7 +183,7 @@ def main() -> int:
             rate = {k: [] for k in keys}
             for _ in range(args.repeats):
                 for k in keys:
-                    rate[k].append(importer_rate(runs[k]))
+                    rate[k].append(harness.importer_rate(runs[k]))
             b = max(rate[args.base, m, "2"])
             for (tree, _, v), r in rate.items():
                 if (tree, v) != (args.base, "2"):
@@ -184,11 +195,34 @@ def main() -> int:
                 ins = {k: instructions_per_step(v, work) for k, v in runs.items() if k[1] == m}
                 b = ins[args.base, m, "2"]
                 for (tree, _, v), n in ins.items():
+                    counts.setdefault((tree, v), {})[m] = n
                     print(
                         f"native FMI {v}.0 FMU ({tree}), fig13 {m}: {n:.0f} instructions "
                         f"per step, ratio {n / b:.3f} to {args.base}'s FMI 2.0 FMU"
                     )
+    if args.write:
+        cmd = (
+            f"python benchmarks/bench_front_ends.py --base {args.base} --steps {args.steps} "
+            f"--importer-steps {args.importer_steps} --repeats {args.repeats}"
+        )
+        harness.write_block(DOC, BLOCK, instruction_table(counts, args.base, cmd))
     return 0
+
+
+def instruction_table(counts: dict[tuple[str, str], dict[str, float]], base: str, cmd: str) -> str:
+    """Instructions per step of each native FMU (tree, FMI version) and method, and their
+    ratio to the FMI 2.0 FMU of ``base``."""
+    lines = [
+        harness.made_by(f"{cmd} --callgrind --write"),
+        "",
+        "| FMU | " + " | ".join(f"{m} | ratio" for m in METHODS) + " |",
+        "|---|" + "---|---|" * len(METHODS),
+    ]
+    ref = counts[base, "2"]
+    for (tree, v), n in sorted(counts.items(), key=lambda kv: (kv[0][1], kv[0][0] != base)):
+        cells = " | ".join(f"{n[m]:.0f} | {n[m] / ref[m]:.3f}" for m in METHODS)
+        lines.append(f"| native FMI {v}.0, {tree} | {cells} |")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

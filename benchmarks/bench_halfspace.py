@@ -1,7 +1,7 @@
 """Benchmark of the steady-rolling half-space solver: FFT against a dense influence matrix.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace.py [--grids 16 32 64 128]
-        [--repeat 3] [--dense-limit-mb 1500] [--json out.json]
+        [--repeat 3] [--dense-limit-mb 1500] [--json out.json] [--write]
     ... bench_halfspace.py --table N N1 N2 N3 [--points 60]       (``table_report``)
 
 Steady rolling of the railway wheel on rail (contact_fmu.halfspace.railway, Hertz,
@@ -24,6 +24,9 @@ oversolving guard), all three timed alternately. Newton and GMRES counts are the
 grid's; "GMRES all levels" weights each coarse level's iterations by its share of the
 elements.
 
+``--write`` replaces the blocks BLOCK (times) and ITERATIONS_BLOCK (Newton and GMRES
+counts) of docs/performance.md.
+
 Threaded BLAS is switched off (the environment variables below are set before numpy
 is imported): on the shared 2-core machine OpenBLAS threads contend with the other
 process and slow GMRES's vector operations down by an order of magnitude.
@@ -40,7 +43,6 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
-import statistics  # noqa: E402
 import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 
@@ -50,31 +52,19 @@ from contact_fmu.halfspace import rolling  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
 
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
+DOC = harness.PERFORMANCE
+BLOCK = "bench_halfspace.py"  # the marker blocks it writes
+ITERATIONS_BLOCK = "bench_halfspace.py iterations"
+
 CASES = {"longitudinal": (0.3, 0.0, 0.0), "combined+spin": (0.2, 0.2, 0.3)}
 # CONTACT's published steady-rolling timings, Hertzian cases (references.md; 2016
 # hardware, one thread): elements per side -> seconds
 CONTACT_PUBLISHED = {11: 1.9e-3, 19: 9.7e-3, 35: 0.134}
-
-
-def _time(fn, repeat: int) -> tuple[float, object]:
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
-
-
-def _time_interleaved(fns: list, repeat: int) -> list[tuple[float, object]]:
-    """Median times of several solves run alternately (the same machine load for each)."""
-    times: list[list[float]] = [[] for _ in fns]
-    outs: list[object] = [None] * len(fns)
-    for _ in range(repeat):
-        for k, fn in enumerate(fns):
-            t0 = time.perf_counter()
-            outs[k] = fn()
-            times[k].append(time.perf_counter() - t0)
-    return [(statistics.median(t), o) for t, o in zip(times, outs, strict=True)]
 
 
 def _previous(patch, *args):
@@ -135,13 +125,16 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
         }
         for name, w in CASES.items():
             args = (w[0] * xref, w[1] * xref, w[2] * xref / contact.c)
-            (t_fft, sol), (t_single, s1), (t_prev, s0) = _time_interleaved(
-                [
-                    lambda a=args, p=patch: solve_rolling(p, *a, method="iterative"),
-                    lambda a=args, p=single: solve_rolling(p, *a, method="iterative"),
-                    lambda a=args, p=single: _previous(p, *a),
-                ],
+            timed = harness.interleaved(  # median of each, the same machine load for each
+                {
+                    "fft": lambda a=args, p=patch: solve_rolling(p, *a, method="iterative"),
+                    "single": lambda a=args, p=single: solve_rolling(p, *a, method="iterative"),
+                    "previous": lambda a=args, p=single: _previous(p, *a),
+                },
                 repeat,
+            )
+            (t_fft, sol), (t_single, s1), (t_prev, s0) = (
+                (timed[k].median, timed[k].result) for k in ("fft", "single", "previous")
             )
             g = float(patch.g.max())
             entry = {
@@ -163,7 +156,8 @@ def run(grids: list[int], repeat: int, dense_limit_mb: float) -> dict:
                 "adhesion": sol.adhesion_fraction,
             }
             if dense_patch is not None:
-                t_dense, sd = _time(lambda a=args, p=dense_patch: solve_rolling(p, *a), repeat)
+                dense = harness.repeated(lambda a=args, p=dense_patch: solve_rolling(p, *a), repeat)
+                t_dense, sd = dense.median, dense.result
                 entry["dense_s"] = t_dense
                 entry["dense_over_fft"] = t_dense / t_fft
                 entry["max_dtau_over_g"] = float(np.abs(sd.tau - sol.tau).max() / patch.g.max())
@@ -238,6 +232,39 @@ def markdown(res: dict) -> str:
     return "\n".join(lines)
 
 
+def _s(t: float | None) -> str:
+    return "skipped" if t is None else f"{t:.3g}"
+
+
+def doc_tables(res: dict, command: str) -> tuple[str, str]:
+    """The blocks of docs/performance.md: the times per grid (FFT, single-level,
+    baseline, dense; both cases side by side) and the fine-grid Newton / GMRES counts of
+    the default against the baseline."""
+    long, comb = (res["cases"][k] for k in CASES)
+    head = "| grid | elements in contact | longitudinal: FFT (s) | single-level (s) | baseline (s) "
+    head += "| dense (s) | combined + spin: FFT (s) | single-level (s) | baseline (s) | dense (s) |"
+    times = [harness.made_by(command), "", head, "|---|---|---|---|---|---|---|---|---|---|"]
+    counts = [
+        f"Made by the same run (`{command}`).",
+        "",
+        "| grid | longitudinal | baseline | combined + spin | baseline |",
+        "|---|---|---|---|---|",
+    ]
+    for n in res["grids"]:
+        cells = [f"{n} x {n}", str(res["setup"][n]["elements_in_contact"])]
+        its = [f"{n} x {n}"]
+        for e in (long[n], comb[n]):
+            cells += [_s(e[k]) for k in ("fft_s", "single_s", "previous_s")]
+            cells.append(_s(e.get("dense_s")))
+            its += [
+                f"{e['newton']} / {e['gmres']}",
+                f"{e['previous_newton']} / {e['previous_gmres']}",
+            ]
+        times.append("| " + " | ".join(cells) + " |")
+        counts.append("| " + " | ".join(its) + " |")
+    return "\n".join(times), "\n".join(counts)
+
+
 def table_report(n: int, nodes: tuple[int, int, int], points: int, seed: int = 1) -> dict:
     """Build the railway creep-force table on an n x n solver grid and measure its
     interpolation error against direct solves at random points of the table box."""
@@ -294,6 +321,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dense-limit-mb", type=float, default=1500.0)
     ap.add_argument("--json", type=str, default=None)
+    ap.add_argument("--write", action="store_true", help="update docs/performance.md")
     ap.add_argument(
         "--table",
         type=int,
@@ -312,8 +340,15 @@ def main(argv: list[str] | None = None) -> None:
             with open(args.json, "w") as f:
                 json.dump(rep, f, indent=1)
         return
-    res = run(args.grids or [16, 32, 64, 128], args.repeat, args.dense_limit_mb)
+    grids = args.grids or [16, 32, 64, 128]
+    res = run(grids, args.repeat, args.dense_limit_mb)
     print(markdown(res))
+    if args.write:
+        cmd = "python benchmarks/bench_halfspace.py"
+        cmd += f" --grids {' '.join(map(str, grids))}" if args.grids else ""
+        times, counts = doc_tables(res, f"{cmd} --repeat {args.repeat} --write")
+        harness.write_block(DOC, BLOCK, times)
+        harness.write_block(DOC, ITERATIONS_BLOCK, counts)
     print("\nCONTACT (published, 2016 hardware, one thread):", CONTACT_PUBLISHED)
     if args.json:
         with open(args.json, "w") as f:

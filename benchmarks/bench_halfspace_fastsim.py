@@ -29,12 +29,15 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import platform  # noqa: E402
-import statistics  # noqa: E402
-import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 from contact_fmu.halfspace import STEEL, Fastsim, HalfSpaceContact, wheel_on_rail  # noqa: E402
+
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
 
 # name: (creepages (xi, eta, phi) at the curve parameter s in (0, 1], the label of s's
 # creepage in the table)
@@ -54,20 +57,16 @@ def contacts(m: int) -> dict[str, HalfSpaceContact]:
 
 
 def cpu(f, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.process_time()
-        f()
-        times.append(time.process_time() - t)
-    return statistics.median(times)
+    """Median CPU seconds of ``repeat`` calls of ``f``."""
+    return harness.repeated(f, repeat, harness.cpu_time).median
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grid", type=int, default=66)
     ap.add_argument("--points", type=int, default=12)
     ap.add_argument("--repeat", type=int, default=7)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     print(f"# {platform.processor() or platform.machine()}, python {platform.python_version()}")
     print(f"# exact solver and FASTSIM on {args.grid} x {args.grid}; max |dT| in % of mu P")
     print("| contact | curve | parabolic: max dT (where) | elliptic: max dT (where) |")

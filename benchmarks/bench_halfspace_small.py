@@ -78,13 +78,13 @@ def fresh_new(m):
     return wheel_on_rail(n=(m, m))
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--repeat", type=int, default=11)
     ap.add_argument("--grids", type=int, nargs="+", default=[11, 19, 23, 35])
     ap.add_argument("--baseline", default="cc7bca5", help="git revision of the previous solver")
     ap.add_argument("--curve", type=int, default=32, help="grid of the creep curve (0: none)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     tmp = tempfile.TemporaryDirectory()
     old = previous_package(args.baseline, Path(tmp.name))
     print(f"# {platform.processor() or platform.machine()}, python {platform.python_version()}")

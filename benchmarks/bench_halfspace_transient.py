@@ -213,14 +213,14 @@ def coupled(n: int, lengths: int) -> list[dict]:
     return out
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--grids", type=int, nargs="+", default=[16, 24, 32])
     ap.add_argument("--skip-coupled", action="store_true")
     ap.add_argument("--only-coupled", action="store_true")
     ap.add_argument("--coupled-lengths", type=int, default=30)
     ap.add_argument("--json", default=None)
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     res: dict = {"machine": platform.platform()}
     if a.only_coupled:
         res["coupled"] = coupled(16, a.coupled_lengths)

@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import math
-import platform
 import time
 from pathlib import Path
 
@@ -37,10 +36,15 @@ from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import Instance
 from fmu_build import native_fmu
 
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "reliability.md"
-MARKS = ("<!-- bench_hunt_step.py: table -->", "<!-- bench_hunt_step.py: end -->")
+BLOCK = "bench_hunt_step.py"  # the marker block it writes
 NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
 LOAD_LIMIT = 1e9  # integrator.LOAD_LIMIT
 
@@ -147,8 +151,7 @@ def table(rows: list[tuple[str, str, dict]], args: argparse.Namespace) -> str:
     lines = [
         f"Made by `python benchmarks/bench_hunt_step.py --instances {args.instances} "
         f"--calls {args.calls} --seed {args.seed} --write` on {datetime.date.today()} "
-        f"({platform.machine()}, Python {platform.python_version()}, the shared 2-core "
-        "machine with other jobs running), max_work at its default 10,000.",
+        f"({harness.machine()}), max_work at its default 10,000.",
         "",
         "| FMU | target | calls (OK/Warning/Discard) | slowest doStep (s) | its status | its t, h "
         "(s) | its parameters and inputs |",
@@ -167,23 +170,13 @@ def table(rows: list[tuple[str, str, dict]], args: argparse.Namespace) -> str:
     return "\n".join(lines)
 
 
-def write(text: str) -> None:
-    page = DOC.read_text()
-    begin, end = MARKS
-    head, sep, rest = page.partition(begin)
-    _, sep2, tail = rest.partition(end)
-    if not (sep and sep2):
-        raise SystemExit(f"{DOC} lacks the markers {begin} ... {end}")
-    DOC.write_text(head + begin + "\n" + text + "\n" + end + tail)
-
-
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=6)
     ap.add_argument("--calls", type=int, default=30)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     rows = []
     for label, target, path in kinds():
@@ -194,7 +187,7 @@ def main() -> None:
     text = table(rows, args)
     print(text)
     if args.write:
-        write(text)
+        harness.write_block(DOC, BLOCK, text)
 
 
 if __name__ == "__main__":

@@ -22,23 +22,21 @@ machine):
    targets) through fmpy's FMU2Slave, native and pythonfmu, each scheme (the full
    method), as 1. with lateral loads swept, communication steps of 2.5e-4 s.
 
-``--write`` replaces the sections SECTION (1-3) and FULL_SECTION (4) of
-docs/performance.md; ``--full-body-only`` measures and writes FULL_SECTION alone.
+``--write`` replaces the blocks BLOCK (1-3) and FULL_BLOCK (4) of
+docs/performance.md; ``--full-body-only`` measures and writes FULL_BLOCK alone.
 
     .venv/bin/python benchmarks/bench_native.py --spin [--steps 300] [--repeats 5] [--write]
 
 measures instead the full contact FMU with a spin input (the law marching its spin grid
 in every evaluation) as in 1.: the native FMU, the pythonfmu FMU with the compiled
 library it carries (fmu_build.compiles) and the same pythonfmu FMU built without it
-(numpy's march), in one run; ``--write`` replaces SECTION_SPIN.
+(numpy's march), in one run; ``--write`` replaces SPIN_BLOCK.
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
-import math
-import platform
 import subprocess
 import sys
 import tempfile
@@ -49,21 +47,25 @@ import numpy as np
 
 import fmu_build
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.report.output import replace_section
 from contact_fmu.scenario import load, runner
-from fmu_build import native_fmu
+from fmu_build import c_importer, native_fmu
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_cosim import Stepper, null_fmu  # noqa: E402
+if __package__:  # python -m benchmarks
+    from . import harness
+    from .bench_cosim import Stepper, null_fmu
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+    from bench_cosim import Stepper, null_fmu  # type: ignore[no-redef]
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
-SECTION = "## Native FMU: step cost, C importer rate, size"
-FULL_SECTION = "## Native full body FMU: Lobatto IIIC and SDIRK2"
-SECTION_SPIN = "## Contact FMU with spin: step cost"
+# the marker blocks it writes: step cost, importer rate, size; the full body FMU (also
+# --full-body-only); the contact FMU with spin (--spin)
+BLOCK = "bench_native.py"
+FULL_BLOCK = "bench_native.py full-body"
+SPIN_BLOCK = "bench_native.py spin"
 TRIVIAL_C = Path(__file__).with_name("trivial_fmu.c")
-IMPORTER = ROOT / "tests" / "native_importer.c"
 
 
 def _trivial_md(name: str, inputs: tuple, outputs: tuple) -> str:
@@ -181,9 +183,8 @@ def full_body_costs(steps: int, repeats: int) -> dict[str, float]:
 def full_report(full: dict[str, float], args) -> str:
     lines = [
         f"Made by `benchmarks/bench_native.py --steps {args.steps} --repeats {args.repeats}"
-        f" --full-body-only --write` on {datetime.date.today()} ({platform.machine()}, "
-        f"Python {platform.python_version()}; a shared 2-core machine: the ratios are the "
-        "result).",
+        f" --full-body-only --write` on {datetime.date.today()} ({harness.machine()}; the "
+        "ratios are the result).",
         "",
         "The full body FMU (`--full body`: Eqs. 8-11 with the law's spin, stepper.c's vector "
         "step on both targets) through fmpy's FMU2Slave, the full method: Fx_ex = 0.3 mu P, "
@@ -203,6 +204,7 @@ def full_report(full: dict[str, float], args) -> str:
         "(integrator._sdirk_vector, mirrored in C: the same iteration), Lobatto IIIC's "
         "coupled pair keeps its matrix from step to step (simplified Newton).",
     ]
+    return "\n".join(lines) + "\n"
 
 
 def spin_costs(steps: int, repeats: int) -> dict[str, float]:
@@ -238,8 +240,8 @@ def spin_report(cost: dict[str, float], args) -> str:
     us = {k: 1e6 * v for k, v in cost.items()}
     lines = [
         f"Made by `benchmarks/bench_native.py --spin --steps {args.steps} --repeats "
-        f"{args.repeats} --write` on {datetime.date.today()} ({platform.machine()}, Python "
-        f"{platform.python_version()}; a shared 2-core machine: the ratios are the result).",
+        f"{args.repeats} --write` on {datetime.date.today()} ({harness.machine()}; the ratios "
+        "are the result).",
         "",
         "The full contact FMU (`python -m fmu_build --full contact`, and `--native`) with "
         "new kinematics and spin every step (partial slip, the load held), through fmpy's "
@@ -258,66 +260,30 @@ def spin_report(cost: dict[str, float], args) -> str:
     return "\n".join(lines) + "\n"
 
 
-class ImporterError(RuntimeError):
-    """The C importer did not finish its run: no rate to report."""
-
-
-def importer_rate(args: list[str]) -> float:
-    """Steps per second that the C importer's bench run ``args`` prints; ImporterError
-    (with the importer's message: the call, the step, the FMU's last message) if it
-    stops or prints no positive rate."""
-    proc = subprocess.run(args, capture_output=True, text=True)
-    words = proc.stdout.split()
-    try:
-        rate = float(words[-1]) if proc.returncode == 0 and words else math.nan
-    except ValueError:
-        rate = math.nan
-    if not (math.isfinite(rate) and rate > 0.0):
-        raise ImporterError(
-            f"the C importer stopped (exit status {proc.returncode}): "
-            f"{(proc.stderr.strip() or proc.stdout.strip() or 'no output')[-2000:]}"
-        )
-    return rate
-
-
-def compile_importer(work: Path, fmi3: bool = False) -> Path:
-    """tests/native_importer.c (native_importer3.c: ``fmi3``) compiled into ``work`` (it
-    dlopens the FMU's binary)."""
-    exe = work / ("importer3" if fmi3 else "importer")
-    source = IMPORTER.with_name("native_importer3.c") if fmi3 else IMPORTER
-    cmd = ["cc", "-O2", f"-I{native_fmu.fmi_headers()}", "-o", str(exe), str(source),
-           "-ldl", "-lm"]  # fmt: skip
-    subprocess.run(cmd, check=True, capture_output=True)
-    return exe
-
-
 def importer_rates(n: int) -> dict[str, float]:
     """Steps per second of the native Fig. 13 FMU from the C importer, per method: the
     case eta = 3 repeated from its start state for n steps."""
     import fmpy
-
-    sys.path.insert(0, str(ROOT / "tests"))
-    from test_native_fmu import _spec
 
     scene, cfgs = fig13_configs()
     case = scene.case("eta = 3")
     rates = {}
     with tempfile.TemporaryDirectory() as work:
         work = Path(work)
-        exe = compile_importer(work)
+        exe = harness.compile_importer(work)
         for m, cfg in cfgs.items():
             unzip = work / m
             fmpy.extract(str(native_fmu.build(cfg, OUT).path), str(unzip))
             md = fmpy.read_model_description(str(unzip))
             spec = work / f"{m}.txt"
-            spec.write_text(_spec(md, scene, case))
+            spec.write_text(c_importer.spec(md, scene, case))
             ident = md.coSimulation.modelIdentifier
             lib = unzip / "binaries" / "linux64" / f"{ident}.so"
             try:
-                rates[m] = importer_rate([str(exe), str(lib), md.guid, ident, "bench",
+                rates[m] = harness.importer_rate([str(exe), str(lib), md.guid, ident, "bench",
                                           str(spec), str(n)])  # fmt: skip
-            except ImporterError as e:
-                raise ImporterError(f"native Fig. 13 FMU, {m} method: {e}") from None
+            except harness.ImporterError as e:
+                raise harness.ImporterError(f"native Fig. 13 FMU, {m} method: {e}") from None
     return rates
 
 
@@ -341,8 +307,8 @@ def report(cost: dict[str, float], rates: dict[str, float], size: dict[str, int]
     q = us["native quasistationary"]
     lines = [
         f"Made by `benchmarks/bench_native.py --steps {args.steps} --repeats {args.repeats}"
-        f" --write` on {datetime.date.today()} ({platform.machine()}, Python "
-        f"{platform.python_version()}; a shared 2-core machine: the ratios are the result).",
+        f" --write` on {datetime.date.today()} ({harness.machine()}; the ratios are the "
+        "result).",
         "",
         "Step cost through fmpy's FMU2Slave (setReal, doStep, getReal; Fig. 13, eta = 3, "
         f"the first {args.steps} steps of 1.75e-4 s; mean of each step's fastest of "
@@ -378,7 +344,7 @@ def report(cost: dict[str, float], rates: dict[str, float], size: dict[str, int]
     return "\n".join(lines) + "\n"
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--repeats", type=int, default=5)
@@ -386,27 +352,27 @@ def main() -> int:
     ap.add_argument("--write", action="store_true")
     ap.add_argument("--full-body-only", action="store_true")
     ap.add_argument("--spin", action="store_true", help="the contact FMU with spin only")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.spin:
         text = spin_report(spin_costs(args.steps, args.repeats), args)
         print(text)
         if args.write:
-            replace_section(DOC, SECTION_SPIN, text)
+            harness.write_block(DOC, SPIN_BLOCK, text)
         return 0
     if not args.full_body_only:
         try:
             rates = importer_rates(args.importer_steps)
-        except ImporterError as e:
+        except harness.ImporterError as e:
             print(f"bench_native: {e}", file=sys.stderr)
             return 1
         text = report(step_costs(args.steps, args.repeats), rates, sizes(), args)
         print(text)
         if args.write:
-            replace_section(DOC, SECTION, text)
+            harness.write_block(DOC, BLOCK, text)
     text = full_report(full_body_costs(args.steps, args.repeats), args)
     print(text)
     if args.write:
-        replace_section(DOC, FULL_SECTION, text)
+        harness.write_block(DOC, FULL_BLOCK, text)
     return 0
 
 

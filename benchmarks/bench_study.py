@@ -19,7 +19,7 @@ the machine is shared; the minimum filters the other processes out), serial and 
 repeats interleaved so that both see the same machine. BLAS is single-threaded in this
 process as in the workers (threaded BLAS slows the solver's small GMRES operations down,
 docs/performance.md). The Dask runs are checked to give the serial rows and table.
-``--write`` replaces the section "## Parameter studies on Dask" of docs/performance.md.
+``--write`` replaces the block BLOCK of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -31,7 +31,6 @@ for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import datetime  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -39,15 +38,19 @@ import numpy as np  # noqa: E402
 
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.table import build_table  # noqa: E402
-from contact_fmu.report.output import replace_section  # noqa: E402
 from contact_fmu.scenario import load  # noqa: E402
 from contact_fmu.study import sweep  # noqa: E402
 from contact_fmu.study.engine import Engine  # noqa: E402
 
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
-SECTION = "## Parameter studies on Dask"
+BLOCK = "bench_study.py"  # the marker block it writes
 STUDY = ROOT / "scenarios" / "studies" / "fig13_peak.toml"
 TABLE_GRID = 12
 TABLE_NODES = (13, 13, 9)
@@ -160,8 +163,7 @@ def main(argv: list[str] | None = None) -> int:
         body = "\n\n".join(
             [
                 f"Measured by `benchmarks/bench_study.py --workers {args.workers} --repeats "
-                f"{args.repeats} --write` ({when}, {platform.machine()}, {os.cpu_count()} "
-                "cores shared with other developers' CPU-heavy work at the time, 1-minute load "
+                f"{args.repeats} --write` ({when}, {harness.machine()}; 1-minute load "
                 f"average {load_before:.1f} before and {load_after:.1f} after: the numbers "
                 "vary with the load, each is the fastest of the repeats (sweeps "
                 f"{SWEEP_REPEATS * args.repeats}, tables {args.repeats}), serial and Dask "
@@ -184,8 +186,7 @@ def main(argv: list[str] | None = None) -> int:
                 "here depend on that load, and an idle machine is the place to rerun it.",
             ]
         )
-        replace_section(DOC, SECTION, body)
-        print(f"wrote {DOC}")
+        harness.write_block(DOC, BLOCK, body)
     return 0
 
 

@@ -16,7 +16,7 @@ same start, repeats interleaved path by path, the fastest repeat kept:
 3. one communication step of the FMU's body model (body_transient: two internal steps,
    the outputs with the field summary, the range check).
 
-``--write`` replaces the section SECTION of docs/performance.md.
+``--write`` replaces the block BLOCK of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -28,7 +28,6 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import datetime  # noqa: E402
-import platform  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -36,13 +35,17 @@ from pathlib import Path  # noqa: E402
 from contact_fmu.dynamics import Loads  # noqa: E402
 from contact_fmu.fmu import body_transient  # noqa: E402
 from contact_fmu.native import field as native_field  # noqa: E402
-from contact_fmu.report.output import replace_section  # noqa: E402
 from contact_fmu.scenario import load  # noqa: E402
 from contact_fmu.transient import LayerField  # noqa: E402
 
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "performance.md"
-SECTION = "## Transient field: compiled stage"
+BLOCK = "bench_transient_field.py"  # the marker block it writes
 SCENE = load(ROOT / "scenarios" / "fig12_transient.toml")
 CASE = SCENE.cases[1]  # eta = 2.92: the longest transient
 PATHS = ("compiled", "Python")
@@ -122,8 +125,7 @@ def report(stages: dict, steps: dict, args: argparse.Namespace) -> str:
         " `LayerField.native = False`."
         " Scene fig12_transient, case eta = 2.92, 32 x 16 cells, both paths in one run"
         f" (`benchmarks/bench_transient_field.py --steps {args.steps} --repeats"
-        f" {args.repeats} --write` on {when}, {platform.machine()}, Python"
-        f" {platform.python_version()}, the shared 2-core machine; fastest repeat):",
+        f" {args.repeats} --write` on {when}, {harness.machine()}; fastest repeat):",
         "",
         "| measured | compiled | Python | ratio |",
         "|---|---|---|---|",
@@ -149,20 +151,20 @@ def report(stages: dict, steps: dict, args: argparse.Namespace) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--stages", type=int, default=2000)
     ap.add_argument("--write", action="store_true")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if native_field.library() is None:
         print("no compiled library (no C compiler, or CONTACT_FMU_NATIVE=0)", file=sys.stderr)
         return 1
     text = report(stage_cost(args.repeats, args.stages), step_cost(args.repeats, args.steps), args)
     print(text)
     if args.write:
-        replace_section(DOC, SECTION, text)
+        harness.write_block(DOC, BLOCK, text)
     return 0
 
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import platform
 import re
 import time
 from pathlib import Path
@@ -31,10 +30,15 @@ from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import Instance
 from fmu_build import native_fmu
 
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "reliability.md"
-MARKS = ("<!-- bench_worst_step.py: table -->", "<!-- bench_worst_step.py: end -->")
+BLOCK = "bench_worst_step.py"  # the marker block it writes
 MU_P = ex.mu * ex.P
 
 
@@ -82,15 +86,14 @@ def worst(path: Path, starts: dict, inputs: dict, repeat: int) -> tuple[float, f
     return best, h, status, steps
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     lines = [
         f"Made by `python benchmarks/bench_worst_step.py --repeat {args.repeat} --write` on "
-        f"{datetime.date.today()} ({platform.machine()}, Python {platform.python_version()}, "
-        f"the shared 2-core machine with other jobs running), max_work = {MAX_WORK}.",
+        f"{datetime.date.today()} ({harness.machine()}), max_work = {MAX_WORK}.",
         "",
         "| FMU | target | h (s) | status | internal steps taken | wall of one doStep (s) |",
         "|---|---|---|---|---|---|",
@@ -102,13 +105,7 @@ def main() -> None:
         lines.append(f"| {label} | {target} | {h:g} | {name} | {steps} | {wall:.3g} |")
         print(lines[-1], flush=True)
     if args.write:
-        page = DOC.read_text()
-        begin, end = MARKS
-        head, sep, rest = page.partition(begin)
-        _, sep2, tail = rest.partition(end)
-        if not (sep and sep2):
-            raise SystemExit(f"{DOC} lacks the markers {begin} ... {end}")
-        DOC.write_text(head + begin + "\n" + "\n".join(lines) + "\n" + end + tail)
+        harness.write_block(DOC, BLOCK, "\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -108,8 +108,10 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
         h.update(rel.encode() + b"\0" + src.read_bytes() + b"\0")
     for rel in cfg.generated_files:  # the generated data's content key (no build needed)
         h.update(rel.encode() + b"\0" + tables.key(cfg).encode() + b"\0")
-    # this package's modules that shape an FMU (not the command line, not the systems)
-    own_files = sorted(p for p in HERE.glob("*.py") if p.name not in ("__main__.py", "system.py"))
+    # this package's modules that shape an FMU (not the command line, not the systems, not
+    # the C importers' input)
+    skip = ("__main__.py", "system.py", "c_importer.py")
+    own_files = sorted(p for p in HERE.glob("*.py") if p.name not in skip)
     for own in own_files + [SHIM]:
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
     for doc in documentation.sources(cfg):  # the licence, the scene's figure

@@ -1,5 +1,6 @@
-"""What the native FMU tests share: the C importers' input format, their compilation
-(plain, with the sanitizers) and runs under valgrind's memcheck.
+"""What the native FMU tests share: the C importers' input format and their compilation
+(fmu_build.c_importer, which the benchmarks use too), the importers built with the
+sanitizers, runs under valgrind's memcheck.
 
 The importers (native_importer.c for FMI 2.0, native_importer3.c for FMI 3.0) read one
 format: inputs, outputs, parameters, then for "run" one row per step.
@@ -11,8 +12,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from contact_fmu.scenario import runner
-from fmu_build import native_fmu
+from fmu_build.c_importer import compile_c, spec  # noqa: F401 (the tests take spec here)
 
 HERE = Path(__file__).parent
 IMPORTER2 = HERE / "native_importer.c"
@@ -32,31 +32,6 @@ MEMCHECK = (
     "--errors-for-leak-kinds=definite", "--show-leak-kinds=definite", "-q",
 )  # fmt: skip
 HAS_VALGRIND = shutil.which("valgrind") is not None
-
-
-def spec(md, scene, case, rows: bool = True) -> str:
-    """The importers' input: the case's inputs per step (``rows``), its parameters."""
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    reals = [o for o in scene.outputs if o != "regime"]
-    params = runner.start_values(scene, case)
-    lines = [
-        f"{len(scene.inputs)} " + " ".join(str(vr[n]) for n in scene.inputs),
-        f"{len(reals)} " + " ".join(str(vr[n]) for n in reals),
-        f"{len(params)} " + " ".join(f"{vr[k]} {float(v).hex()}" for k, v in params.items()),
-    ]
-    if rows:
-        table = runner.input_table(scene, case)
-        for k in range(scene.grid.size - 1):
-            u = " ".join(float(table[n][k]).hex() for n in scene.inputs)
-            lines.append(f"{float(scene.grid[k]).hex()} {scene.step.hex()} {u}")
-    return "\n".join(lines) + "\n"
-
-
-def compile_c(out: Path, *args: str) -> Path:
-    """cc -O1 -g with the FMI headers (2.0 and 3.0) on the include path, -lm."""
-    cmd = ["cc", "-O1", "-g", f"-I{native_fmu.fmi_headers()}", "-o", str(out), *args, "-lm"]
-    subprocess.run(cmd, check=True, capture_output=True, text=True)
-    return out
 
 
 def sanitized(out: Path, importer: Path, unzip: Path) -> Path:
