@@ -3,7 +3,7 @@ kernels and dense operator built in the call) and repeat solve, today's solver a
 a previous revision's, alternately in one run.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace_small.py \\
-        [--repeat 11] [--grids 11 19 23 35] [--baseline cc7bca5] [--curve 32]
+        [--repeat 11] [--grids 11 19 23 35] [--baseline cc7bca5] [--curve 32] [--curve-repeat 5]
 
 The railway wheel on rail (contact_fmu.halfspace.railway) on m x m elements over the
 potential contact area (``HalfSpaceContact(n=(m, m))``, CONTACT's meaning of the grid),
@@ -25,7 +25,11 @@ import each other relatively), called the same way. max dT: the largest differen
 Tx, Ty between the two, relative to mu P (both converged to the Newton tolerance).
 
 --curve m: a 20-point creep curve (xi = 0.075 .. 1.5 mu P/(G c^2), no spin) on the
-int grid ``HalfSpaceContact(n=m)`` of a fresh contact, both solvers.
+int grid ``HalfSpaceContact(n=m)`` of a fresh contact, ``c.forces(xs, 0, 0, 1)``: the
+previous solver, today's with every point solved cold (``continuation=False``) and
+today's default (each point from the secant prediction of the last two,
+``rolling.Continuation``), alternately, --curve-repeat times; median and best CPU time.
+Pass --grids with --repeat 0 for the curve alone.
 """
 
 from __future__ import annotations
@@ -84,6 +88,7 @@ def main() -> None:
     ap.add_argument("--grids", type=int, nargs="+", default=[11, 19, 23, 35])
     ap.add_argument("--baseline", default="cc7bca5", help="git revision of the previous solver")
     ap.add_argument("--curve", type=int, default=32, help="grid of the creep curve (0: none)")
+    ap.add_argument("--curve-repeat", type=int, default=5, help="runs of each creep curve")
     args = ap.parse_args()
     tmp = tempfile.TemporaryDirectory()
     old = previous_package(args.baseline, Path(tmp.name))
@@ -101,6 +106,8 @@ def main() -> None:
         xref = probe.mu * probe.P / (probe.elastic.G * probe.c**2)
         a_of = {k: (w[0] * xref, w[1] * xref, w[2] * xref / probe.c) for k, w in CASES.items()}
         for name, a in a_of.items():
+            if args.repeat == 0:
+                continue
             first: list[list[float]] = [[], []]
             again: list[list[float]] = [[], []]
             for _ in range(args.repeat):
@@ -133,9 +140,13 @@ def main() -> None:
             )
     if args.curve:
         m = args.curve
-        for label in ("previous", "new"):
-            times = []
-            for _ in range(3):
+        # alternately: the previous solver, today's without continuation (every point
+        # cold, continuation=False) and today's default (continuation)
+        labels = ("previous", "new, cold points", "new, continuation")
+        times: dict[str, list[float]] = {k: [] for k in labels}
+        curves = {}
+        for _ in range(args.curve_repeat):
+            for label in labels:
                 if label == "previous":
                     c = old.wheel_on_rail(n=m)
                 else:
@@ -143,10 +154,19 @@ def main() -> None:
                     c = wheel_on_rail(n=m)
                 xref = c.mu * c.P / (c.elastic.G * c.c**2)
                 xs = np.linspace(0.0, 1.5, 21)[1:] * xref
-                dt, _ = cpu(lambda c=c, xs=xs: c.forces(xs, 0.0, 0.0, 1.0))
-                times.append(dt)
-            med = statistics.median(times)
-            print(f"# 20-point creep curve on {m} x {m}, {label}: median {med:.3f} s CPU")
+                kw = {} if label == "previous" else {"continuation": label.endswith("ion")}
+                dt, T = cpu(lambda c=c, xs=xs, kw=kw: c.forces(xs, 0.0, 0.0, 1.0, **kw))
+                times[label].append(dt)
+                curves[label] = np.array(T[:2]) / (c.mu * c.P)
+        base = statistics.median(times["previous"])
+        for label in labels:
+            med = statistics.median(times[label])
+            dT = float(np.abs(curves[label] - curves["previous"]).max())
+            print(
+                f"# 20-point creep curve on {m} x {m}, {label}: median {med:.3f} s CPU, "
+                f"best {min(times[label]):.3f} s (previous/this {base / med:.2f}; "
+                f"max dT/(mu P) against previous {dT:.1e})"
+            )
     print(f"# load average after: {os.getloadavg()[0]:.2f}")
 
 

@@ -1,0 +1,126 @@
+"""Creep curves by continuation and the solver's accuracy at small creepages.
+
+``HalfSpaceContact.forces`` solves a sequence of creepages from the secant prediction
+of ``rolling.Continuation`` instead of the cold start of ``solve``. The prediction is
+only the initial guess of the same Newton iteration, converged to the same tolerance:
+the forces must be the cold start's within what that tolerance allows. References: the
+converged cold solves, and Kalker's linear theory (the grid's own creep coefficients,
+``creep_coefficients``) at small creepage.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from contact_fmu.halfspace.railway import wheel_on_rail
+from contact_fmu.halfspace.rolling import NEWTON_TOL, Continuation, solve_rolling
+
+# Forces of two solves converged to max |F| <= NEWTON_TOL max g from different starts:
+# a residual of that size in every element moves the force by at most NEWTON_TOL max g
+# times the contact area = 1.5 NEWTON_TOL mu P (Hertz: max p = 1.5 P/area) per unit gain
+# of the inverse Jacobian; 1e-6 mu P allows a gain of 6 (measured: 1.1e-8 mu P).
+SAME_FORCE = 1e-6
+
+
+def reference_units(c):
+    """mu P/(G c^2): the creepage unit of the curves."""
+    return c.mu * c.P / (c.elastic.G * c.c**2)
+
+
+def test_creep_curve_with_continuation_is_the_cold_one():
+    """A 20-point longitudinal creep curve (xi = 0.075 .. 1.5 mu P/(G c^2), partial
+    slip into full slip) and a combined curve with spin and Vx < 0 (mirrored frame),
+    32 x 32 (the iterative path) and 19 x 19 (the direct path): forces with
+    continuation equal the cold solves' within SAME_FORCE mu P (measured at most 1.1e-8
+    mu P), and the warm curve takes fewer Newton steps (measured 81 against 94 on
+    32 x 32, 41 against 67 on 19 x 19)."""
+    for n in (32, (19, 19)):
+        c = wheel_on_rail(n=n)
+        xref = reference_units(c)
+        muP = c.mu * c.P
+        s = np.linspace(0.0, 1.5, 21)[1:]
+        zero = np.zeros_like(s)
+        for vx, vy, phi, Vx in (
+            (s * xref, zero, zero, 1.0),
+            (-0.5 * s * xref, 0.3 * s * xref, 0.4 * s * xref / c.c, -1.0),
+        ):
+            warm = np.array(c.forces(vx, vy, phi, Vx))
+            cold = np.array(c.forces(vx, vy, phi, Vx, continuation=False))
+            assert np.abs(warm[:2] - cold[:2]).max() <= SAME_FORCE * muP
+            assert np.abs(warm[2] - cold[2]).max() <= SAME_FORCE * muP * c.c
+            # the batch is single solves (the frame of Vx < 0 included)
+            one = c.traction(vx[7], vy[7], phi[7], Vx)
+            assert abs(one.Tx - warm[0, 7]) <= SAME_FORCE * muP
+            assert abs(one.Ty - warm[1, 7]) <= SAME_FORCE * muP
+    c = wheel_on_rail(n=32)
+    p = c.patch
+    xs = np.linspace(0.0, 1.5, 21)[1:] * reference_units(c)
+    cont = Continuation(p)
+    warm = sum(cont.solve(x).newton_iterations for x in xs)
+    cold = sum(solve_rolling(p, x).newton_iterations for x in xs)
+    assert warm < cold
+
+
+def test_continuation_predicts_only_along_a_line():
+    """The secant prediction is made only for creepages on the line of the last two
+    (here xi = 1, 2 -> 3: tau_2 + (tau_2 - tau_1), projected on |tau| <= g) and the
+    scaled one on the ray of the last; a creepage off both gets no prediction (the cold
+    start)."""
+    c = wheel_on_rail(n=16)
+    p = c.patch
+    x = 0.1 * reference_units(c)
+    cont = Continuation(p)
+    assert cont.guess(x, 0.0, 0.0) is None
+    t1 = cont.solve(x).tau
+    # one point: the ray through it scales it (projected)
+    ray = cont.guess(2.0 * x, 0.0, 0.0)
+    mag = np.hypot(*(2.0 * t1))
+    expect = 2.0 * t1 * np.minimum(1.0, p.g / np.where(mag > 0, mag, 1.0))
+    assert np.abs(ray - expect).max() <= 1e-12 * p.g.max()
+    assert cont.guess(x, x, 0.0) is None  # off the ray
+    t2 = cont.solve(2.0 * x).tau
+    line = cont.guess(3.0 * x, 0.0, 0.0)
+    pred = 2.0 * t2 - t1
+    mag = np.hypot(*pred)
+    expect = pred * np.minimum(1.0, p.g / np.where(mag > 0, mag, 1.0))
+    assert np.abs(line - expect).max() <= 1e-12 * p.g.max()
+    assert cont.guess(2.0 * x, x, 0.0) is None  # off the line and the ray
+
+
+def test_small_creepage_is_the_linear_theory():
+    """At xi (eta, phi c) = 1e-6 mu P/(G c^2) the slip area is vanishingly small and the
+    forces are Kalker's linear theory on the same grid (``creep_coefficients``; the
+    exact solution departs from it at second order, about 1e-6 relative here): Tx =
+    G c^2 C11 xi, Ty = G c^2 (C22 eta + c C23 phi), within 0.1 % of the force with the
+    default tolerance, on the iterative path (32 x 32; the bound max g alone left up to
+    0.08 % there, now measured at most 2.6e-5) and the direct one (19 x 19: exact to
+    rounding)."""
+    for n in (32, (19, 19)):
+        c = wheel_on_rail(n=n)
+        k = c.creep_coefficients()
+        G, cc = c.elastic.G, c.c
+        x = 1e-6 * reference_units(c)
+        for xi, eta, phi in ((x, 0.0, 0.0), (0.0, x, 0.0), (0.0, 0.0, x / cc)):
+            s = c.solve(xi, eta, phi, check_units=False)
+            Tx = G * cc**2 * k.C11 * xi
+            Ty = G * cc**2 * (k.C22 * eta + cc * k.C23 * phi)
+            scale = max(abs(Tx), abs(Ty))
+            assert s.Tx == pytest.approx(Tx, abs=1e-3 * scale)
+            assert s.Ty == pytest.approx(Ty, abs=1e-3 * scale)
+            assert s.adhesion_fraction == 1.0
+
+
+def test_convergence_bound_scales_with_small_tractions():
+    """The Newton bound is NEWTON_TOL max g while max |tau| >= 1e-3 max g (creep
+    curves and tables unchanged) and NEWTON_TOL 1e3 max |tau| below."""
+    from contact_fmu.halfspace.rolling import SMALL_TRACTION, convergence_bound
+
+    tau = np.zeros((2, 3, 3))
+    tau[0, 1, 1] = 2e-4
+    assert convergence_bound(tau, NEWTON_TOL, 1.0, SMALL_TRACTION) == pytest.approx(
+        NEWTON_TOL * 0.2, rel=1e-12
+    )
+    tau[0, 1, 1] = 0.5
+    assert convergence_bound(tau, NEWTON_TOL, 1.0, SMALL_TRACTION) == NEWTON_TOL
+    assert convergence_bound(tau, NEWTON_TOL, 1.0, 0.0) == NEWTON_TOL
