@@ -124,8 +124,12 @@ GMRES_MAXIT = 600
 ARMIJO = 1e-4
 MIN_STEP = 1.0 / 64.0
 # Direct path (direct.py) for contacts of at most this many elements (solve_rolling,
-# method "auto"): measured crossover against the iterative path, docs/performance.md.
-DIRECT_MAX_ELEMENTS = 380
+# method "auto"). Measured (docs/performance.md, railway wheel, two cases): a first
+# solve (patch, kernels, calibration included) and a repeat solve cross over at the same
+# size, between 293 (direct 1.1-1.3 times faster in both) and 349 elements (iterative
+# as fast or faster in both), so one threshold serves a contact solved once and a curve
+# or a table of many solves alike.
+DIRECT_MAX_ELEMENTS = 320
 # Nested iteration (docs/halfspace.md): ellipse_patch grids of n elements per side get a
 # coarse level of n/2 while n/2 >= NESTED_MIN_N, recursively. A 16 x 16 level costs
 # about what it saves (measured: 32 x 32 15-20 % slower nested from 16 x 16, 64 x 64 no
