@@ -455,7 +455,8 @@ class RollingPatch:
 
     # ---- linear theory and the initial guess -----------------------------------------
     def solve_adhesion(self, W: FloatArray, rtol: float = 1e-10) -> tuple[FloatArray, int]:
-        """Full adhesion (mu -> inf, Kalker's linear theory): K tau = W on the contact.
+        """Full adhesion (mu -> inf, Kalker's linear theory): K tau = W on the contact,
+        by ``krylov.gmres_right`` to rtol of |W| (the true residual).
 
         Returns tau (2, ny, nx) (Pa) and the GMRES iteration count (0 for the contacts
         of the direct path, which use the dense K^-1 it keeps anyway)."""
@@ -465,20 +466,23 @@ class RollingPatch:
             return self._adhesion_dense([W])[0], 0
         clo = self._closure(C)
 
+        iC = np.flatnonzero(C)
+        iCC = np.concatenate([iC, C.size + iC])  # both components, flat
+        shape = (2, *self.grid.shape)
+        marcher = march_plan(C)
+
         def matvec(x):
-            t = np.zeros((2, *self.grid.shape))
-            t[0][C], t[1][C] = x[:m], x[m:]
-            Kt = self.apply_K(t)
-            return np.concatenate([Kt[0][C], Kt[1][C]])
+            t = np.zeros(2 * C.size)
+            t[iCC] = x
+            return self.apply_K(t.reshape(shape)).ravel()[iCC], None
 
         def psolve(v):
-            res = np.zeros((2, *self.grid.shape))
-            res[0][C], res[1][C] = v[:m], v[m:]
-            d = self._precondition_adhesion(res, C, clo)
-            return np.concatenate([d[0][C], d[1][C]])
+            res = np.zeros(2 * C.size)
+            res[iCC] = v
+            return self._precondition_adhesion(res.reshape(shape), C, clo, marcher).ravel()[iCC]
 
         b = np.concatenate([W[0][C], W[1][C]])
-        x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
+        x, its, _ = gmres_right(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
         tau = np.zeros((2, *self.grid.shape))
         tau[0][C], tau[1][C] = x[:m], x[m:]
         return tau, its
