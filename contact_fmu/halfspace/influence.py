@@ -91,8 +91,16 @@ class Grid:
         return self.y0 + (np.arange(self.ny) + 0.5) * self.dy
 
     def mesh(self) -> tuple[FloatArray, FloatArray]:
-        """(X, Y) of the cell centres, each of shape (ny, nx)."""
-        return np.meshgrid(self.x, self.y)
+        """(X, Y) of the cell centres, each of shape (ny, nx); built once per grid and
+        read-only (a solve asks for it several times)."""
+        return self._mesh
+
+    @cached_property
+    def _mesh(self) -> tuple[FloatArray, FloatArray]:
+        X, Y = np.meshgrid(self.x, self.y)
+        X.flags.writeable = False
+        Y.flags.writeable = False
+        return X, Y
 
     @property
     def area(self) -> float:
