@@ -19,7 +19,7 @@ from contact_fmu.halfspace.rolling import NEWTON_TOL, Continuation, solve_rollin
 # Forces of two solves converged to max |F| <= NEWTON_TOL max g from different starts:
 # a residual of that size in every element moves the force by at most NEWTON_TOL max g
 # times the contact area = 1.5 NEWTON_TOL mu P (Hertz: max p = 1.5 P/area) per unit gain
-# of the inverse Jacobian; 1e-6 mu P allows a gain of 6 (measured: 1.1e-8 mu P).
+# of the inverse Jacobian; 1e-6 mu P allows a gain of 6 (measured: 2.1e-8 mu P).
 SAME_FORCE = 1e-6
 
 
@@ -29,37 +29,40 @@ def reference_units(c):
 
 
 def test_creep_curve_with_continuation_is_the_cold_one():
-    """A 20-point longitudinal creep curve (xi = 0.075 .. 1.5 mu P/(G c^2), partial
-    slip into full slip) and a combined curve with spin and Vx < 0 (mirrored frame),
-    32 x 32 (the iterative path) and 19 x 19 (the direct path): forces with
-    continuation equal the cold solves' within SAME_FORCE mu P (measured at most 1.1e-8
-    mu P), and the warm curve takes fewer Newton steps (measured 81 against 94 on
-    32 x 32, 41 against 67 on 19 x 19)."""
+    """A 12-point longitudinal creep curve (xi = 0.125 .. 1.5 mu P/(G c^2), partial
+    slip into full slip) and an 8-point combined one with spin and Vx < 0 (the mirrored
+    frame), on 32 x 32 (the iterative path) and 19 x 19 (the direct path): forces with
+    continuation equal the cold solves' within SAME_FORCE mu P (measured at most 2.1e-8
+    mu P), and the warm longitudinal curve on 32 x 32 takes fewer Newton steps (measured
+    52 against 57)."""
     for n in (32, (19, 19)):
         c = wheel_on_rail(n=n)
         xref = reference_units(c)
         muP = c.mu * c.P
-        s = np.linspace(0.0, 1.5, 21)[1:]
-        zero = np.zeros_like(s)
+        s = np.linspace(0.0, 1.5, 13)[1:]
+        t = np.linspace(0.0, 1.5, 9)[1:]
         for vx, vy, phi, Vx in (
-            (s * xref, zero, zero, 1.0),
-            (-0.5 * s * xref, 0.3 * s * xref, 0.4 * s * xref / c.c, -1.0),
+            (s * xref, 0.0 * s, 0.0 * s, 1.0),
+            (-0.5 * t * xref, 0.3 * t * xref, 0.4 * t * xref / c.c, -1.0),
         ):
+            if n == 32 and Vx > 0.0:
+                continue  # below, by the solver directly, with its counts
             warm = np.array(c.forces(vx, vy, phi, Vx))
             cold = np.array(c.forces(vx, vy, phi, Vx, continuation=False))
             assert np.abs(warm[:2] - cold[:2]).max() <= SAME_FORCE * muP
             assert np.abs(warm[2] - cold[2]).max() <= SAME_FORCE * muP * c.c
             # the batch is single solves (the frame of Vx < 0 included)
-            one = c.traction(vx[7], vy[7], phi[7], Vx)
-            assert abs(one.Tx - warm[0, 7]) <= SAME_FORCE * muP
-            assert abs(one.Ty - warm[1, 7]) <= SAME_FORCE * muP
+            one = c.traction(vx[3], vy[3], phi[3], Vx)
+            assert abs(one.Tx - warm[0, 3]) <= SAME_FORCE * muP
+            assert abs(one.Ty - warm[1, 3]) <= SAME_FORCE * muP
     c = wheel_on_rail(n=32)
     p = c.patch
-    xs = np.linspace(0.0, 1.5, 21)[1:] * reference_units(c)
     cont = Continuation(p)
-    warm = sum(cont.solve(x).newton_iterations for x in xs)
-    cold = sum(solve_rolling(p, x).newton_iterations for x in xs)
-    assert warm < cold
+    warm = [cont.solve(x) for x in s * reference_units(c)]
+    cold = [solve_rolling(p, x) for x in s * reference_units(c)]
+    dT = max(max(abs(w.Tx - k.Tx), abs(w.Ty - k.Ty)) for w, k in zip(warm, cold, strict=True))
+    assert dT <= SAME_FORCE * c.mu * c.P
+    assert sum(w.newton_iterations for w in warm) < sum(k.newton_iterations for k in cold)
 
 
 def test_continuation_predicts_only_along_a_line():

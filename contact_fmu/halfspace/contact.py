@@ -382,9 +382,12 @@ class HalfSpaceContact:
         direction (cos angle, sin angle), no spin (-)."""
         angle = finite("angle", angle)
         ca, sa = math.cos(angle), math.sin(angle)
+        # the bisection's creepages lie on one ray: each solve starts from the secant
+        # through the last two (the same converged solutions as cold starts)
+        cont = Continuation(self.patch)
 
         def adh(s: float) -> float:
-            return self.solve(s * ca, s * sa).adhesion_fraction
+            return cont.solve(s * ca, s * sa).adhesion_fraction
 
         lo, hi = 0.0, 3.0 * self.mu * self.P / (self.elastic.G * self.c**2)
         while adh(hi) > FULL_SLIP_ADHESION:
