@@ -1,6 +1,7 @@
 """GMRES for the Newton systems of the half-space solvers: scipy's (restarted, the
-preconditioner on the left) with its iteration count, as the block preconditioner
-uses it."""
+preconditioner on the left) with its iteration count (the transient solver), and
+``gmres_right`` (the preconditioner on the right, with a side product; steady rolling
+and its full-adhesion solves), as the block preconditioner uses them."""
 
 from __future__ import annotations
 
