@@ -152,3 +152,30 @@ def test_right_preconditioned_gmres_with_restarts():
     assert np.abs(side - 2.0 * (A @ x)).max() <= 1e-12 * np.abs(b).max() * 2.0 * n
     x0, its0, side0 = gmres_right(lambda z: (A @ z, None), np.zeros(n), lambda v: v, 0.1, 5, 50)
     assert its0 == 0 and side0 is None and not x0.any()
+
+
+def test_continuation_falls_back_to_a_cold_start(monkeypatch):
+    """Should Newton fail from the prediction (here: every warm-started solve raises,
+    as after NEWTON_MAXIT steps), the point is solved cold: the solution of
+    ``solve_rolling`` without a guess, within SAME_FORCE mu P (the same start; the
+    direct path's Newton steps may take another reduced form once K^-1 exists)."""
+    from contact_fmu.halfspace import rolling
+
+    c = wheel_on_rail(n=16)
+    p = c.patch
+    x = 0.2 * reference_units(c)
+    real = rolling.solve_rolling
+
+    def failing(patch, xi, eta=0.0, phi=0.0, tau0=None, **kw):
+        if tau0 is not None:
+            raise RuntimeError("steady rolling: no convergence (test)")
+        return real(patch, xi, eta, phi, **kw)
+
+    cont = Continuation(p)
+    cont.solve(x)
+    monkeypatch.setattr(rolling, "solve_rolling", failing)
+    assert cont.guess(2.0 * x, 0.0, 0.0) is not None
+    sol = cont.solve(2.0 * x)
+    ref = real(p, 2.0 * x)
+    assert abs(sol.Tx - ref.Tx) <= SAME_FORCE * c.mu * c.P
+    assert sol.levels == ref.levels and sol.newton_iterations > 0

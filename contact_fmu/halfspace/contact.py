@@ -346,7 +346,8 @@ class HalfSpaceContact:
         (the secant through the last two solutions where the creepages lie on their
         line, as along a creep curve; otherwise a cold start), not from the cold start
         of ``solve``; the forces agree within the Newton tolerance (a 20-point creep
-        curve on 32 x 32: about 45 % less time, docs/halfspace.md)."""
+        curve on 32 x 32: 76 Newton steps instead of 94, 0.18 s CPU instead of 0.22 s;
+        docs/halfspace.md, "Creep curves and tables: continuation")."""
         vx, vy, phi, Vx = _broadcast(vx=vx, vy=vy, phi=phi, Vx=Vx)
         cont = Continuation(self.patch) if flag("continuation", continuation) else None
         out = np.zeros((3, *vx.shape))

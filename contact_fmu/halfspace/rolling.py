@@ -98,7 +98,7 @@ NEWTON_TOL = 1e-7
 # SMALL_TRACTION max |tau|, whichever is smaller (solve_rolling): the traction is then
 # converged to NEWTON_TOL SMALL_TRACTION = 1e-4 of itself, ten times below the 0.1 % of
 # the force asked of the solver (at xi = 1e-6 mu P/(G c^2) on 32 x 32 the bound max g
-# alone left 0.03-0.08 % against the linear theory; tests/test_halfspace_curve.py).
+# alone left 0.015-0.08 % against the linear theory; tests/test_halfspace_curve.py).
 # It binds only below max |tau| = 1e-3 max g: creep curves and tables cost the same.
 SMALL_TRACTION = 1e3
 # Newton iteration cap; observed counts are 2-12 (docs/halfspace.md).
