@@ -44,8 +44,9 @@ over each adhesion interval (a small dense system, one unknown per interval and
 component), and the march from the leading edge that turns differences into
 tractions. For the thin layer this preconditioner is the exact inverse (the march of
 LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
-|F| globalises the iteration. Contacts of at most DIRECT_MAX_ELEMENTS elements take
-dense direct Newton steps instead (direct.py).
+|F| globalises the iteration. Small contacts take dense direct Newton steps instead
+(direct.py; DIRECT_MAX_ELEMENTS on a patch's first solve, DIRECT_REPEAT_MAX_ELEMENTS
+on later ones).
 
 Nested iteration: a patch from ellipse_patch carries its coarse levels (n/2, n/4, ...
 elements per side over the same ellipse, down to NESTED_MIN_N); solve_rolling solves the
@@ -123,13 +124,18 @@ GMRES_MAXIT = 600
 # Backtracking: sufficient decrease factor on |F|_2 and the smallest step fraction.
 ARMIJO = 1e-4
 MIN_STEP = 1.0 / 64.0
-# Direct path (direct.py) for contacts of at most this many elements (solve_rolling,
-# method "auto"). Measured (docs/performance.md, railway wheel, two cases): a first
-# solve (patch, kernels, calibration included) and a repeat solve cross over at the same
-# size, between 293 (direct 1.1-1.3 times faster in both) and 349 elements (iterative
-# as fast or faster in both), so one threshold serves a contact solved once and a curve
-# or a table of many solves alike.
+# Direct path (direct.py) for contacts of at most DIRECT_MAX_ELEMENTS elements on a
+# patch's first solve, and of at most DIRECT_REPEAT_MAX_ELEMENTS on its later ones
+# (solve_rolling, method "auto"; the rule in docs/halfspace.md, "Which path"). Measured
+# on the railway wheel (CPU ms; first solve, second (it builds K^-1: 14.5 ms at 293
+# elements), later ones): direct 8.9, 13.4, 3.3 and iterative 14.3, 7.3, 7.3 at 225
+# elements; direct 13.9, 26.5, 7.7 and iterative 17.0, 8.6, 8.6 at 293; at 349 the
+# iterative path is as fast on a first solve and faster on later ones. So a first solve
+# is direct up to about 320 elements, and the n solves of one patch cost least on the
+# direct path up to about 260 (at 225 from n = 2 on), but iteratively from the second
+# solve on at 293 (direct only even again from n = 20).
 DIRECT_MAX_ELEMENTS = 320
+DIRECT_REPEAT_MAX_ELEMENTS = 260
 # Nested iteration (docs/halfspace.md): ellipse_patch grids of n elements per side get a
 # coarse level of n/2 while n/2 >= NESTED_MIN_N, recursively. A 16 x 16 level costs
 # about what it saves (measured: 32 x 32 15-20 % slower nested from 16 x 16, 64 x 64 no
@@ -336,8 +342,10 @@ class RollingPatch:
 
     @cached_property
     def direct(self) -> bool:
-        """Whether ``solve_rolling(method="auto")`` takes the direct path on this patch:
-        contacts of at most DIRECT_MAX_ELEMENTS elements, FFT backend."""
+        """Whether this patch is in the direct path's range: contacts of at most
+        DIRECT_MAX_ELEMENTS elements, FFT backend (its first ``solve_rolling(method=
+        "auto")`` is direct, and so are later ones up to DIRECT_REPEAT_MAX_ELEMENTS; its
+        full-adhesion solves use the dense K)."""
         return int(self.contact.sum()) <= DIRECT_MAX_ELEMENTS and self.backend == "fft"
 
     @cached_property
@@ -597,8 +605,10 @@ def solve_rolling(
     Omega_z/Vx (1/m), rolling in +x. tau0: initial traction (2, ny, nx) (warm start).
 
     method: "iterative" (GMRES Newton steps, below), "direct" (dense Newton steps,
-    direct.py), "auto": direct for contacts of at most DIRECT_MAX_ELEMENTS elements
-    with the FFT backend, iterative otherwise.
+    direct.py), "auto": with the FFT backend direct for contacts of at most
+    DIRECT_MAX_ELEMENTS elements on the patch's first direct solve and of at most
+    DIRECT_REPEAT_MAX_ELEMENTS on later ones (the measured costs of one and of many
+    solves), iterative otherwise.
 
     Initial guess without tau0: nested iteration where the patch has a coarse level
     (``RollingPatch.coarse``; ellipse_patch grids of 64 and more elements per side): the
@@ -615,7 +625,8 @@ def solve_rolling(
     one_of("method", method, ("auto", "iterative", "direct"))
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
-    if method == "direct" or (method == "auto" and patch.direct):
+    auto_direct = patch.direct and (patch.solves == 0 or int(C.sum()) <= DIRECT_REPEAT_MAX_ELEMENTS)
+    if method == "direct" or (method == "auto" and auto_direct):
         guess = tau0 if tau0 is not None else patch.fastsim_guess(xi, eta, phi)
         tau, S, slip, newton = direct.newton(patch, W, guess, tol, maxit, SMALL_TRACTION)
         return _solution(patch, tau, S, slip, newton, 0, ())
