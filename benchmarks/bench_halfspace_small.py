@@ -3,7 +3,8 @@ kernels and dense operator built in the call) and repeat solve, today's solver a
 a previous revision's, alternately in one run.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace_small.py \\
-        [--repeat 11] [--grids 11 19 23 35] [--baseline cc7bca5] [--curve 32]
+        [--repeat 11] [--grids 11 19 23 35] [--baseline cc7bca5] [--curve 32] [--curve-repeat 5] \\
+        [--crossover 19 21 23 25 27]
 
 The railway wheel on rail (contact_fmu.halfspace.railway) on m x m elements over the
 potential contact area (``HalfSpaceContact(n=(m, m))``, CONTACT's meaning of the grid),
@@ -12,8 +13,8 @@ spin (xi = eta = 0.2, phi = 0.3 in the same units).
 
 *first*: a fresh contact solved once, the whole call timed (Hertz pressure on the grid,
 influence kernels, the dense operator, the FASTSIM calibration, the Newton iteration);
-the kernel cache of today's solver is emptied before each, so that no call reuses
-another's kernels. *repeat*: the median of four more solves of the same contact (cold
+the kernel cache of each solver (where it has one) is emptied before each, so that no
+call reuses another's kernels. *repeat*: the median of four more solves of the same contact (cold
 starts, no warm start; the first of them builds K^-1 on the direct path): what a creep
 curve or a table pays per point. CPU time of the process
 (time.process_time; wall clock on a shared machine carries other processes' time),
@@ -25,7 +26,15 @@ import each other relatively), called the same way. max dT: the largest differen
 Tx, Ty between the two, relative to mu P (both converged to the Newton tolerance).
 
 --curve m: a 20-point creep curve (xi = 0.075 .. 1.5 mu P/(G c^2), no spin) on the
-int grid ``HalfSpaceContact(n=m)`` of a fresh contact, both solvers.
+int grid ``HalfSpaceContact(n=m)`` of a fresh contact, ``c.forces(xs, 0, 0, 1)``: the
+previous solver, today's with every point solved cold (``continuation=False``) and
+today's default (each point from the secant prediction of the last two,
+``rolling.Continuation``), alternately, --curve-repeat times; median and best CPU time.
+Pass --grids with --repeat 0 for the curve alone.
+
+--crossover m ...: today's solver by either path (``solve_rolling(method="direct")``
+and ``"iterative"``) on m x m, first and repeat solves: the measurement behind
+``rolling.DIRECT_MAX_ELEMENTS``.
 """
 
 from __future__ import annotations
@@ -78,12 +87,59 @@ def fresh_new(m):
     return wheel_on_rail(n=(m, m))
 
 
+def fresh_old(old, m, n=None):
+    """A fresh contact of the previous solver, its kernel cache (where it has one)
+    emptied like today's."""
+    prev = importlib.import_module("contact_fmu_prev.halfspace.influence")
+    cache = getattr(prev, "_cerruti_reference", None)
+    if cache is not None:
+        cache.cache_clear()
+    return old.wheel_on_rail(n=(m, m) if n is None else n)
+
+
+def crossover(m: int) -> None:
+    """Today's solver on m x m by either path (solve_rolling(method=...)): first solve
+    of a fresh contact (patch and kernels built in the call) and the median of four
+    repeat solves after one more, medians of three runs, each case."""
+    from contact_fmu.halfspace.rolling import solve_rolling
+
+    for name, w in CASES.items():
+        res: dict[str, list[tuple[float, float]]] = {"direct": [], "iterative": []}
+        for _ in range(3):
+            for meth in res:
+                c = fresh_new(m)
+                xref = c.mu * c.P / (c.elastic.G * c.c**2)
+                a = (w[0] * xref, w[1] * xref, w[2] * xref / c.c)
+
+                def one(c=c, a=a, meth=meth):
+                    return solve_rolling(c.patch, *a, method=meth)
+
+                first, _ = cpu(one)
+                again = [cpu(one)[0] for _ in range(5)][1:]
+                res[meth].append((first, statistics.median(again)))
+        n_c = int(c.patch.contact.sum())
+        cols = [
+            f"{statistics.median(f for f, _ in v) * 1e3:.1f}, "
+            f"{statistics.median(r for _, r in v) * 1e3:.1f}"
+            for v in res.values()
+        ]
+        print(
+            f"# crossover {m} x {m} ({n_c} elements), {name}: first, repeat (ms): "
+            f"direct {cols[0]}; iterative {cols[1]}",
+            flush=True,
+        )
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--repeat", type=int, default=11)
     ap.add_argument("--grids", type=int, nargs="+", default=[11, 19, 23, 35])
     ap.add_argument("--baseline", default="cc7bca5", help="git revision of the previous solver")
     ap.add_argument("--curve", type=int, default=32, help="grid of the creep curve (0: none)")
+    ap.add_argument("--curve-repeat", type=int, default=5, help="runs of each creep curve")
+    ap.add_argument(
+        "--crossover", type=int, nargs="*", default=[], help="grids of the path crossover"
+    )
     args = ap.parse_args(argv)
     tmp = tempfile.TemporaryDirectory()
     old = previous_package(args.baseline, Path(tmp.name))
@@ -101,11 +157,13 @@ def main(argv: list[str] | None = None) -> None:
         xref = probe.mu * probe.P / (probe.elastic.G * probe.c**2)
         a_of = {k: (w[0] * xref, w[1] * xref, w[2] * xref / probe.c) for k, w in CASES.items()}
         for name, a in a_of.items():
+            if args.repeat == 0:
+                continue
             first: list[list[float]] = [[], []]
             again: list[list[float]] = [[], []]
             for _ in range(args.repeat):
                 for i in range(2):
-                    c = old.wheel_on_rail(n=(m, m)) if i == 0 else fresh_new(m)
+                    c = fresh_old(old, m) if i == 0 else fresh_new(m)
                     dt, s = cpu(lambda c=c, a=a: c.solve(*a))
                     first[i].append(dt)
                     # later solves: the first of them builds K^-1 (direct path); their
@@ -133,20 +191,35 @@ def main(argv: list[str] | None = None) -> None:
             )
     if args.curve:
         m = args.curve
-        for label in ("previous", "new"):
-            times = []
-            for _ in range(3):
+        # alternately: the previous solver, today's without continuation (every point
+        # cold, continuation=False) and today's default (continuation)
+        labels = ("previous", "new, cold points", "new, continuation")
+        times: dict[str, list[float]] = {k: [] for k in labels}
+        curves = {}
+        for _ in range(args.curve_repeat):
+            for label in labels:
                 if label == "previous":
-                    c = old.wheel_on_rail(n=m)
+                    c = fresh_old(old, m, m)
                 else:
                     influence._cerruti_reference.cache_clear()
                     c = wheel_on_rail(n=m)
                 xref = c.mu * c.P / (c.elastic.G * c.c**2)
                 xs = np.linspace(0.0, 1.5, 21)[1:] * xref
-                dt, _ = cpu(lambda c=c, xs=xs: c.forces(xs, 0.0, 0.0, 1.0))
-                times.append(dt)
-            med = statistics.median(times)
-            print(f"# 20-point creep curve on {m} x {m}, {label}: median {med:.3f} s CPU")
+                kw = {} if label == "previous" else {"continuation": label.endswith("ion")}
+                dt, T = cpu(lambda c=c, xs=xs, kw=kw: c.forces(xs, 0.0, 0.0, 1.0, **kw))
+                times[label].append(dt)
+                curves[label] = np.array(T[:2]) / (c.mu * c.P)
+        base = statistics.median(times["previous"])
+        for label in labels:
+            med = statistics.median(times[label])
+            dT = float(np.abs(curves[label] - curves["previous"]).max())
+            print(
+                f"# 20-point creep curve on {m} x {m}, {label}: median {med:.3f} s CPU, "
+                f"best {min(times[label]):.3f} s (previous/this {base / med:.2f}; "
+                f"max dT/(mu P) against previous {dT:.1e})"
+            )
+    for m in args.crossover:
+        crossover(m)
     print(f"# load average after: {os.getloadavg()[0]:.2f}")
 
 

@@ -337,10 +337,15 @@ def fmi_headers() -> Path:
 
 
 def identity(cfg: ModelConfig) -> str:
-    """The content key: the configuration, the C sources, the variables' header and this
-    module; the GUID and the model identifier follow from it."""
+    """The content key: the configuration, the C sources, the variables' header, the
+    creep-force table's key (its data travel as a resource: the header alone does not
+    change with them) and this module; the GUID and the model identifier follow from it."""
     h = hashlib.sha256(FORMAT.encode())
     h.update(json.dumps(cfg.to_dict(), sort_keys=True).encode())
+    if cfg.has_table:
+        from . import tables
+
+        h.update(tables.key(cfg).encode())
     h.update(header(cfg, "").encode())
     h.update(_skeleton(cfg, "", ""))
     for name in SOURCES:

@@ -10,25 +10,31 @@ import pytest
 from contact_fmu import examples as ex
 from contact_fmu.halfspace import HalfSpaceContact, Material, direct
 from contact_fmu.halfspace.railway import wheel_on_rail
-from contact_fmu.halfspace.rolling import DIRECT_MAX_ELEMENTS, ellipse_patch, solve_rolling
+from contact_fmu.halfspace.rolling import (
+    DIRECT_MAX_ELEMENTS,
+    DIRECT_REPEAT_MAX_ELEMENTS,
+    ellipse_patch,
+    solve_rolling,
+)
 
 
 def _patches():
     w = wheel_on_rail(n=(11, 11))
-    w23 = wheel_on_rail(n=(23, 23))  # 349 elements: near the direct path's limit
+    w19 = wheel_on_rail(n=(19, 19))  # 225 elements: near the limit of repeated direct solves
     lc = ex.contact()
     layer = ellipse_patch(lc.a1, lc.a2, 12, lc.pressure, lc.mu, lc.a1 / lc.k, 0.3, k=lc.k, P=lc.P)
     steel, alu = Material(210e9, 0.3), Material(70e9, 0.33)
     dissimilar = HalfSpaceContact(1000.0, 0.02, 0.02, steel, alu, 0.3, n=12)
-    return {"railway 11 x 11": (w.patch, w), "railway 23 x 23": (w23.patch, w23),
+    return {"railway 11 x 11": (w.patch, w), "railway 19 x 19": (w19.patch, w19),
             "layers": (layer, None),
             "dissimilar": (dissimilar.patch, dissimilar)}  # fmt: skip
 
 
-@pytest.mark.parametrize("name", ["railway 11 x 11", "railway 23 x 23", "layers", "dissimilar"])
+@pytest.mark.parametrize("name", ["railway 11 x 11", "railway 19 x 19", "layers", "dissimilar"])
 def test_direct_and_iterative_paths_agree(name):
     patch, c = _patches()[name]
-    assert int(patch.contact.sum()) <= DIRECT_MAX_ELEMENTS  # "auto" takes the direct path
+    # "auto" takes the direct path on every solve
+    assert int(patch.contact.sum()) <= DIRECT_REPEAT_MAX_ELEMENTS
     if c is not None:
         s = c.mu * c.P / (c.elastic.G * c.c**2)
         cases = [(0.1 * s, 0, 0), (0.3 * s, 0, 0), (0.2 * s, 0.2 * s, 0.3 * s / c.c),
@@ -42,6 +48,25 @@ def test_direct_and_iterative_paths_agree(name):
         assert np.abs(a.tau - b.tau).max() < 1e-6 * float(patch.g.max()), w
         assert np.array_equal(a.slip, b.slip), w
         assert b.newton_iterations <= 10
+
+
+def test_path_rule_for_one_and_for_many_solves():
+    """solve_rolling(method="auto") by the measured costs (rolling.DIRECT_MAX_ELEMENTS):
+    a patch of 293 elements (21 x 21) takes the direct path on its first solve (the
+    cheaper first solve, 14 against 17 ms) and the iterative one after it (8.6 ms a
+    solve, where the direct path's second solve builds K^-1 for 26 ms); 225 elements
+    (19 x 19) stay direct; 349 (23 x 23) are iterative from the first. The solutions of
+    the two paths agree to the Newton tolerance (compared at 1e-6 of max mu p)."""
+    for m, first, later in ((19, True, True), (21, True, False), (23, False, False)):
+        c = wheel_on_rail(n=(m, m))
+        p = c.patch
+        n = int(p.contact.sum())
+        assert (n <= DIRECT_MAX_ELEMENTS, n <= DIRECT_REPEAT_MAX_ELEMENTS) == (first, later)
+        x = 0.3 * c.mu * c.P / (c.elastic.G * c.c**2)
+        one, two, three = (solve_rolling(p, x) for _ in range(3))
+        assert (one.gmres_iterations == 0, two.gmres_iterations == 0) == (first, later)
+        assert (three.gmres_iterations == 0) == later
+        assert np.abs(one.tau - two.tau).max() < 1e-6 * float(p.g.max())
 
 
 def test_direct_path_warm_start_and_full_adhesion():

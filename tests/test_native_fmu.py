@@ -162,6 +162,20 @@ def test_guid_follows_the_model(scenes):
     assert native_fmu.identity(cfg) != native_fmu.identity(other)
 
 
+def test_guid_follows_the_creep_force_table(scenes, monkeypatch):
+    """A half-space FMU carries its table's data as a resource, which the variables'
+    header does not describe: another table (a changed solver, numpy or scipy: the
+    table's key) is another FMU, never a cached one with the old data."""
+    from fmu_build import tables
+
+    cfg = scenes["rail_creep"].config
+    before = native_fmu.identity(cfg)
+    key, law = tables.key(cfg), native_fmu._table_law(cfg)
+    monkeypatch.setattr(native_fmu, "_table_law", lambda c: law)  # the same header
+    monkeypatch.setattr(tables, "key", lambda c: "0" + key[1:])  # another table's data
+    assert native_fmu.identity(cfg) != before
+
+
 def test_rigid_body_fmu_steps_eqs_8_9_to_the_pythonfmu_doubles(tmp_path):
     """The full rigid_body FMU (Eqs. 8-9 under held inputs, exact for held Tx), native and
     pythonfmu, under the same changing inputs: the same doubles; Iy = 0 cannot start."""

@@ -15,7 +15,7 @@ from .line import LineContact
 from .normal import NormalSolution, solve_normal
 from .plotting import plot_creep_curves
 from .railway import STEEL, wheel_on_rail
-from .rolling import RollingPatch, RollingSolution, ellipse_patch, solve_rolling
+from .rolling import Continuation, RollingPatch, RollingSolution, ellipse_patch, solve_rolling
 from .spec import Solid, TableLaw, TableSpec, build_file
 from .table import CreepTable, TableData, build_table
 
@@ -46,6 +46,7 @@ def __getattr__(name: str) -> Any:
 __all__ = [
     "STEEL",
     "CombinedElastic",
+    "Continuation",
     "CreepCoefficients",
     "CoulombSolution",
     "CreepTable",

@@ -48,6 +48,7 @@ from .hertz import (
 )
 from .rolling import (
     NEWTON_TOL,
+    Continuation,
     RollingPatch,
     RollingSolution,
     ellipse_patch,
@@ -308,36 +309,67 @@ class HalfSpaceContact:
     def traction(self, vx: float, vy: float, phi: float, Vx: float) -> RollingSolution:
         """The solution for rigid slip (vx, vy) (m/s), Omega_z = phi (rad/s), speed Vx (m/s),
         in the frame of the contact (x along +x of the body frame for every sign of Vx)."""
+        return self._traction(vx, vy, phi, Vx, None)
+
+    def _traction(
+        self, vx: float, vy: float, phi: float, Vx: float, cont: Continuation | None
+    ) -> RollingSolution:
+        """``traction``, solved from the continuation's prediction where one is given (its
+        history is kept in the rolling frame, after the mirroring of Vx < 0)."""
         vx, vy, phi, Vx = (
             finite(n, v) for n, v in zip(("vx", "vy", "phi", "Vx"), (vx, vy, phi, Vx), strict=True)
         )
         if Vx == 0.0:
             return self._sliding(vx, vy, phi)
         aV = abs(Vx)
-        if Vx > 0.0:
-            # Omega_z of a simulation, not a user's spin: no unit check
-            return self.solve(vx / aV, vy / aV, phi / aV, check_units=False)
-        sol = self.solve(-vx / aV, vy / aV, -phi / aV, check_units=False)
-        return _mirror(sol)
+        sign = 1.0 if Vx > 0.0 else -1.0
+        # Omega_z of a simulation, not a user's spin: no unit check
+        xi, eta, ph = sign * vx / aV, vy / aV, sign * phi / aV
+        if cont is None:
+            sol = self.solve(xi, eta, ph, check_units=False)
+        else:
+            sol = cont.solve(xi, eta, ph)
+        return sol if Vx > 0.0 else _mirror(sol)
 
     def forces(
-        self, vx: ArrayLike, vy: ArrayLike, phi: ArrayLike, Vx: ArrayLike
+        self,
+        vx: ArrayLike,
+        vy: ArrayLike,
+        phi: ArrayLike,
+        Vx: ArrayLike,
+        continuation: bool = True,
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(Tx, Ty, Mz) in N, N m (Eq. 8 convention), one solve per element of the
-        broadcast inputs."""
+        broadcast inputs, in their order (C order).
+
+        continuation: each solve starts from the prediction of ``rolling.Continuation``
+        (the secant through the last two solutions where the creepages lie on their
+        line, as along a creep curve; otherwise a cold start), not from the cold start
+        of ``solve``; the forces agree within the Newton tolerance (a 20-point creep
+        curve on 32 x 32: 76 Newton steps instead of 94, 0.18 s CPU instead of 0.22 s;
+        docs/halfspace.md, "Creep curves and tables: continuation")."""
         vx, vy, phi, Vx = _broadcast(vx=vx, vy=vy, phi=phi, Vx=Vx)
+        cont = Continuation(self.patch) if flag("continuation", continuation) else None
         out = np.zeros((3, *vx.shape))
         for idx in np.ndindex(vx.shape):
-            s = self.traction(vx[idx], vy[idx], phi[idx], Vx[idx])
+            s = self._traction(vx[idx], vy[idx], phi[idx], Vx[idx], cont)
             out[:, *idx] = (s.Tx, s.Ty, s.Mz)
         return out[0], out[1], out[2]
 
-    def adhesion_fraction(self, vx: ArrayLike, vy: ArrayLike, Vx: ArrayLike, phi: ArrayLike = 0.0):
-        """Adhesion area over contact area (-)."""
+    def adhesion_fraction(
+        self,
+        vx: ArrayLike,
+        vy: ArrayLike,
+        Vx: ArrayLike,
+        phi: ArrayLike = 0.0,
+        continuation: bool = True,
+    ):
+        """Adhesion area over contact area (-); continuation as in ``forces``."""
         vx, vy, phi, Vx = _broadcast(vx=vx, vy=vy, phi=phi, Vx=Vx)
+        cont = Continuation(self.patch) if flag("continuation", continuation) else None
         out = np.zeros(vx.shape)
         for idx in np.ndindex(vx.shape):
-            out[idx] = self.traction(vx[idx], vy[idx], phi[idx], Vx[idx]).adhesion_fraction
+            out[idx] = self._traction(vx[idx], vy[idx], phi[idx], Vx[idx], cont).adhesion_fraction
         return out
 
     @cached_property
@@ -351,9 +383,12 @@ class HalfSpaceContact:
         direction (cos angle, sin angle), no spin (-)."""
         angle = finite("angle", angle)
         ca, sa = math.cos(angle), math.sin(angle)
+        # the bisection's creepages lie on one ray: each solve starts from the secant
+        # through the last two (the same converged solutions as cold starts)
+        cont = Continuation(self.patch)
 
         def adh(s: float) -> float:
-            return self.solve(s * ca, s * sa).adhesion_fraction
+            return cont.solve(s * ca, s * sa).adhesion_fraction
 
         lo, hi = 0.0, 3.0 * self.mu * self.P / (self.elastic.G * self.c**2)
         while adh(hi) > FULL_SLIP_ADHESION:

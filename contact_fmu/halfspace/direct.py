@@ -110,10 +110,12 @@ def newton(
     tau0: FloatArray,
     tol: float,
     maxit: int,
+    traction_scale: float = 0.0,
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_], int]:
-    """Semismooth Newton on the contact with dense Jacobians from tau0 (2, ny, nx) (Pa).
-    Returns tau, S (2, ny, nx), the slip mask and the Newton count; RuntimeError after
-    ``maxit`` steps."""
+    """Semismooth Newton on the contact with dense Jacobians from tau0 (2, ny, nx) (Pa),
+    converged when max |F| <= tol max g, or with traction_scale > 0 tol min(max g,
+    traction_scale max |tau|) (rolling.convergence_bound). Returns tau, S (2, ny, nx),
+    the slip mask and the Newton count; RuntimeError after ``maxit`` steps."""
     C, r = patch.contact, patch.r
     K = patch.dense_contact_operator
     # K^-1 (the slip form) costs about three Newton factorisations (2 (2m)^3 flops): built
@@ -140,7 +142,7 @@ def newton(
     fnorm = float(np.sqrt(F @ F))
     it = 0
     jac: _Jacobian | None = None
-    while float(np.abs(F).max()) > tol * gmax:
+    while float(np.abs(F).max()) > _bound(t, tol, gmax, traction_scale):
         if it >= maxit:
             raise RuntimeError(
                 f"steady rolling (direct): no convergence in {maxit} Newton steps "
@@ -173,6 +175,13 @@ def newton(
     mask = np.zeros(patch.grid.shape, dtype=bool)
     mask[C] = slip
     return tau, S, mask, it
+
+
+def _bound(t: FloatArray, tol: float, gmax: float, traction_scale: float) -> float:
+    """rolling.convergence_bound on the contact's unknowns t."""
+    if traction_scale <= 0.0:
+        return tol * gmax
+    return tol * min(gmax, traction_scale * float(np.abs(t).max(initial=0.0)))
 
 
 _WORKSPACE = threading.local()

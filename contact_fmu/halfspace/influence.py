@@ -91,8 +91,16 @@ class Grid:
         return self.y0 + (np.arange(self.ny) + 0.5) * self.dy
 
     def mesh(self) -> tuple[FloatArray, FloatArray]:
-        """(X, Y) of the cell centres, each of shape (ny, nx)."""
-        return np.meshgrid(self.x, self.y)
+        """(X, Y) of the cell centres, each of shape (ny, nx); built once per grid and
+        read-only (a solve asks for it several times)."""
+        return self._mesh
+
+    @cached_property
+    def _mesh(self) -> tuple[FloatArray, FloatArray]:
+        X, Y = np.meshgrid(self.x, self.y)
+        X.flags.writeable = False
+        Y.flags.writeable = False
+        return X, Y
 
     @property
     def area(self) -> float:
@@ -275,15 +283,22 @@ class BlockConvolution:
         return out
 
     def _convolve(self, S: NDArray[np.float64], q: FloatArray) -> FloatArray:
+        """The block convolution of q (ncomp, ny, nx) with the symbols S on the padded
+        torus, restricted to the grid. The 2-D transforms are taken one axis at a time,
+        so that the padding rows are never transformed along x (forward) and only the
+        grid's rows are transformed back along x (inverse): the same result as rfft2 and
+        irfft2 of the padded arrays for about half their cost on the grids in use
+        (per-call overhead included; 32 x 32 on 64 x 64: 0.09 ms against 0.16 ms)."""
         n = self.ncomp
-        fq = sfft.rfft2(q, s=self.shape, axes=(-2, -1))
+        Ly, Lx = self.shape
+        fq = sfft.fft(sfft.rfft(q, n=Lx, axis=-1), n=Ly, axis=-2, overwrite_x=True)
         out = np.empty_like(fq)
         for a in range(n):
-            acc = S[a, 0] * fq[0]
+            np.multiply(S[a, 0], fq[0], out=out[a])
             for b in range(1, n):
-                acc = acc + S[a, b] * fq[b]
-            out[a] = acc
-        return sfft.irfft2(out, s=self.shape, axes=(-2, -1))[:, : self.grid.ny, : self.grid.nx]
+                out[a] += S[a, b] * fq[b]
+        half = sfft.ifft(out, axis=-2, overwrite_x=True)[:, : self.grid.ny]
+        return sfft.irfft(half, n=Lx, axis=-1)[:, :, : self.grid.nx]
 
     def apply(self, q: FloatArray) -> FloatArray:
         """Displacements (ncomp, ny, nx) (m) due to tractions q (ncomp, ny, nx) (Pa)."""

@@ -44,8 +44,9 @@ over each adhesion interval (a small dense system, one unknown per interval and
 component), and the march from the leading edge that turns differences into
 tractions. For the thin layer this preconditioner is the exact inverse (the march of
 LayerContact.traction); for the half-space it is spectrally equivalent. Backtracking on
-|F| globalises the iteration. Contacts of at most DIRECT_MAX_ELEMENTS elements take
-dense direct Newton steps instead (direct.py).
+|F| globalises the iteration. Small contacts take dense direct Newton steps instead
+(direct.py; DIRECT_MAX_ELEMENTS on a patch's first solve, DIRECT_REPEAT_MAX_ELEMENTS
+on later ones).
 
 Nested iteration: a patch from ellipse_patch carries its coarse levels (n/2, n/4, ...
 elements per side over the same ellipse, down to NESTED_MIN_N); solve_rolling solves the
@@ -59,7 +60,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, partial
 from typing import Any
 
 import numpy as np
@@ -86,7 +87,7 @@ from .influence import (
     difference,
     tangential_operator,
 )
-from .krylov import gmres
+from .krylov import gmres, gmres_right
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -94,6 +95,13 @@ BoolArray = NDArray[np.bool_]
 # Newton convergence: max |F| <= NEWTON_TOL * max g. F is a traction (Pa); 1e-7 of the
 # traction bound is far below the discretisation error (1e-3 and above).
 NEWTON_TOL = 1e-7
+# ... or, where the traction is far below its bound (small creepages), NEWTON_TOL times
+# SMALL_TRACTION max |tau|, whichever is smaller (solve_rolling): the traction is then
+# converged to NEWTON_TOL SMALL_TRACTION = 1e-4 of itself, ten times below the 0.1 % of
+# the force asked of the solver (at xi = 1e-6 mu P/(G c^2) on 32 x 32 the bound max g
+# alone left 0.015-0.08 % against the linear theory; tests/test_halfspace_curve.py).
+# It binds only below max |tau| = 1e-3 max g: creep curves and tables cost the same.
+SMALL_TRACTION = 1e3
 # Newton iteration cap; observed counts are 2-12 (docs/halfspace.md).
 NEWTON_MAXIT = 60
 # Inexact Newton: the GMRES relative tolerance is min(GMRES_RTOL_MAX, ratio of the last two
@@ -116,9 +124,18 @@ GMRES_MAXIT = 600
 # Backtracking: sufficient decrease factor on |F|_2 and the smallest step fraction.
 ARMIJO = 1e-4
 MIN_STEP = 1.0 / 64.0
-# Direct path (direct.py) for contacts of at most this many elements (solve_rolling,
-# method "auto"): measured crossover against the iterative path, docs/performance.md.
-DIRECT_MAX_ELEMENTS = 380
+# Direct path (direct.py) for contacts of at most DIRECT_MAX_ELEMENTS elements on a
+# patch's first solve, and of at most DIRECT_REPEAT_MAX_ELEMENTS on its later ones
+# (solve_rolling, method "auto"; the rule in docs/halfspace.md, "Which path"). Measured
+# on the railway wheel (CPU ms; first solve, second (it builds K^-1: 14.5 ms at 293
+# elements), later ones): direct 8.9, 13.4, 3.3 and iterative 14.3, 7.3, 7.3 at 225
+# elements; direct 13.9, 26.5, 7.7 and iterative 17.0, 8.6, 8.6 at 293; at 349 the
+# iterative path is as fast on a first solve and faster on later ones. So a first solve
+# is direct up to about 320 elements, and the n solves of one patch cost least on the
+# direct path up to about 260 (at 225 from n = 2 on), but iteratively from the second
+# solve on at 293 (direct only even again from n = 20).
+DIRECT_MAX_ELEMENTS = 320
+DIRECT_REPEAT_MAX_ELEMENTS = 260
 # Nested iteration (docs/halfspace.md): ellipse_patch grids of n elements per side get a
 # coarse level of n/2 while n/2 >= NESTED_MIN_N, recursively. A 16 x 16 level costs
 # about what it saves (measured: 32 x 32 15-20 % slower nested from 16 x 16, 64 x 64 no
@@ -128,6 +145,13 @@ NESTED_MIN_N = 32
 # solution is only the fine level's initial guess, whose error against the fine solution
 # is the discretisation error of the coarse grid (1e-2 of mu p and above).
 NESTED_TOL = 1e-4
+# Continuation along a sequence of solves (``Continuation``): the next creepage is
+# predicted from the last two solutions when it lies on their line (its distance from
+# the line at most CONTINUATION_LINE times its distance from the last point) no farther
+# than CONTINUATION_REACH of their spacings from the last; from the last alone, scaled,
+# when it lies on the ray from zero through it (the linear theory's proportionality).
+CONTINUATION_LINE = 0.1
+CONTINUATION_REACH = 2.0
 
 
 @dataclass(frozen=True)
@@ -318,8 +342,10 @@ class RollingPatch:
 
     @cached_property
     def direct(self) -> bool:
-        """Whether ``solve_rolling(method="auto")`` takes the direct path on this patch:
-        contacts of at most DIRECT_MAX_ELEMENTS elements, FFT backend."""
+        """Whether this patch is in the direct path's range: contacts of at most
+        DIRECT_MAX_ELEMENTS elements, FFT backend (its first ``solve_rolling(method=
+        "auto")`` is direct, and so are later ones up to DIRECT_REPEAT_MAX_ELEMENTS; its
+        full-adhesion solves use the dense K)."""
         return int(self.contact.sum()) <= DIRECT_MAX_ELEMENTS and self.backend == "fft"
 
     @cached_property
@@ -411,8 +437,15 @@ class RollingPatch:
         a0 = float(self.op.self_coefficient[0, 0])
         return a0 / (a0 + self.k_extra)
 
-    def _precondition_adhesion(self, res: FloatArray, H: BoolArray, clo) -> FloatArray:
-        """Approximate K_HH^{-1} res (res (2, ny, nx) on H) -> dtau on H."""
+    def _precondition_adhesion(
+        self,
+        res: FloatArray,
+        H: BoolArray,
+        clo,
+        marcher: Callable[[FloatArray], FloatArray] | None = None,
+    ) -> FloatArray:
+        """Approximate K_HH^{-1} res (res (2, ny, nx) on H) -> dtau on H; marcher:
+        ``march_plan(H)`` where the caller keeps it."""
         r0 = np.where(H, res, 0.0)
         q = self.op.solve_periodic(r0) * self._theta_scale
         if clo is not None:
@@ -426,11 +459,12 @@ class RollingPatch:
             r1[0, rows, t] += mult[:n]
             r1[1, rows, t] += mult[n:]
             q = self.op.solve_periodic(r1) * self._theta_scale
-        return march(q, H)
+        return march(q, H) if marcher is None else marcher(q)
 
     # ---- linear theory and the initial guess -----------------------------------------
     def solve_adhesion(self, W: FloatArray, rtol: float = 1e-10) -> tuple[FloatArray, int]:
-        """Full adhesion (mu -> inf, Kalker's linear theory): K tau = W on the contact.
+        """Full adhesion (mu -> inf, Kalker's linear theory): K tau = W on the contact,
+        by ``krylov.gmres_right`` to rtol of |W| (the true residual).
 
         Returns tau (2, ny, nx) (Pa) and the GMRES iteration count (0 for the contacts
         of the direct path, which use the dense K^-1 it keeps anyway)."""
@@ -440,20 +474,23 @@ class RollingPatch:
             return self._adhesion_dense([W])[0], 0
         clo = self._closure(C)
 
+        iC = np.flatnonzero(C)
+        iCC = np.concatenate([iC, C.size + iC])  # both components, flat
+        shape = (2, *self.grid.shape)
+        marcher = march_plan(C)
+
         def matvec(x):
-            t = np.zeros((2, *self.grid.shape))
-            t[0][C], t[1][C] = x[:m], x[m:]
-            Kt = self.apply_K(t)
-            return np.concatenate([Kt[0][C], Kt[1][C]])
+            t = np.zeros(2 * C.size)
+            t[iCC] = x
+            return self.apply_K(t.reshape(shape)).ravel()[iCC], None
 
         def psolve(v):
-            res = np.zeros((2, *self.grid.shape))
-            res[0][C], res[1][C] = v[:m], v[m:]
-            d = self._precondition_adhesion(res, C, clo)
-            return np.concatenate([d[0][C], d[1][C]])
+            res = np.zeros(2 * C.size)
+            res[iCC] = v
+            return self._precondition_adhesion(res.reshape(shape), C, clo, marcher).ravel()[iCC]
 
         b = np.concatenate([W[0][C], W[1][C]])
-        x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
+        x, its, _ = gmres_right(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
         tau = np.zeros((2, *self.grid.shape))
         tau[0][C], tau[1][C] = x[:m], x[m:]
         return tau, its
@@ -508,35 +545,50 @@ class RollingPatch:
         dx = self.grid.dx
         Wx = (xi / Lx - phi * Y / Lp) * dx + self.pressure_slip[0] / Lx
         Wy = (eta / Ly + phi * X / Lp) * dx + self.pressure_slip[1] / Ly
-        C, g = self.contact, self.g
-        tau = np.zeros((2, *self.grid.shape))
+        # columns as contiguous rows, the load masked by the contact once: the march
+        # runs a few ufuncs per column (it is a tenth of an 11 x 11 first solve)
+        Cf = self.contact.T.astype(float)
+        WxT, WyT, gT = (Wx.T * Cf), (Wy.T * Cf), np.ascontiguousarray(self.g.T)
+        tauT = np.zeros((2, self.grid.nx, self.grid.ny))
         tx = np.zeros(self.grid.ny)
         ty = np.zeros(self.grid.ny)
+        tiny = np.finfo(float).tiny
         for i in range(self.grid.nx - 1, -1, -1):
-            ins = C[:, i]
-            tx = np.where(ins, tx + Wx[:, i], 0.0)
-            ty = np.where(ins, ty + Wy[:, i], 0.0)
-            mag = np.hypot(tx, ty)
-            f = np.where(mag > g[:, i], g[:, i] / np.where(mag > 0, mag, 1.0), 1.0)
-            tx, ty = tx * f, ty * f
-            tau[0, :, i], tau[1, :, i] = tx, ty
-        return tau
+            tx = (tx + WxT[i]) * Cf[i]  # zero outside the contact: the run restarts
+            ty = (ty + WyT[i]) * Cf[i]
+            # projection on |tau| <= g: the factor g/max(|tau|, g) (1 within the bound;
+            # outside the contact 0/tiny, the traction there being zero anyway)
+            f = gT[i] / np.maximum(np.hypot(tx, ty), np.maximum(gT[i], tiny))
+            tx *= f
+            ty *= f
+            tauT[0, i], tauT[1, i] = tx, ty
+        return np.ascontiguousarray(tauT.transpose(0, 2, 1))
 
 
 def march(q: FloatArray, H: BoolArray) -> FloatArray:
     """Tractions from differences within each run of H: tau_I = q_I + tau_I+ (I+ in H),
     summed from the leading (+x) end of the run. q: (..., ny, nx)."""
-    qH = np.where(H, q, 0.0)
-    rev = qH[..., ::-1]
-    cs = np.cumsum(rev, axis=-1)
-    # value of the cumulative sum at the last element outside H (ahead of each run)
+    return march_plan(H)(q)
+
+
+def march_plan(H: BoolArray) -> Callable[[FloatArray], FloatArray]:
+    """``march`` over the runs of H as a function of q alone: the index arithmetic that
+    locates each run's leading end is done once (a preconditioner marches over the same
+    H in every GMRES iteration)."""
+    ny, nx = H.shape
+    # in the reversed rows, the last element outside H at or before each position: the
+    # running sum there is what precedes the run (none: the run starts at the edge)
     outside = ~H[:, ::-1]
-    idx = np.where(outside, np.arange(H.shape[1]), -1)
-    last = np.maximum.accumulate(idx, axis=-1)
-    base = np.where(
-        last >= 0, np.take_along_axis(cs, np.broadcast_to(np.maximum(last, 0), cs.shape), -1), 0.0
-    )
-    return np.where(H, (cs - base)[..., ::-1], 0.0)
+    last = np.maximum.accumulate(np.where(outside, np.arange(nx), -1), axis=-1)
+    has = last >= 0
+    at = (np.arange(ny)[:, None] * nx + np.maximum(last, 0)).ravel()
+
+    def run(q: FloatArray) -> FloatArray:
+        cs = np.cumsum(np.where(H, q, 0.0)[..., ::-1], axis=-1)
+        base = cs.reshape(*cs.shape[:-2], ny * nx)[..., at].reshape(cs.shape)
+        return np.where(H, (cs - np.where(has, base, 0.0))[..., ::-1], 0.0)
+
+    return run
 
 
 def solve_rolling(
@@ -553,8 +605,10 @@ def solve_rolling(
     Omega_z/Vx (1/m), rolling in +x. tau0: initial traction (2, ny, nx) (warm start).
 
     method: "iterative" (GMRES Newton steps, below), "direct" (dense Newton steps,
-    direct.py), "auto": direct for contacts of at most DIRECT_MAX_ELEMENTS elements
-    with the FFT backend, iterative otherwise.
+    direct.py), "auto": with the FFT backend direct for contacts of at most
+    DIRECT_MAX_ELEMENTS elements on the patch's first direct solve and of at most
+    DIRECT_REPEAT_MAX_ELEMENTS on later ones (the measured costs of one and of many
+    solves), iterative otherwise.
 
     Initial guess without tau0: nested iteration where the patch has a coarse level
     (``RollingPatch.coarse``; ellipse_patch grids of 64 and more elements per side): the
@@ -571,9 +625,10 @@ def solve_rolling(
     one_of("method", method, ("auto", "iterative", "direct"))
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
-    if method == "direct" or (method == "auto" and patch.direct):
+    auto_direct = patch.direct and (patch.solves == 0 or int(C.sum()) <= DIRECT_REPEAT_MAX_ELEMENTS)
+    if method == "direct" or (method == "auto" and auto_direct):
         guess = tau0 if tau0 is not None else patch.fastsim_guess(xi, eta, phi)
-        tau, S, slip, newton = direct.newton(patch, W, guess, tol, maxit)
+        tau, S, slip, newton = direct.newton(patch, W, guess, tol, maxit, SMALL_TRACTION)
         return _solution(patch, tau, S, slip, newton, 0, ())
     levels: tuple[tuple[int, int, int, int], ...] = ()
     tau = None
@@ -600,10 +655,87 @@ def solve_rolling(
         "steady rolling",
         slip_block=SLIP_BLOCK_RATIO,
         oversolve=OVERSOLVE,
+        right=True,
+        traction_scale=SMALL_TRACTION,
     )
     if levels:
         levels = (*levels, (patch.grid.nx, patch.grid.ny, newton, inner))
     return _solution(patch, tau, S, slip, newton, inner, levels)
+
+
+class Continuation:
+    """Initial guesses for a sequence of solves on one patch (a creep curve, a line of a
+    table, a bisection along a ray): the secant predictor from the last two converged
+    solutions,
+
+        z = z_2 + s (z_2 - z_1),   s = (w - w_2).(w_2 - w_1)/|w_2 - w_1|^2,   tau = Proj(z),
+
+    of the fixed-point variable z = tau + r S (tau = Proj_{|.| <= g}(z) at a solution;
+    z is smooth where tau has a kink at the stick-slip boundary, so its secant also
+    predicts the moving boundary: 5-10 % fewer Newton steps than the secant of tau on
+    the railway curves), w = (xi, eta, phi l) the creepages (l: the radius of a circle
+    of the contact's area, so that spin weighs like creepage); with one solution on the
+    ray from zero through w, z_2 scaled by |w|/|w_2| and projected; otherwise none (the
+    cold start of ``solve_rolling``). The predictor is only the initial guess: the
+    solution is converged to the same tolerance from it, so it agrees with a cold
+    start's within that tolerance (tests/test_halfspace_curve.py). Should Newton fail
+    from the prediction, the point is solved cold."""
+
+    def __init__(self, patch: RollingPatch) -> None:
+        self.patch = patch
+        C = patch.contact
+        self.length = math.sqrt(float(C.sum()) * patch.grid.area / math.pi)
+        self.points: list[tuple[FloatArray, FloatArray]] = []
+
+    def guess(self, xi: float, eta: float, phi: float) -> FloatArray | None:
+        """The predicted traction (2, ny, nx) (Pa) at (xi, eta, phi), or None."""
+        if not self.points:
+            return None
+        w = np.array([xi, eta, phi * self.length])
+        w2, z2 = self.points[-1]
+        step = float(np.linalg.norm(w - w2))
+        if len(self.points) == 2:
+            w1, z1 = self.points[0]
+            d = w2 - w1
+            dd = float(d @ d)
+            if dd > 0.0:
+                s = float((w - w2) @ d) / dd
+                off = float(np.linalg.norm(w - w2 - s * d))
+                if off <= CONTINUATION_LINE * step and abs(s) <= CONTINUATION_REACH:
+                    return self._bounded(z2 + s * (z2 - z1))
+        ww = float(w2 @ w2)
+        if ww > 0.0:
+            s = float(w @ w2) / ww
+            if s > 0.0 and float(np.linalg.norm(w - s * w2)) <= CONTINUATION_LINE * step:
+                return self._bounded(s * z2)
+        return None
+
+    def _bounded(self, tau: FloatArray) -> FloatArray:
+        """tau (a predicted z) projected on |tau| <= g, zero off the contact."""
+        g = self.patch.g
+        mag = np.hypot(tau[0], tau[1])
+        f = np.where(mag > g, g / np.where(mag > 0.0, mag, 1.0), 1.0)
+        return np.where(self.patch.contact, tau * f, 0.0)
+
+    def solve(
+        self, xi: float, eta: float = 0.0, phi: float = 0.0, tol: float = NEWTON_TOL
+    ) -> RollingSolution:
+        """``solve_rolling`` from the predicted traction (cold without one, or should
+        Newton fail from it); the solution joins the history."""
+        tau0 = self.guess(xi, eta, phi)
+        try:
+            sol = solve_rolling(self.patch, xi, eta, phi, tau0=tau0, tol=tol)
+        except RuntimeError:
+            if tau0 is None:
+                raise
+            sol = solve_rolling(self.patch, xi, eta, phi, tol=tol)
+        w = np.array([xi, eta, phi * self.length])
+        z = np.where(self.patch.contact, sol.tau + self.patch.r * sol.S, 0.0)
+        if self.points and float(np.linalg.norm(w - self.points[-1][0])) == 0.0:
+            self.points[-1] = (w, z)  # a repeated point: no line through it
+        else:
+            self.points = [*self.points[-1:], (w, z)]
+        return sol
 
 
 def _solution(
@@ -637,20 +769,30 @@ def coulomb_newton(
     slip_block: float = 0.0,
     oversolve: float = 0.0,
     error: type[RuntimeError] = RuntimeError,
+    right: bool = False,
+    traction_scale: float = 0.0,
 ) -> tuple[FloatArray, FloatArray, BoolArray, FloatArray, FloatArray, int, int]:
     """F(tau) = tau - Proj_{|.| <= g}(tau + r S) = 0 with S = W - K tau on the contact of
     ``patch`` (a RollingPatch, or the transient's step patch), by the semismooth Newton
     method of the module docstring from tau (2, ny, nx) (Pa): GMRES directions with the
     block preconditioner (``_newton_direction``, ``slip_block``), forcing terms after
     Eisenstat & Walker, no smaller than ``oversolve`` times the reduction still needed
-    (0: no such bound), backtracking on |F|. Converged when max |F| <= tol max g; after
-    ``maxit`` steps raises ``error`` naming ``what``. Returns tau, S, slip, z, |z| and
-    the Newton and GMRES iteration counts."""
+    (0: no such bound), backtracking on |F|. Converged when max |F| <= tol max g, or
+    with ``traction_scale`` > 0 when max |F| <= tol min(max g, traction_scale max
+    |tau|) (``convergence_bound``); after ``maxit`` steps raises ``error`` naming
+    ``what``. Returns tau, S, slip, z, |z| and the Newton and GMRES iteration counts.
+
+    right: GMRES preconditioned on the right (``krylov.gmres_right``: the forcing terms
+    bound the true residual, and neither the initial nor the final residual costs an
+    operator application), which also returns K dtau, so that the slip of a trial
+    step is S - step K dtau without applying K again; otherwise scipy's gmres (left
+    preconditioning) and the slip of each trial from K tau."""
     C, g, r = patch.contact, patch.g, patch.r
     gmax = float(g.max())
 
-    def residual(t: FloatArray):
-        S = np.where(C, W - patch.apply_K(t), 0.0)
+    def residual(t: FloatArray, S: FloatArray | None = None):
+        if S is None:
+            S = np.where(C, W - patch.apply_K(t), 0.0)
         z = t + r * S
         nz = np.hypot(z[0], z[1])
         slip = C & (nz > g)
@@ -662,7 +804,7 @@ def coulomb_newton(
     fnorm = float(np.sqrt(np.sum(F * F)))
     newton = inner = 0
     prev_ratio = GMRES_RTOL_MAX
-    while float(np.abs(F).max()) > tol * gmax:
+    while float(np.abs(F).max()) > (bound := convergence_bound(tau, tol, gmax, traction_scale)):
         if newton >= maxit:
             raise error(
                 f"{what}: no convergence in {maxit} Newton steps "
@@ -670,13 +812,16 @@ def coulomb_newton(
             )
         newton += 1
         rtol = min(GMRES_RTOL_MAX, max(prev_ratio, GMRES_RTOL_MIN))
-        rtol = min(GMRES_RTOL_MAX, max(rtol, oversolve * tol * gmax / float(np.abs(F).max())))
-        dtau, its = _newton_direction(patch, tau, F, S, z, nz, slip, rtol, slip_block=slip_block)
+        rtol = min(GMRES_RTOL_MAX, max(rtol, oversolve * bound / float(np.abs(F).max())))
+        dtau, its, Kd = _newton_direction(
+            patch, tau, F, S, z, nz, slip, rtol, slip_block=slip_block, right=right
+        )
         inner += its
         step = 1.0
         while True:
             trial = tau + step * dtau
-            F_t, S_t, z_t, nz_t, slip_t = residual(trial)
+            S_t = None if Kd is None else np.where(C, S - step * Kd, 0.0)
+            F_t, S_t, z_t, nz_t, slip_t = residual(trial, S_t)
             fn_t = float(np.sqrt(np.sum(F_t * F_t)))
             if fn_t <= (1.0 - ARMIJO * step) * fnorm or step <= MIN_STEP:
                 break
@@ -685,6 +830,15 @@ def coulomb_newton(
         tau, F, S, z, nz, slip = trial, F_t, S_t, z_t, nz_t, slip_t
         fnorm = fn_t
     return tau, S, slip, z, nz, newton, inner
+
+
+def convergence_bound(tau: FloatArray, tol: float, gmax: float, traction_scale: float) -> float:
+    """The Newton convergence bound on max |F| (Pa): tol max g, or with traction_scale > 0
+    tol min(max g, traction_scale max |tau|) (SMALL_TRACTION: tractions far below their
+    bound converged relative to themselves)."""
+    if traction_scale <= 0.0:
+        return tol * gmax
+    return tol * min(gmax, traction_scale * float(np.abs(tau).max(initial=0.0)))
 
 
 def prolong(tau_c: FloatArray, coarse: RollingPatch, fine: RollingPatch) -> FloatArray:
@@ -730,9 +884,11 @@ def _newton_direction(
     slip: BoolArray,
     rtol: float,
     slip_block: float = 0.0,
-) -> tuple[FloatArray, int]:
+    right: bool = False,
+) -> tuple[FloatArray, int, FloatArray | None]:
     """The semismooth Newton step dtau for F(tau) = 0 (module docstring) by GMRES with
-    the block preconditioner; returns dtau (2, ny, nx) and the GMRES iteration count.
+    the block preconditioner; returns dtau (2, ny, nx), the GMRES iteration count and,
+    with ``right`` (``krylov.gmres_right``), K dtau (None otherwise).
 
     slip_block: slip elements whose local coefficient (|z|/g - 1)/r is below slip_block
     times their diagonal of K (those next to the adhesion area, where |z| is close to g)
@@ -776,8 +932,19 @@ def _newton_direction(
 
     unknowns = _Unknowns(H, Sl, that, cS, iH, iS)
     psolve = _block_psolve(patch, unknowns, slip_block)
-    x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
-    return to_field(x) + dn * zhat, its
+    if not right:
+        x, its = gmres(matvec, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
+        return to_field(x) + dn * zhat, its, None
+
+    def matvec_field(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        # the rows of the unknowns and, as side product, the whole field K d
+        Kd = patch.apply_K(to_field(x)).reshape(2, n)
+        out_S = cS_S * x[2 * nH :] + (t_S[0] * Kd[0, iS] + t_S[1] * Kd[1, iS])
+        return np.concatenate([Kd.ravel()[iHH], out_S]), Kd
+
+    x, its, Kx = gmres_right(matvec_field, b, psolve, rtol, GMRES_RESTART, GMRES_MAXIT)
+    Kd = Kn if Kx is None else Kx.reshape(shape) + Kn
+    return to_field(x) + dn * zhat, its, Kd
 
 
 @dataclass(frozen=True)
@@ -810,6 +977,9 @@ def _block_psolve(
     Sb = Sl & (cS < slip_block * Ktt)
     B = H | Sb
     clo = patch._closure(B)
+    precondition = patch._precondition_adhesion
+    if isinstance(patch, RollingPatch):  # the march over B planned once for all iterations
+        precondition = partial(precondition, marcher=march_plan(B))
 
     in_block = Sb.ravel()[iS]  # of the slip unknowns, those in the block
     iSb, vS_b = iS[in_block], np.flatnonzero(in_block)
@@ -824,7 +994,7 @@ def _block_psolve(
         res[iHH] = v[: 2 * nH]
         res = res.reshape(2, n)
         res[:, iSb] = vs[vS_b] * t_Sb
-        d = patch._precondition_adhesion(res.reshape(shape), B, clo).reshape(2, n)
+        d = precondition(res.reshape(shape), B, clo).reshape(2, n)
         xs = np.where(in_block, t_S[0] * d[0, iS] + t_S[1] * d[1, iS], vs / dS_S)
         return np.concatenate([d.ravel()[iHH], xs])
 

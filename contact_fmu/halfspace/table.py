@@ -57,6 +57,7 @@ from scipy.interpolate import Akima1DInterpolator, make_interp_spline
 from .._validate import InputError, array, count, finite, instance, nonnegative, positive
 from .contact import HalfSpaceContact
 from .hertz import Hertz
+from .rolling import Continuation
 
 FloatArray = NDArray[np.float64]
 
@@ -571,7 +572,8 @@ class CreepTable:
 # ---- building ------------------------------------------------------------------------------
 def _table_task(contacts, axes, task) -> FloatArray | float:
     """One task of a build: (load index, nodes of one line of x1 from its centre out)
-    -> the OUTPUTS at those nodes (len, 4), each solve warm-started from the previous;
+    -> the OUTPUTS at those nodes (len, 4), each solve started from the secant
+    prediction of the last two (``rolling.Continuation``);
     (load index, None) -> the normalised onset of full slip at that load."""
     ip, line = task
     ck = contacts[ip]
@@ -581,17 +583,9 @@ def _table_task(contacts, axes, task) -> FloatArray | float:
     pref = xref / ck.c
     muP, c = ck.mu * ck.P, ck.c
     out = np.empty((len(line), 4))
-    prev = None
+    cont = Continuation(ck.patch)  # the nodes of a line lie on it: secant predictions
     for i, (k1, k2, k3) in enumerate(line):
-        s = ck.solve(
-            axes[0][k1] * xref,
-            axes[1][k2] * xref,
-            axes[2][k3] * pref,
-            tau0=prev,
-            tol=TABLE_TOL,
-            check_units=False,  # the table's own nodes
-        )
-        prev = s.tau
+        s = cont.solve(axes[0][k1] * xref, axes[1][k2] * xref, axes[2][k3] * pref, TABLE_TOL)
         out[i] = (s.Tx / muP, s.Ty / muP, s.Mz / (muP * c), s.adhesion_fraction)
     return out
 
