@@ -36,6 +36,13 @@
 #define CF_MAX_SUBSTEPS 10000                /* fmu.body_model.MAX_SUBSTEPS */
 #define CF_WORK_SCALAR 1 /* fmu.body_model.WORK_SCALAR (work units per internal step) */
 #define CF_WORK_VECTOR 200 /* fmu.body_model.WORK_VECTOR (Eqs. 10-11: per internal step) */
+#define CF_WORK_PER_CELL 2 /* fmu.body_model.WORK_PER_CELL (the field's step, per cell) */
+#define CF_FIELD_GAMMA 0.2928932188134524    /* transient.GAMMA (the field's SDIRK2) */
+#define CF_FIELD_A21 0.7071067811865476      /* transient.A21 */
+#define CF_FIELD_SOLVE_RTOL 1e-13            /* transient.SOLVE_RTOL */
+#define CF_FIELD_V_SCALE_FLOOR 1e-09         /* transient.V_SCALE_FLOOR (m/s) */
+#define CF_FIELD_MIN_SPEED_FRACTION 0.1      /* transient.MIN_SPEED_FRACTION */
+#define CF_FIELD_MAX_ITERATIONS 200          /* transient.MAX_STAGE_ITERATIONS */
 
 /* The outputs of RollingBody.outputs() in the order of cf_body.out. */
 enum {

@@ -275,3 +275,75 @@ int cf_model_centre_line(const cf_core *c, const cf_params *law, const cf_body *
     }
     return 0;
 }
+
+/* ---- phase "transient": the body on the thin-layer traction field -------------------- */
+
+/* LayerField.__init__ (transient.py) at the law's load: dx = 2 a1/nx, X = a1, Y = a2, the
+ * strips of _strips("sine", ny, a2): phi at the midpoints of ny intervals of (-pi/2,
+ * pi/2), y = a2 sin(phi), dy = a2 cos(phi) dphi; the field at rest (theta = 0.5, no
+ * rolling yet, tau = 0, no slip) */
+void cf_model_field_lay(const cf_params *law, const cf_body *lb, cf_tstate *fs) {
+    const double dphi = M_PI / CF_FIELD_NY;
+    fs->dx = 2.0 * law->a1 / CF_FIELD_NX;
+    fs->X = law->a1;
+    fs->Y = lb->a2;
+    for (int i = 0; i < CF_FIELD_NY; i++) {
+        const double phi = -0.5 * M_PI + ((double)i + 0.5) * dphi;
+        fs->ys[i] = lb->a2 * sin(phi);
+        fs->dy[i] = lb->a2 * cos(phi) * dphi;
+    }
+    fs->theta = 0.5;
+    fs->direction = 0.0;
+    memset(fs->tau_x, 0, sizeof fs->tau_x);
+    memset(fs->tau_y, 0, sizeof fs->tau_y);
+    memset(fs->slip, 0, sizeof fs->slip);
+}
+
+/* LayerField._update_contact at the law's load: l(y) = a1 sqrt(max(1 - (y/a2)^2, 0))
+ * (Eq. 37), p at x = 0: p0 (1 - (y/a2)^2), the strip widths scaled so that the rule
+ * integrates the pressure to P (sum dy_w (4/3) p0 l^3/a1^2 = P; numpy's dot sums in
+ * another order: the scale agrees to rounding); c0 = mu p0/a1^2 (Eq. 33); k = kb + ks */
+void cf_model_field(const cf_params *law, const cf_body *lb, double k, const cf_tstate *fs,
+                    field_scratch *sc, cf_field *f) {
+    const double a1 = law->a1, a2 = lb->a2, p0 = lb->p0, a1sq = pow(a1, 2.0);
+    double held = 0.0;
+    for (int i = 0; i < CF_FIELD_NY; i++) {
+        const double q = fs->ys[i] / a2, r = 1.0 - q * q;
+        sc->ell[i] = a1 * sqrt(r > 0.0 ? r : 0.0);
+        sc->p_strip[i] = p0 * r;
+        held += fs->dy[i] * ((4.0 / 3.0) * p0 * pow(sc->ell[i], 3.0) / a1sq);
+    }
+    const double scale = held > 0.0 ? law->P / held : 1.0;
+    for (int i = 0; i < CF_FIELD_NY; i++) sc->dy_w[i] = fs->dy[i] * scale;
+    f->ny = CF_FIELD_NY, f->nx = CF_FIELD_NX;
+    f->dx = fs->dx, f->X = fs->X;
+    f->a1 = a1, f->p0 = p0, f->mu = law->mu, f->k = k;
+    f->c0 = law->mu * p0 / a1sq;
+    f->min_speed_fraction = CF_FIELD_MIN_SPEED_FRACTION;
+    f->y = fs->ys, f->ell = sc->ell, f->p_strip = sc->p_strip, f->dy_w = sc->dy_w;
+}
+
+/* TransientRollingBody.outputs(): the kinematics of the state (BodyState.kinematics),
+ * the contact of the last step (T, sliding), the creepages (kinematics.creepage: |Vx|
+ * floored at V_CREEP_FLOOR), the law's a1, a2, p0, and LayerField.summary (adhesion,
+ * slip-area centroid, peak |tau|: cf_field_summary) */
+int cf_model_field_outputs(const cf_params *law, const cf_body *lb, const cf_field *f,
+                           cf_tstate *fs, field_scratch *sc, double out[N_OUT_ALL]) {
+    double s[4];
+    const int rc = cf_field_summary(f, fs->theta, fs->tau_x, fs->tau_y, fs->slip, s, sc->work,
+                                    sc->bytes);
+    const double Vx = fs->y[0], vx = fs->y[1], Vy = fs->y[2], Oz = fs->y[3];
+    const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
+    for (int i = 0; i < N_OUT_ALL; i++) out[i] = 0.0;
+    out[O_VX] = Vx, out[O_VY] = Vy, out[O_OMEGA_Y] = (Vx - vx) / law->Rx, out[O_OMEGA_Z] = Oz;
+    out[O_TX] = fs->T[0], out[O_TY] = fs->T[1], out[O_MZ] = fs->T[2];
+    out[O_VX_SLIP] = vx, out[O_VY_SLIP] = Vy;
+    out[O_XI_X] = vx / V, out[O_XI_Y] = Vy / V, out[O_XI_SP] = Oz / V;
+    out[O_A1] = law->a1, out[O_A2] = lb->a2, out[O_P0] = lb->p0;
+    out[O_REGIME] = fs->sliding ? 1.0 : 0.0;
+    if (rc != CF_FIELD_OK) return rc;
+    out[O_ADHESION] = s[0];
+    out[O_SLIP_CX] = s[1], out[O_SLIP_CY] = s[2], out[O_TAU_PEAK] = s[3];
+    for (int k = 0; k < N_OUT_ALL - N_OUT; k++) fs->fo[k] = out[N_OUT + k];
+    return CF_FIELD_OK;
+}
