@@ -27,7 +27,10 @@ half-space creep-force table of one load node without layers, body and contact m
 rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
 law, with a spin input Omega_z too (sweep, ``--full contact``: the strip march on the
 law's spin grid, built in C for each load, with its forward-mode derivative for the
-directional derivatives); the rigid_body mode (``--full rigid_body``). Everything
+directional derivatives); the rigid_body mode (``--full rigid_body``); the body on the
+transient traction field (phase "transient", vx the only stage unknown: fig12_transient;
+field.c's cf_field_advance, the field of the scene's nx x ny in the instance's core, at
+most FIELD_CELLS_MAX cells; no field file). Everything
 else is refused here with a message that names the scene's feature
 (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
