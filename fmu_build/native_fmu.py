@@ -42,6 +42,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -148,6 +149,23 @@ def _fixed(cfg: ModelConfig) -> dict[str, tuple[float, str]]:
         for name, n in zip(("nx", "ny"), field_grid(cfg), strict=True):
             out[name] = (float(n), f"{n}, the field size this native FMU is compiled for")
     return out
+
+
+def fix_grid(xml: bytes, cfg: ModelConfig) -> bytes:
+    """A transient scene's model description (FMI 2.0's or 3.0's) with the Integer
+    parameters nx and ny declared min = max = the grid compiled into the native FMU (the
+    pythonfmu FMU's range is 4 to 1024 and 2 to 512); others unchanged."""
+    if not cfg.transient:
+        return xml
+    text = xml.decode()
+    for name, n in zip(("nx", "ny"), field_grid(cfg), strict=True):
+        element = (rf'(<ScalarVariable name="{name}"[^>]*>\s*<Integer [^>]*?'
+                   rf'|<Int32 name="{name}"[^>]*?)')  # fmt: skip
+        text, count = re.subn(element + r'min="[^"]*" max="[^"]*"', rf'\g<1>min="{n}" max="{n}"',
+                              text)  # fmt: skip
+        if count != 1:
+            raise NativeUnsupportedError(f"no range of {name} in the model description")
+    return text.encode()
 
 
 def _c(x: float) -> str:
@@ -427,7 +445,7 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeB
     naming the feature where the C kernel does not cover the model."""
 
     def described(identifier: str, guid: str) -> dict[str, bytes]:
-        xml = model_description.patch(_skeleton(cfg, identifier, guid), cfg)
+        xml = fix_grid(model_description.patch(_skeleton(cfg, identifier, guid), cfg), cfg)
         return {"modelDescription.xml": xml,
                 **documentation.files(cfg, identifier, target="native")}  # fmt: skip
 

@@ -757,9 +757,9 @@ static cf_status transient_step(Inst *I, double t, double h) {
                      "equation (target force %.6g N against mu P = %.6g N)",
                      p.A2 * v[R_FX_EX] - p.A1 * v[R_MY_EX] / p.Rx, p.mu * p.P);
         } else if (rc == CF_FIELD_RANGE) {
-            snprintf(why, sizeof why, "the step moves the traction field's lattice by more "
-                     "than %g columns, beyond the native FMU's field (the pythonfmu FMU takes "
-                     "it): take shorter communication steps", CF_FIELD_SHIFT_MAX);
+            snprintf(why, sizeof why, "the step would roll the traction field's lattice by "
+                     "more than %g columns (the loads or the step drive the body beyond what "
+                     "the field resolves)", CF_FIELD_SHIFT_MAX);
         } else if (rc != CF_FIELD_OK) {
             snprintf(why, sizeof why, "FloatingPointError: the traction field's step is not "
                      "finite (the loads or the step drive it beyond the doubles)");
