@@ -93,8 +93,7 @@ def run_scene(
     state = "cached" if built.cached else f"built in {t_build:.1f} s"
     print(f"  FMU  {built.stable} ({state}; {n_vars} variables, {size / 1024:.0f} KiB)")
     t0 = time.perf_counter()
-    # the FMU's field files, if any (the native FMU writes none: field_file stays "")
-    field_dir = None if native else out / "scenes" / scene.name / "fields"
+    field_dir = out / "scenes" / scene.name / "fields"  # the FMU's field files, if any
     results = runner.simulate(built.path, scene, field_dir=field_dir)
     wall = time.perf_counter() - t0
     print(
@@ -116,9 +115,7 @@ def run_scene(
     scene_dir = out / "scenes" / scene.name
     runner.write_csv(scene_dir / f"{scene.name}.csv", scene, results)
     print(f"  CSV  {scene_dir / (scene.name + '.csv')}")
-    if scene.field is not None and field_dir is None:
-        print("  field not written: the native FMU does not write the traction field")
-    elif scene.field is not None:  # written by the FMU during the run (phase "transient")
+    if scene.field is not None:  # written by the FMU during the run (phase "transient")
         for c in scene.cases:
             print(f"  field {scene.field.path(field_dir, c.name)}")
     if make_plot:

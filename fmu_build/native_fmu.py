@@ -30,7 +30,7 @@ law's spin grid, built in C for each load, with its forward-mode derivative for 
 directional derivatives); the rigid_body mode (``--full rigid_body``); the body on the
 transient traction field (phase "transient", vx the only stage unknown: fig12_transient;
 field.c's cf_field_advance, the field of the scene's nx x ny in the instance's core, at
-most FIELD_CELLS_MAX cells; no field file). Everything
+most FIELD_CELLS_MAX cells; the field file written in C). Everything
 else is refused here with a message that names the scene's feature
 (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
@@ -128,10 +128,11 @@ def unsupported(cfg: ModelConfig) -> str | None:
     return None
 
 
-# The largest field (nx ny cells) the native FMU carries: its state holds the field (17
-# bytes a cell) and is copied whole (get/set state, a step's trial copy, on the stack of
-# a state's check too): 4096 cells are 70 kB.
-FIELD_CELLS_MAX = 4096
+# The largest field (nx ny cells) the native FMU carries: its state holds the field and
+# the field file's captures (17 bytes a cell each, 9 times: 153 bytes a cell) and is
+# copied whole (get/set state, serialisation): 2048 cells (the default 64 x 32) are 313
+# kB.
+FIELD_CELLS_MAX = 2048
 
 
 def field_grid(cfg: ModelConfig) -> tuple[int, int]:

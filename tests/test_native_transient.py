@@ -108,13 +108,15 @@ def test_fig12_transient_native_validates_and_repeats_the_pythonfmu_fmu(native, 
 def test_contact_fmu_run_native_passes_fig12_transient(tmp_path):
     """`contact-fmu run --native scenarios/fig12_transient.toml` builds the native FMU,
     runs the three cases through fmpy and passes every reference (exit status 0, PASS);
-    the field file, which the native FMU does not write, is said to be missing."""
+    the FMU writes each case's field file (5 captures of the 32 x 16 nodes)."""
     cmd = [sys.executable, "-m", "contact_fmu.cli", "run", "--native", "--no-plot",
            "--out", str(tmp_path), str(ROOT / "scenarios" / "fig12_transient.toml")]  # fmt: skip
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert "PASS" in proc.stdout and "MISMATCH" not in proc.stdout
-    assert "the native FMU does not write the traction field" in proc.stdout
+    for case in SCENE.cases:
+        path = SCENE.field.path(tmp_path / "scenes" / SCENE.name / "fields", case.name)
+        assert len(path.read_text().splitlines()) == 1 + 5 * 32 * 16, path
 
 
 def test_fmi3_native_fmu_runs_the_same_core_to_the_same_doubles(native, tmp_path):
@@ -289,17 +291,20 @@ def test_a_load_drop_is_followed_and_a_load_beyond_the_field_refused(native, pyt
         ("nx", 64, "must be 32, the field size this native FMU is compiled for"),
         ("ny", 3, "must be 16, the field size this native FMU is compiled for"),
         ("nx", 3, "must be >= 4"),
-        ("field_file", "field.csv", "must be '' (the native FMU does not write the traction"),
-        ("field_times", "1e-3", "must be '' (the native FMU does not write the traction"),
+        ("field_times", "1e-3 soon", "must be times in s separated by spaces or commas"),
+        ("field_times", "1e-3, nan", "must be finite times in s"),
+        ("field_times", "1 2 3 4 5 6 7 8 9", "must be at most 8 times (the native FMU's"),
     ],
 )
 def test_a_grid_or_field_file_the_native_fmu_cannot_carry_is_refused_naming_it(
     native, name, value, requirement
 ):
-    """The field's size is compiled in (nx = 32, ny = 16, the scene's) and the native
-    FMU writes no field file: setting another grid or a file is refused at once with
-    fmi2Error naming the variable, its value and what it must be, and the model cannot
-    start while it is held; the declared range is checked first (nx = 3 < 4)."""
+    """The field's size is compiled in (nx = 32, ny = 16, the scene's), and the field
+    file's times are parsed as body_transient.parse_times does, into at most 8 captures:
+    another grid or times that are not finite numbers are refused at once with fmi2Error
+    naming the variable, its value and what it must be (the pythonfmu FMU refuses such
+    times at initialisation), and the model cannot start while one is held; the declared
+    range is checked first (nx = 3 < 4)."""
     from fmpy.fmi1 import FMICallException
 
     with pytest.raises(FMICallException) as e:
@@ -313,9 +318,69 @@ def test_a_grid_or_field_file_the_native_fmu_cannot_carry_is_refused_naming_it(
         text = f"{name} = {shown} is invalid: {requirement}"
         assert any(text in m for s, m in b.messages if s == ERROR), b.messages
         assert b.get(name) == value
-    with Instance(native, "good", {"nx": 32, "ny": 16, "field_file": ""}) as b:
+    with Instance(native, "good", {"nx": 32, "ny": 16, "field_times": "1e-3; 2e-3"}) as b:
         assert (b.get("nx"), b.get("ny")) == (32, 16)
         steps(b, 1)
+
+
+def _field(path: Path) -> np.ndarray:
+    """A field file's rows (its header checked: body_transient.FIELD_COLUMNS)."""
+    from contact_fmu.fmu.body_transient import FIELD_COLUMNS
+
+    assert path.read_text().split("\n", 1)[0] == ",".join(FIELD_COLUMNS)
+    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def test_the_field_file_is_the_pythonfmu_ones(native, python, tmp_path):
+    """The scene's field file (5 captures of the 32 x 16 nodes at 0.2 to 7 ms, each case)
+    written by the native FMU: the same rows as the pythonfmu FMU's file, the requested
+    and reached times, indices, x, y, p and the slip and inside flags identical, the
+    tractions and weights within 1e-9 of each column's largest magnitude (the field's
+    geometry laid in C: an ulp apart, as the outputs)."""
+    got = runner.simulate(native, SCENE, field_dir=tmp_path / "native")
+    ref = runner.simulate(python, SCENE, field_dir=tmp_path / "pythonfmu")
+    assert all(r.error is None for r in got + ref)
+    for case in SCENE.cases:
+        a = _field(SCENE.field.path(tmp_path / "native", case.name))
+        b = _field(SCENE.field.path(tmp_path / "pythonfmu", case.name))
+        assert a.shape == b.shape == (5 * 32 * 16, 12)
+        exact = [0, 1, 2, 3, 4, 5, 8, 9, 10]  # requested, time, i, j, x, y, p, slip, inside
+        assert np.array_equal(a[:, exact], b[:, exact]), case.name
+        for col in (6, 7, 11):  # tau_x, tau_y, weight
+            assert np.max(np.abs(a[:, col] - b[:, col])) <= RTOL * np.max(np.abs(b[:, col]))
+
+
+def test_the_field_file_follows_a_restored_state_and_an_unwritable_one_is_refused(
+    native, python, tmp_path
+):
+    """FieldRecorder's rules: a state set back before a capture rewrites the file with the
+    captures of that state (one, here, then both again after stepping on); a file that
+    cannot be written discards the step that reaches a requested time on both targets,
+    naming field_file and its value, the state unchanged."""
+    path = tmp_path / "deep" / "field.csv"  # its folder made by the FMU
+    with start(native, field_file=str(path), field_times=f"{2 * H!r} {6 * H!r}") as b:
+        steps(b, 3)
+        assert len(_field(path)) == 512
+        state = b.get_state()
+        steps(b, 4)
+        both = _field(path)
+        assert len(both) == 1024
+        b.set_state(state)
+        assert np.array_equal(_field(path), both[:512])
+        b.time = 3 * H
+        steps(b, 4)
+        assert np.array_equal(_field(path), both)
+    said = []
+    for fmu in (native, python):
+        bad = "/dev/null/field.csv"  # under a file: no folder can be made there
+        with start(fmu, field_file=bad, field_times=repr(2 * H)) as b:
+            steps(b, 1)
+            before = b.outputs()
+            assert b.step(H) == DISCARD
+            said.append(b.messages[-1][1].split(" (", 1)[0])
+            assert b.outputs() == before
+    assert said[0] == said[1]
+    assert said[0].endswith(f"field_file = '{bad}' is invalid: must be a writable file"), said
 
 
 def test_a_non_finite_load_is_refused_and_the_instance_recovers(native):

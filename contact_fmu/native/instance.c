@@ -72,7 +72,7 @@ struct cf_inst {
     char scheme_out[METHOD_TEXT];
     spin_grid *grid;              /* CF_GRID only */
     field_scratch *field;         /* CF_TRANSIENT only */
-    char field_out[2][METHOD_TEXT]; /* what getString hands out: field_file, field_times */
+    char field_out[2][FIELD_TEXT]; /* what getString hands out: field_file, field_times */
     double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
     unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
     cf_core **states;             /* the live FMU states handed out: an open-addressing */
@@ -251,18 +251,28 @@ static const char *string_text(const cf_core *c, int i) {
     return is_scheme(i) ? c->scheme_text : c->method_text;
 }
 
-static const char *string_choices(int i) {
-    if (field_string(i) >= 0) /* body_transient.FieldRecorder is Python's */
-        return "'' (the native FMU does not write the traction field to a file; the "
-               "pythonfmu FMU does)";
+/* what a String held must be where the FMU refuses it (RollingBody's words, and
+ * body_transient.parse_times' for field_times), or NULL */
+static const char *string_requirement(const cf_core *c, int i) {
+    const int f = field_string(i);
+    if (f >= 0) {
+        const char *text = string_text(c, i);
+        if (strlen(text) >= FIELD_TEXT - 1) /* set longer: cut */
+            return "a text of fewer than 1023 characters (the native FMU's)";
+        if (f == 0) return NULL;
+        double times[CF_FIELD_CAPTURES];
+        const int n = cf_model_field_times(text, times);
+        return n == -1   ? "times in s separated by spaces or commas"
+               : n == -2 ? "finite times in s"
+               : n == -3 ? "at most 8 times (the native FMU's captures of the field)"
+                         : NULL;
+    }
+    if ((is_scheme(i) ? c->scheme : c->method) >= 0) return NULL;
     return is_scheme(i) ? "\"lobatto3c\" or \"sdirk2\"" : "\"full\" or \"quasistationary\"";
 }
 
 /* a String held that the FMU refuses */
-static int string_bad(const cf_core *c, int i) {
-    if (field_string(i) >= 0) return string_text(c, i)[0] != '\0';
-    return (is_scheme(i) ? c->scheme : c->method) < 0;
-}
+static int string_bad(const cf_core *c, int i) { return string_requirement(c, i) != NULL; }
 
 /* the message of the first bad value held that became bad after the order *last
  * (they are told in the order they became bad), *last moved to it; 0 when none is left */
@@ -274,7 +284,7 @@ static int next_bad(const cf_core *c, unsigned *last, char *one, size_t n) {
     *last = c->bad[best];
     if (CF_VARS[best].type == T_STRING)
         snprintf(one, n, "%s = '%s' is invalid: must be %s", CF_VARS[best].name,
-                 string_text(c, best), string_choices(best));
+                 string_text(c, best), string_requirement(c, best));
     else
         bad_text(&CF_VARS[best], c->var[best], one, n);
     return 1;
@@ -414,6 +424,39 @@ static int field_nonfinite(const Inst *I, const double *out) {
     return -1;
 }
 
+/* FieldRecorder.capture_due at the state tr (time tr->t, the law law, lb): each requested
+ * time reached (to TIME_RTOL 1e-9 of max(1, |t|)) and not yet captured, into c->cap[*n
+ * ...), and the file written whole when one is; *n the captures then. 0, or -1 with the
+ * write's failure in why (*n as it was: the captures are those of the state committed) */
+static int capture_due(Inst *I, const cf_tstate *tr, const cf_params *law, const cf_body *lb,
+                       int *n, char *why, size_t size) {
+    cf_core *c = &I->c;
+    double times[CF_FIELD_CAPTURES];
+    if (!CF_TRANSIENT || c->field_text[0][0] == '\0') return 0; /* no file: no times */
+    const int m = cf_model_field_times(c->field_text[1], times);
+    const int before = *n;
+    const double t = tr->t;
+    while (*n < m && !(times[*n] > t + 1e-9 * fmax(1.0, fabs(t)))) {
+        cf_capture *q = &c->cap[*n];
+        q->wanted = times[*n], q->t = t, q->theta = tr->theta, q->direction = tr->direction;
+        q->a1 = law->a1, q->a2 = lb->a2, q->p0 = lb->p0, q->mu = law->mu, q->P = law->P;
+        memcpy(q->tau_x, tr->tau_x, sizeof q->tau_x);
+        memcpy(q->tau_y, tr->tau_y, sizeof q->tau_y);
+        memcpy(q->slip, tr->slip, sizeof q->slip);
+        (*n)++;
+    }
+    if (*n == before) return 0;
+    char err[256];
+    if (cf_model_field_write(c->field_text[0], c->cap, *n, c->val[R_KB] + c->val[R_KS], tr,
+                             I->field, err, sizeof err) != 0) {
+        snprintf(why, size, "field_file = '%s' is invalid: must be a writable file (%s)",
+                 c->field_text[0], err);
+        *n = before;
+        return -1;
+    }
+    return 0;
+}
+
 /* TransientBodyModel set up (body_transient.build, TransientRollingBody.__init__): the
  * field laid at the load and at rest (LayerField.__init__), the body at its initial state
  * (BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, ry Vx0, rz Vx0), Omega_y0 = (Vx0 - vx0)/Rx),
@@ -450,6 +493,13 @@ static int build_transient(Inst *I, cf_params *p, cf_body *b) {
             "field's summary is not finite");
         return 0;
     }
+    int n = 0; /* the captures due at the start time (body_transient.build) */
+    char why[FIELD_TEXT + 256];
+    if (capture_due(I, fs, p, b, &n, why, sizeof why) != 0) {
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", why);
+        return 0;
+    }
+    c->n_captured = n;
     c->p = *p, c->b = *b, c->fs = *fs;
     c->P_law = p->P;
     c->built = 1;
@@ -685,7 +735,8 @@ static cf_status transient_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
     field_scratch *sc = I->field;
     const double *v = c->val;
-    char why[640] = "", r[40];
+    char why[FIELD_TEXT + 640] = "", r[40];
+    int n_captured = c->n_captured;
     cf_params p = c->p;
     cf_body b = c->b;
     const double P = v[R_P];
@@ -769,6 +820,8 @@ static cf_status transient_step(Inst *I, double t, double h) {
             py_repr(out[k], r, sizeof r);
             snprintf(why, sizeof why, "FloatingPointError: output %s = %s is not finite",
                      out_name(k), r);
+        } else {
+            capture_due(I, tr, &p, &b, &n_captured, why, sizeof why); /* why: its failure */
         }
     }
     if (why[0]) {
@@ -780,7 +833,7 @@ static cf_status transient_step(Inst *I, double t, double h) {
         return CF_STATUS_DISCARD;
     }
     memcpy(b.out, out, sizeof b.out);
-    c->p = p, c->b = b, c->fs = sc->trial, c->P_law = P;
+    c->p = p, c->b = b, c->fs = sc->trial, c->P_law = P, c->n_captured = n_captured;
     publish(c);
     c->time = t + h;
     if (needed > cap) { /* TransientBodyModel.step's cap_note */
@@ -1254,7 +1307,7 @@ cf_status cf_get_string(cf_inst *I, const unsigned *vr, size_t n, const char **v
         const int f = field_string((int)vr[i]);
         char *out = f >= 0 ? I->field_out[f] : is_scheme((int)vr[i]) ? I->scheme_out
                                                                         : I->method_out;
-        snprintf(out, METHOD_TEXT, "%s", string_text(&I->c, (int)vr[i]));
+        snprintf(out, f >= 0 ? FIELD_TEXT : METHOD_TEXT, "%s", string_text(&I->c, (int)vr[i]));
         v[i] = out;
     }
     return CF_STATUS_OK;
@@ -1369,8 +1422,8 @@ cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n, const char *co
         }
         cf_core *C = &I->c;
         const int i = (int)vr[k], scheme = is_scheme(i), f = field_string(i);
-        if (f >= 0) { /* field_file, field_times: "" only (no file written here) */
-            snprintf(C->field_text[f], METHOD_TEXT, "%s", s);
+        if (f >= 0) { /* field_file, field_times (longer than the buffer: refused) */
+            snprintf(C->field_text[f], FIELD_TEXT, "%s", s);
         } else {
             char *text = scheme ? C->scheme_text : C->method_text;
             int *choice = scheme ? &C->scheme : &C->method;
@@ -1385,7 +1438,8 @@ cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n, const char *co
         if (bad) {
             const char *text = string_text(C, i);
             say(I, CF_STATUS_ERROR, "%s = '%s' is invalid: must be %s; doStep answers %sDiscard "
-                "until it is corrected", CF_VARS[i].name, text, string_choices(i), I->api);
+                "until it is corrected", CF_VARS[i].name, text, string_requirement(C, i),
+                I->api);
             status = CF_STATUS_ERROR;
         }
     }
@@ -1504,7 +1558,9 @@ static void sanitize(cf_core *c) {
     cf_model_constants(&c->p, &c->b);
     c->method_text[METHOD_TEXT - 1] = '\0';
     c->scheme_text[METHOD_TEXT - 1] = '\0';
-    c->field_text[0][METHOD_TEXT - 1] = c->field_text[1][METHOD_TEXT - 1] = '\0';
+    c->field_text[0][FIELD_TEXT - 1] = c->field_text[1][FIELD_TEXT - 1] = '\0';
+    for (int k = 0; k < (CF_TRANSIENT ? CF_FIELD_CAPTURES : 1); k++)
+        for (int i = 0; i < FIELD_N; i++) c->cap[k].slip[i] = c->cap[k].slip[i] != 0;
     c->fs.sliding = c->fs.sliding != 0;
     for (int i = 0; i < FIELD_N; i++) c->fs.slip[i] = c->fs.slip[i] != 0;
     c->method = c->scheme = -1; /* the texts decide, as at setString */
@@ -1625,7 +1681,17 @@ static const char *state_problem(const cf_core *c, char *why, size_t n) {
              all_finite(fs->ys, CF_FIELD_NY) && all_finite(fs->dy, CF_FIELD_NY) &&
              all_finite(fs->tau_x, FIELD_N) && all_finite(fs->tau_y, FIELD_N) &&
              all_finite(fs->fo, N_OUT_ALL - N_OUT));
-        if (!(body_ok && rigid_ok && law_ok && jac_ok && field_ok &&
+        double times[CF_FIELD_CAPTURES];
+        const int m = c->field_text[0][0] ? cf_model_field_times(c->field_text[1], times) : 0;
+        int captures_ok = !CF_TRANSIENT || (c->n_captured >= 0 && c->n_captured <= m);
+        for (int q = 0; captures_ok && q < c->n_captured; q++) {
+            const cf_capture *cq = &c->cap[q];
+            const double at[] = {cq->wanted, cq->t, cq->theta, cq->direction, cq->a1, cq->a2,
+                                 cq->p0, cq->mu, cq->P};
+            captures_ok = all_finite(at, 9) && cq->a1 > 0.0 && cq->a2 > 0.0 &&
+                          all_finite(cq->tau_x, FIELD_N) && all_finite(cq->tau_y, FIELD_N);
+        }
+        if (!(body_ok && rigid_ok && law_ok && jac_ok && field_ok && captures_ok &&
               all_finite(c->b.out, N_OUT))) {
             snprintf(why, n, "its model state cannot be restored (it is not finite)");
             return why;
@@ -1728,16 +1794,31 @@ cf_status cf_set_state(cf_inst *I, const void *state) {
         return CF_STATUS_ERROR;
     }
     if (!live_or_refuse(I, state, C_SET_STATE)) return CF_STATUS_ERROR;
-    cf_core c = *(const cf_core *)state;
-    sanitize(&c);
+    /* checked on a copy (on the heap: a transient field's core is hundreds of kB) */
+    cf_core *c = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core));
+    if (c == NULL) {
+        say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, C_SET_STATE));
+        return CF_STATUS_ERROR;
+    }
+    *c = *(const cf_core *)state;
+    sanitize(c);
     char why[512];
-    if (state_problem(&c, why, sizeof why)) { /* slave._set_fmu_state's words */
+    if (state_problem(c, why, sizeof why)) { /* slave._set_fmu_state's words */
+        I->cb.release(I->env, c);
         say(I, CF_STATUS_ERROR, "the FMU state given to setFMUstate is refused: %s; the "
             "instance's state is unchanged", why);
         return CF_STATUS_ERROR;
     }
-    I->c = c;
+    const int captured = I->c.n_captured;
+    I->c = *c;
+    I->cb.release(I->env, c);
     cf_model_attach_table(I->table, &I->c.p);
+    if (CF_TRANSIENT && I->c.built && I->c.field_text[0][0] && I->c.n_captured != captured) {
+        char err[256]; /* FieldRecorder.set_state: rewritten, best effort */
+        cf_model_field_write(I->c.field_text[0], I->c.cap, I->c.n_captured,
+                             I->c.val[R_KB] + I->c.val[R_KS], &I->c.fs, I->field, err,
+                             sizeof err);
+    }
     if (CF_VECTOR && I->c.built) ensure_grid(I, &I->c.p, &I->c.b, &I->c.p); /* its load's */
     return CF_STATUS_OK;
 }
@@ -1833,19 +1914,25 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
             I->api, call_name(I, C_DESERIALIZE), why);
         return CF_STATUS_ERROR;
     }
-    cf_core c;
-    memcpy(&c, p + 16 + glen + 8, sizeof(cf_core));
-    sanitize(&c);
+    cf_core *c = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core)); /* on the heap */
+    if (c == NULL) {
+        say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, C_DESERIALIZE));
+        return CF_STATUS_ERROR;
+    }
+    memcpy(c, p + 16 + glen + 8, sizeof(cf_core));
+    sanitize(c);
     char problem[512];
-    if (state_problem(&c, problem, sizeof problem)) {
+    if (state_problem(c, problem, sizeof problem)) {
+        I->cb.release(I->env, c);
         say(I, CF_STATUS_ERROR, "%s%s: the bytes are refused: %s",
             I->api, call_name(I, C_DESERIALIZE),
             problem);
         return CF_STATUS_ERROR;
     }
     cf_core *s = state_to_fill(I, state, C_DESERIALIZE);
+    if (s != NULL) *s = *c;
+    I->cb.release(I->env, c);
     if (s == NULL) return CF_STATUS_ERROR;
-    *s = c;
     *state = s;
     return CF_STATUS_OK;
 }

@@ -5,7 +5,17 @@
  * rigid_body mode's step (fmu/rigid_body.py) and the contact mode's analytic directional
  * derivatives. No FMI here and no message: the instance layer (instance.c) checks,
  * words and commits. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#ifdef _WIN32
+#include <direct.h>
+#define make_dir(p) _mkdir(p)
+#else
+#include <sys/stat.h>
+#define make_dir(p) mkdir((p), 0777)
+#endif
 
 #include "model.h"
 
@@ -346,4 +356,100 @@ int cf_model_field_outputs(const cf_params *law, const cf_body *lb, const cf_fie
     out[O_SLIP_CX] = s[1], out[O_SLIP_CY] = s[2], out[O_TAU_PEAK] = s[3];
     for (int k = 0; k < N_OUT_ALL - N_OUT; k++) fs->fo[k] = out[N_OUT + k];
     return CF_FIELD_OK;
+}
+
+/* ---- the field file (body_transient.FieldRecorder) ----------------------------------- */
+
+static int by_value(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+int cf_model_field_times(const char *text, double times[CF_FIELD_CAPTURES]) {
+    int n = 0;
+    const char *s = text;
+    for (;;) {
+        while (*s == ' ' || *s == ',' || *s == ';' || *s == '\t' || *s == '\n' || *s == '\r')
+            s++;
+        if (*s == '\0') break;
+        char *end;
+        const double t = strtod(s, &end);
+        if (end == s || !(*end == '\0' || *end == ' ' || *end == ',' || *end == ';' ||
+                          *end == '\t' || *end == '\n' || *end == '\r'))
+            return -1;
+        if (!isfinite(t)) return -2;
+        if (n == CF_FIELD_CAPTURES) return -3;
+        times[n++] = t;
+        s = end;
+    }
+    qsort(times, (size_t)n, sizeof times[0], by_value);
+    return n;
+}
+
+/* the folders of path made (Path.parent.mkdir(parents=True, exist_ok=True)) */
+static void make_parents(const char *path) {
+    char dir[FIELD_TEXT];
+    snprintf(dir, sizeof dir, "%s", path);
+    for (char *q = dir + 1; *q; q++)
+        if (*q == '/' || *q == '\\') {
+            const char keep = *q;
+            *q = '\0';
+            make_dir(dir); /* an existing one: EEXIST, fine; a failure shows at fopen */
+            *q = keep;
+        }
+}
+
+/* LayerField.traction_field / arrays of a capture, one row per node: requested, time, i,
+ * j, x, y, tau_x, tau_y (0 outside the contact), p (Eq. 33, 0 outside), slip, inside,
+ * weight (LayerField._weights at the field's direction: cf_field_weights), as numpy's
+ * savetxt writes them (%.17g, %d) */
+int cf_model_field_write(const char *path, const cf_capture *cap, int n, double k,
+                         const cf_tstate *fs, field_scratch *sc, char *why, size_t why_size) {
+    make_parents(path);
+    errno = 0;
+    FILE *out = fopen(path, "w");
+    if (out == NULL) {
+        snprintf(why, why_size, "%s", strerror(errno));
+        return -1;
+    }
+    fprintf(out, "requested,time,i,j,x,y,tau_x,tau_y,p,slip,inside,weight\n");
+    double x[CF_FIELD_NX];
+    for (int c = 0; c < n; c++) {
+        const cf_capture *q = &cap[c];
+        cf_params law;
+        cf_body lb;
+        memset(&law, 0, sizeof law);
+        memset(&lb, 0, sizeof lb);
+        law.a1 = q->a1, law.mu = q->mu, law.P = q->P, lb.a2 = q->a2, lb.p0 = q->p0;
+        cf_field f;
+        cf_model_field(&law, &lb, k, fs, sc, &f);
+        for (int j = 0; j < CF_FIELD_NX; j++) x[j] = -fs->X + ((double)j + q->theta) * fs->dx;
+        unsigned char *inside = sc->bytes;
+        for (int i = 0; i < CF_FIELD_NY; i++)
+            for (int j = 0; j < CF_FIELD_NX; j++)
+                inside[i * CF_FIELD_NX + j] = fabs(x[j]) < sc->ell[i];
+        double *w = sc->work + 3 * CF_FIELD_NX; /* after the weights' own scratch */
+        if (cf_field_weights(&f, x, inside, q->tau_x, q->tau_y, q->slip, q->direction, w,
+                             sc->work) != CF_FIELD_OK) {
+            fclose(out);
+            snprintf(why, why_size, "the field's weights are not finite");
+            return -1;
+        }
+        for (int i = 0; i < CF_FIELD_NY; i++)
+            for (int j = 0; j < CF_FIELD_NX; j++) {
+                const int e = i * CF_FIELD_NX + j;
+                const double qx = x[j] / q->a1, qy = fs->ys[i] / q->a2;
+                const double r = 1.0 - qx * qx - qy * qy;
+                fprintf(out, "%.17g,%.17g,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%.17g\n",
+                        q->wanted, q->t, i, j, x[j], fs->ys[i], inside[e] ? q->tau_x[e] : 0.0,
+                        inside[e] ? q->tau_y[e] : 0.0, q->p0 * (r > 0.0 ? r : 0.0),
+                        q->slip[e] != 0, inside[e], w[e]);
+            }
+    }
+    const int bad = ferror(out) != 0;
+    if (fclose(out) != 0 || bad) {
+        snprintf(why, why_size, "%s", errno ? strerror(errno) : "the write failed");
+        return -1;
+    }
+    return 0;
 }

@@ -68,6 +68,20 @@ typedef struct {
     double fo[N_OUT_ALL - N_OUT]; /* the summary outputs O_SLIP_CX ... */
 } cf_tstate;
 
+/* The field file (body_transient.FieldRecorder): field_file and field_times as set (a
+ * longer text is refused), at most CF_FIELD_CAPTURES times, and a capture of the field at
+ * each time reached (the law's a1, a2, p0, mu, P with it: the file is written from them
+ * whole at each capture and after a restore of an FMU state with other captures) */
+#define FIELD_TEXT (CF_TRANSIENT ? 1024 : 8)
+#define CF_FIELD_CAPTURES 8
+typedef struct {
+    double wanted, t;             /* the requested time and the step's end (s) */
+    double theta, direction;
+    double a1, a2, p0, mu, P;     /* the law then */
+    double tau_x[FIELD_N], tau_y[FIELD_N];
+    unsigned char slip[FIELD_N];
+} cf_capture;
+
 /* ---- the instance's core ------------------------------------------------------------ */
 enum { PH_INSTANTIATED, PH_INIT, PH_STEP, PH_TERMINATED };
 
@@ -92,7 +106,9 @@ typedef struct {
     cf_state s;
     cf_body b;
     cf_tstate fs;                 /* phase "transient" (1 x 1 without it) */
-    char field_text[2][METHOD_TEXT]; /* field_file, field_times as set (cut as method_text) */
+    char field_text[2][FIELD_TEXT]; /* field_file, field_times as set */
+    int n_captured;               /* captures of the field file taken ... */
+    cf_capture cap[CF_TRANSIENT ? CF_FIELD_CAPTURES : 1]; /* ... in cap[0 ... n_captured) */
 } cf_core;
 
 /* the spin grid of the vector path and of the contact mode's spin input (layer._Grid of
@@ -161,6 +177,15 @@ CF_HIDDEN void cf_model_field_lay(const cf_params *law, const cf_body *lb, cf_ts
  * fs's strips */
 CF_HIDDEN void cf_model_field(const cf_params *law, const cf_body *lb, double k,
                               const cf_tstate *fs, field_scratch *sc, cf_field *f);
+/* field_times parsed (body_transient.parse_times: numbers separated by spaces, commas or
+ * semicolons, sorted) into times; their count, or -1 not numbers, -2 not finite, -3 more
+ * than CF_FIELD_CAPTURES */
+CF_HIDDEN int cf_model_field_times(const char *text, double times[CF_FIELD_CAPTURES]);
+/* FieldRecorder.write: the captures cap[0 ... n) as the CSV file path (its folders made);
+ * k = kb + ks; fs: the lattice and strips; 0, or -1 with errno's text in why */
+CF_HIDDEN int cf_model_field_write(const char *path, const cf_capture *cap, int n, double k,
+                                   const cf_tstate *fs, field_scratch *sc, char *why,
+                                   size_t why_size);
 /* TransientRollingBody.outputs() into out (N_OUT_ALL: cf_body.out's then the summary's)
  * and fs->fo; CF_FIELD_OK or field.c's refusal of the summary */
 CF_HIDDEN int cf_model_field_outputs(const cf_params *law, const cf_body *lb, const cf_field *f,
