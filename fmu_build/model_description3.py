@@ -44,8 +44,9 @@ LINE = (
 
 def has_line(cfg: ModelConfig) -> bool:
     """Whether the FMU has the centre line's arrays: the thin-layer law in body and
-    contact mode (native model.h's CF_LINE)."""
-    return cfg.mode != "rigid_body" and not cfg.has_table
+    contact mode, steady phase (native model.h's CF_LINE; the steady law's line would not
+    be a transient field's)."""
+    return cfg.mode != "rigid_body" and not cfg.has_table and not cfg.transient
 
 
 def line_vrs(cfg: ModelConfig) -> dict[str, int]:

@@ -27,7 +27,10 @@ half-space creep-force table of one load node without layers, body and contact m
 rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
 law, with a spin input Omega_z too (sweep, ``--full contact``: the strip march on the
 law's spin grid, built in C for each load, with its forward-mode derivative for the
-directional derivatives); the rigid_body mode (``--full rigid_body``). Everything
+directional derivatives); the rigid_body mode (``--full rigid_body``); the body on the
+transient traction field (phase "transient", vx the only stage unknown: fig12_transient;
+field.c's cf_field_advance, the field of the scene's nx x ny in the instance's core, at
+most FIELD_CELLS_MAX cells; the field file written in C). Everything
 else is refused here with a message that names the scene's feature
 (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
@@ -39,6 +42,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -63,8 +67,8 @@ NATIVE_DIR = Path(native.__file__).resolve().parent
 # headers they include; with HEADER (generated) they are the FMU's sources/
 # CORE: what every front end is linked with (the FMI 3.0 FMU's: native_fmu3.SOURCES)
 FRONT_END = "fmi2.c"
-CORE = ("instance.c", "model.c", "stepper.c", "instance.h", "model.h", "stepper.h", "cf_abi.h",
-        "cf_core.h")  # fmt: skip
+CORE = ("instance.c", "model.c", "stepper.c", "field.c", "instance.h", "model.h", "stepper.h",
+        "field.h", "cf_abi.h", "cf_core.h")  # fmt: skip
 SOURCES = (FRONT_END, *CORE)
 HEADER = "cf_model.h"
 # no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
@@ -103,14 +107,66 @@ def unsupported(cfg: ModelConfig) -> str | None:
             )
         if spec.kb + spec.ks > 0.0:
             return "[halfspace] kb + ks > 0 (a table with layers has a load range to check)"
-    if cfg.phase != "steady":
-        return f'phase = "{cfg.phase}" (the transient traction field is not in the C kernel)'
+    if cfg.transient:
+        if cfg.vy == "eq10" or cfg.spin == "eq11":
+            return (
+                'phase = "transient" with Vy or Omega_z as stage unknowns (Eqs. 10-11 on the '
+                "traction field run in Python only; field.c's body has vx its only unknown)"
+            )
+        nx, ny = field_grid(cfg)
+        if nx * ny > FIELD_CELLS_MAX:
+            return (
+                f'phase = "transient" on a {nx} x {ny} field (the native FMU holds the field '
+                f"in its FMU state, copied whole: at most {FIELD_CELLS_MAX} cells)"
+            )
+        return None
     if cfg.spin == "ratio" and cfg.vy != "eq10":
         return (
             'spin = "ratio" without vy = "eq10" (a held spin ratio with vx the only unknown '
             "runs in Python only, not in the C kernel)"
         )
     return None
+
+
+# The largest field (nx ny cells) the native FMU carries: its state holds the field and
+# the field file's captures (17 bytes a cell each, 9 times: 153 bytes a cell) and is
+# copied whole (get/set state, serialisation): 2048 cells (the default 64 x 32) are 313
+# kB.
+FIELD_CELLS_MAX = 2048
+
+
+def field_grid(cfg: ModelConfig) -> tuple[int, int]:
+    """(nx, ny) of a transient scene's field: the build's, fixed in the native FMU."""
+    return int(cfg.start(fv.BY_NAME["nx"])), int(cfg.start(fv.BY_NAME["ny"]))
+
+
+def _fixed(cfg: ModelConfig) -> dict[str, tuple[float, str]]:
+    """The values a native build fixes, with the requirement its check words: the
+    table's (ModelConfig.fixed) and a transient scene's grid (its field's size is
+    compiled into the instance's state)."""
+    out = {name: (value, cfg.check(name, math.nextafter(value, math.inf)))
+           for name, value in cfg.fixed.items()}  # fmt: skip
+    if cfg.transient:
+        for name, n in zip(("nx", "ny"), field_grid(cfg), strict=True):
+            out[name] = (float(n), f"{n}, the field size this native FMU is compiled for")
+    return out
+
+
+def fix_grid(xml: bytes, cfg: ModelConfig) -> bytes:
+    """A transient scene's model description (FMI 2.0's or 3.0's) with the Integer
+    parameters nx and ny declared min = max = the grid compiled into the native FMU (the
+    pythonfmu FMU's range is 4 to 1024 and 2 to 512); others unchanged."""
+    if not cfg.transient:
+        return xml
+    text = xml.decode()
+    for name, n in zip(("nx", "ny"), field_grid(cfg), strict=True):
+        element = (rf'(<ScalarVariable name="{name}"[^>]*>\s*<Integer [^>]*?'
+                   rf'|<Int32 name="{name}"[^>]*?)')  # fmt: skip
+        text, count = re.subn(element + r'min="[^"]*" max="[^"]*"', rf'\g<1>min="{n}" max="{n}"',
+                              text)  # fmt: skip
+        if count != 1:
+            raise NativeUnsupportedError(f"no range of {name} in the model description")
+    return text.encode()
 
 
 def _c(x: float) -> str:
@@ -131,12 +187,17 @@ _ROLES = {
     "mu", "Rx", "Ry", "k1", "k2", "kb", "ks", "M", "Iy", "vy_ratio", "Vx0", "vx0",
     "h_max", "method", "P", "Fx_ex", "My_ex", "Vx", "Vy", "Omega_y", "Omega_z", "Tx",
     "Iz", "Vy0", "Omega_z0", "spin_ratio", "Fy_ex", "Mz_ex", "scheme", "max_work",
+    "nx", "ny", "cells_per_step", "field_file", "field_times",
 }  # fmt: skip
+# phase "transient"'s outputs after cf_body.out's (model.h: O_SLIP_CX ...)
+FIELD_OUTPUTS = ("slip_centroid_x", "slip_centroid_y", "tau_peak")
 _MODES = {"body": "MODE_BODY", "contact": "MODE_CONTACT", "rigid_body": "MODE_RIGID"}
 
 
 def _role(cfg: ModelConfig, v: fv.Var) -> str:
     if v.causality[cfg.mode] == fv.OUTPUT:
+        if v.name in FIELD_OUTPUTS:
+            return f"R_OUT + {len(native.OUTPUTS) + FIELD_OUTPUTS.index(v.name)}"
         return f"R_OUT + {native.OUTPUTS.index(v.name)}"
     if v.name not in _ROLES:
         raise NativeUnsupportedError(f"variable {v.name} (not read by the native FMU's model)")
@@ -150,12 +211,13 @@ def header(cfg: ModelConfig, guid: str) -> str:
     kinds = {fv.PARAMETER: "K_PARAMETER", fv.INPUT: "K_INPUT", fv.OUTPUT: "K_OUTPUT"}
     types = {"Real": "T_REAL", "Integer": "T_INTEGER", "String": "T_STRING"}
     rows = []
+    fixed = _fixed(cfg)
     for v in cfg.variables:
         lo, hi = v.bounds(cfg.mode)  # Var.check's range; a fixed value is checked after it
         fix, fix_req = 0.0, "NULL"
-        if v.name in cfg.fixed:
-            fix = cfg.fixed[v.name]
-            fix_req = _cstr(cfg.check(v.name, math.nextafter(fix, math.inf)))
+        if v.name in fixed:
+            fix, text = fixed[v.name]
+            fix_req = _cstr(text)
         # outputs start at their declared value before set-up (slave.py's _out)
         start = v.start if v.causality[cfg.mode] == fv.OUTPUT else cfg.start(v)
         lo_req = hi_req = "NULL"
@@ -187,6 +249,12 @@ def header(cfg: ModelConfig, guid: str) -> str:
         f"#define CF_SPIN_NY {layer.SPIN_GRID[1]}",
         f"#define CF_TINY {_c(layer.TINY)}",
         f"#define CF_LINE_N {model_description3.LINE_N}",
+        # phase "transient": the body on the traction field (field.c), its grid
+        f"#define CF_TRANSIENT {int(cfg.transient)}",
+        *(
+            f"#define CF_FIELD_{k} {n}"
+            for k, n in zip(("NX", "NY"), field_grid(cfg) if cfg.transient else (1, 1), strict=True)
+        ),  # fmt: skip
         *_table_header(cfg),
         f"#define CF_METHOD_START {('full', 'quasistationary').index(method)}",
         f"#define CF_SCHEME_START {integrator.SCHEMES.index(scheme)}",
@@ -383,7 +451,7 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> NativeB
     naming the feature where the C kernel does not cover the model."""
 
     def described(identifier: str, guid: str) -> dict[str, bytes]:
-        xml = model_description.patch(_skeleton(cfg, identifier, guid), cfg)
+        xml = fix_grid(model_description.patch(_skeleton(cfg, identifier, guid), cfg), cfg)
         return {"modelDescription.xml": xml,
                 **documentation.files(cfg, identifier, target="native")}  # fmt: skip
 

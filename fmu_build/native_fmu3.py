@@ -70,7 +70,9 @@ def build(cfg: ModelConfig, out_dir: str | Path, force: bool = False) -> n2.Nati
 
     def described(identifier: str, token: str) -> dict[str, bytes]:
         return {
-            "modelDescription.xml": model_description3.model_description(cfg, identifier, token),
+            "modelDescription.xml": n2.fix_grid(
+                model_description3.model_description(cfg, identifier, token), cfg
+            ),
             "sources/buildDescription.xml": model_description3.build_description(
                 identifier, n2.c_files(SOURCES)
             ),

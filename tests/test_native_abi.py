@@ -24,6 +24,7 @@ import pytest
 
 from contact_fmu import native
 from contact_fmu.native import abi, abi_header
+from contact_fmu.native import field as native_field
 
 pytestmark = pytest.mark.skipif(
     shutil.which(os.environ.get("CC", "cc")) is None, reason="no C compiler"
@@ -36,6 +37,11 @@ TWINS = {
     "cf_body": native.BodyIO,
     "cf_strips": native.Strips,
     "cf_vstate": native.VState,
+    "cf_field": native_field.Field,
+    "cf_field_stage_in": native_field.StageIn,
+    "cf_field_stage_out": native_field.StageOut,
+    "cf_field_body": native_field.Body,
+    "cf_field_body_state": native_field.BodyState,
 }
 STRICT = ("-std=c11", "-Wall", "-Wextra", "-pedantic", "-Werror")
 

@@ -258,7 +258,7 @@ def test_model_description_is_the_fmi2_fmus_in_fmi3_and_validates(fmus, kind):
     assert cs3["hasEventMode"] == "false"
     [config] = md3.buildConfigurations
     listed = [f for s in config.sourceFileSets for f in s.sourceFiles]
-    assert listed == ["fmi3.c", "instance.c", "model.c", "stepper.c"]
+    assert listed == ["fmi3.c", "instance.c", "model.c", "stepper.c", "field.c"]
     with zipfile.ZipFile(path3) as z:
         names = set(z.namelist())
     assert {f"sources/{n}" for n in (*native_fmu3.SOURCES, "cf_model.h")} <= names

@@ -8,7 +8,8 @@ fills and reads the structs in place. From the declarations here come
   order of a body step's outputs (``cf_body.out``) and the constants of the Python
   numerics the C code reads, each as the literal that reads back to its Python double
   (``repr``); written by ``python -m contact_fmu.native.abi_header --write``;
-- ``fields(name)``: a struct's ctypes ``_fields_`` (``native.Params``, ``State``, ...).
+- ``fields(name)``: a struct's ctypes ``_fields_`` (``native.Params``, ``State``, ...,
+  and field.py's ``Field``, ``StageIn``, ``StageOut``, ``Body``, ``BodyState``).
 
 A field is (name, C type, comment) or (name, C type, length, comment) for an array; the
 C types are those of ``CTYPES``. A constant is (C name, C type, Python home, comment):
@@ -41,6 +42,10 @@ CTYPES: dict[str, Any] = {
     "int": ctypes.c_int,
     "const double *": ctypes.c_void_p,
     "const void *": ctypes.c_void_p,
+    "long long": ctypes.c_longlong,
+    "double *": ctypes.c_void_p,
+    "unsigned char *": ctypes.c_void_p,
+    "const unsigned char *": ctypes.c_void_p,
 }
 
 # ---- a body step's outputs: RollingBody.outputs() keys, in the order of cf_body.out -----
@@ -215,6 +220,113 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("sliding", "int", "RollingBody.sliding (quasistationary gross sliding)"),
         ],
     ),
+    "cf_field": (
+        "The thin-layer transient field's grid and law (field.c; transient.LayerField: nx cells "
+        "of dx over the lattice's half-extent X, ny strips at y; law a1, p0, mu, k = kb + ks). "
+        "Per strip: ell = l(y) (Eq. 37), p_strip = p0 (1 - y^2/a2^2) (p at x = 0), dy_w the "
+        "scaled strip width (LayerField._update_contact). c0 = mu p0/a1^2 (mu p = c0 (l^2 - "
+        "x^2), Eq. 33). field.Field.",
+        [
+            ("ny", "int", "strips across 2 a2 ..."),
+            ("nx", "int", "... and cells along the lattice"),
+            ("dx", "double", "m: the cell"),
+            ("X", "double", "m: the lattice's half-extent"),
+            ("a1", "double", "m: the law's half-length"),
+            ("p0", "double", "Pa: its peak pressure"),
+            ("mu", "double", "its coefficient of friction"),
+            ("k", "double", "m/Pa: kb + ks"),
+            ("c0", "double", "Pa/m^2: mu p0/a1^2"),
+            ("min_speed_fraction", "double", "transient.MIN_SPEED_FRACTION"),
+            ("y", "const double *", "(ny): the strips' y (m) ..."),
+            ("ell", "const double *", "... l(y) (m) ..."),
+            ("p_strip", "const double *", "... p at x = 0 (Pa) ..."),
+            ("dy_w", "const double *", "... and scaled widths (m)"),
+        ],
+    ),
+    "cf_field_stage_in": (
+        "A stage's inputs (LayerField.stage's arguments): the base of the step (theta, the "
+        "inside mask, ny x nx row major, bytes 0/1), tau_hat in base indexing, the distance "
+        "rolled ds (m), elapsed and h_own (s), the rigid slip (vx, vy) (m/s), phi = Omega_z "
+        "(rad/s), Vx (m/s); midpath and jacobian as in LayerField.stage (0 or 1). "
+        "field.StageIn.",
+        [
+            ("theta", "double", "the base's column offset (cells)"),
+            ("inside", "const unsigned char *", "(ny x nx) the base's inside mask"),
+            ("hat_x", "const double *", "(ny x nx) tau_hat (Pa) ..."),
+            ("hat_y", "const double *", ""),
+            ("ds", "double", "m: distance rolled"),
+            ("elapsed", "double", "s"),
+            ("h_own", "double", "s"),
+            ("vx", "double", "m/s: the rigid slip ..."),
+            ("vy", "double", ""),
+            ("phi", "double", "rad/s: Omega_z"),
+            ("Vx", "double", "m/s"),
+            ("midpath", "int", "0 or 1"),
+            ("jacobian", "int", "0 or 1: J wanted"),
+        ],
+    ),
+    "cf_field_stage_out": (
+        "A stage's results (StageField): theta and shift, column positions x (nx), traction, "
+        "weights (ny x nx), the slip (slip & inside) and inside masks (bytes 0/1), the "
+        "resultant T = (Tx, Ty, Mz), dTx/dvx and (with jacobian) J = d(Tx, Ty, Mz)/d(vx, vy, "
+        "Omega_z), 3 x 3 row major. work: scratch of 5 ny nx + 3 nx doubles. field.StageOut.",
+        [
+            ("theta", "double", "the stage's column offset"),
+            ("shift", "long long", "columns moved"),
+            ("x", "double *", "(nx) m"),
+            ("tau_x", "double *", "(ny x nx) Pa ..."),
+            ("tau_y", "double *", ""),
+            ("w", "double *", "(ny x nx) m^2: weights"),
+            ("slip", "unsigned char *", "(ny x nx) 0/1 ..."),
+            ("inside", "unsigned char *", ""),
+            ("work", "double *", "scratch"),
+            ("T", "double", 3, "N, N, N m: the resultant"),
+            ("dTx_dvx", "double", "N s/m"),
+            ("J", "double", 9, "with jacobian: 3 x 3, row major"),
+        ],
+    ),
+    "cf_field_body": (
+        "The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and "
+        "Omega_z held at the ratios ry, rz to Vx (Lateral); the law's creep_full_slip; SDIRK2's "
+        "gamma and a21 = 1 - gamma; transient.SOLVE_RTOL, V_SCALE_FLOOR (m/s), "
+        "MAX_STAGE_ITERATIONS. field.Body.",
+        [
+            ("M", "double", "kg"),
+            ("Rx", "double", "m"),
+            ("A1", "double", "Eq. (23)"),
+            ("A2", "double", "Eq. (23)"),
+            ("m_slip", "double", "kg: M A2"),
+            ("ry", "double", "held Vy/Vx"),
+            ("rz", "double", "held Omega_z/Vx (1/m)"),
+            ("creep_full_slip", "double", "the law's"),
+            ("gamma", "double", "SDIRK2's"),
+            ("a21", "double", "1 - gamma"),
+            ("solve_rtol", "double", ""),
+            ("v_scale_floor", "double", "m/s"),
+            ("max_iterations", "int", "of a stage solve"),
+        ],
+    ),
+    "cf_field_body_state": (
+        "The state of cf_field_advance: y = (Vx, vx, Vy, Omega_z), t (s), the contact impulse "
+        "(N s, N s, N m s), the field (theta, direction, tau_x, tau_y, slip: ny x nx, advanced "
+        "in place), the contact at the end of the last step (T = (Tx, Ty, Mz), sliding: no "
+        "adhesion), scratch (work: CF_FIELD_ADVANCE_WORK doubles, bytes: "
+        "CF_FIELD_ADVANCE_BYTES). field.BodyState.",
+        [
+            ("y", "double", 4, "m/s, m/s, m/s, rad/s"),
+            ("t", "double", "s"),
+            ("impulse", "double", 3, "N s, N s, N m s"),
+            ("theta", "double", "the lattice's column offset"),
+            ("direction", "double", "sign of the last distance rolled"),
+            ("tau_x", "double *", "(ny x nx) Pa ..."),
+            ("tau_y", "double *", ""),
+            ("slip", "unsigned char *", "(ny x nx) 0/1"),
+            ("T", "double", 3, "N, N, N m"),
+            ("sliding", "int", "no adhesion"),
+            ("work", "double *", "scratch"),
+            ("bytes", "unsigned char *", "scratch"),
+        ],
+    ),
 }
 
 # ---- the constants: (C name, C type, Python home, comment) ------------------------------
@@ -245,6 +357,13 @@ CONSTANTS: tuple[tuple[str, str, str, str], ...] = (
     ("CF_MAX_SUBSTEPS", "int", "fmu.body_model.MAX_SUBSTEPS", ""),
     ("CF_WORK_SCALAR", "int", "fmu.body_model.WORK_SCALAR", "(work units per internal step)"),
     ("CF_WORK_VECTOR", "int", "fmu.body_model.WORK_VECTOR", "(Eqs. 10-11: per internal step)"),
+    ("CF_WORK_PER_CELL", "int", "fmu.body_model.WORK_PER_CELL", "(the field's step, per cell)"),
+    ("CF_FIELD_GAMMA", "double", "transient.GAMMA", "(the field's SDIRK2)"),
+    ("CF_FIELD_A21", "double", "transient.A21", ""),
+    ("CF_FIELD_SOLVE_RTOL", "double", "transient.SOLVE_RTOL", ""),
+    ("CF_FIELD_V_SCALE_FLOOR", "double", "transient.V_SCALE_FLOOR", "(m/s)"),
+    ("CF_FIELD_MIN_SPEED_FRACTION", "double", "transient.MIN_SPEED_FRACTION", ""),
+    ("CF_FIELD_MAX_ITERATIONS", "int", "transient.MAX_STAGE_ITERATIONS", ""),
 )  # fmt: skip
 
 
@@ -344,10 +463,10 @@ def header() -> str:
         f"/* Generated by `{COMMAND}` (from abi.py): do not edit. */",
         *_comment(
             "The types and constants the C code shares with Python (stepper.h includes this "
-            "file; contact_fmu/native/__init__.py's ctypes structs have the same fields from "
-            "the same declarations). tests/test_native_abi.py compares this file with the "
-            "generator's output, the compiler's sizes and offsets with ctypes', and the "
-            "constants with their Python homes."
+            "file; the ctypes structs of contact_fmu/native/__init__.py and field.py have the "
+            "same fields from the same declarations). tests/test_native_abi.py compares this "
+            "file with the generator's output, the compiler's sizes and offsets with ctypes', "
+            "and the constants with their Python homes."
         ),
         "#ifndef CF_ABI_H",
         "#define CF_ABI_H",

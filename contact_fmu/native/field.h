@@ -26,44 +26,13 @@ enum {
  * shift of nx columns or more already empties it), small enough for any index. */
 #define CF_FIELD_SHIFT_MAX 1e9
 
-/* The field's grid and its law (LayerField: nx cells of dx over the lattice's
- * half-extent X, ny strips at y; law a1, p0, mu, k = kb + ks). Per strip: ell = l(y)
- * (Eq. 37), p_strip = p0 (1 - y^2/a2^2) (p at x = 0), dy_w the scaled strip width
- * (LayerField._update_contact). c0 = mu p0/a1^2 (mu p = c0 (l^2 - x^2), Eq. 33). */
-typedef struct {
-    int ny, nx;
-    double dx, X, a1, p0, mu, k, c0;
-    double min_speed_fraction; /* transient.MIN_SPEED_FRACTION */
-    const double *y, *ell, *p_strip, *dy_w; /* (ny) */
-} cf_field;
+/* The structs of these calls, cf_field (the grid and law), cf_field_stage_in and
+ * cf_field_stage_out (a stage's inputs and results), cf_field_body and
+ * cf_field_body_state (the body and its state on the scalar path), are declared once in
+ * abi.py, with their fields' meanings, and come with cf_abi.h (through stepper.h): the
+ * ctypes twins of field.py have the same fields from the same declarations. */
 
-/* A stage's inputs (LayerField.stage's arguments): the base of the step (theta, the
- * inside mask, ny x nx row major, bytes 0/1), tau_hat in base indexing, the distance
- * rolled ds (m), elapsed and h_own (s), the rigid slip (vx, vy) (m/s), phi = Omega_z
- * (rad/s), Vx (m/s); midpath and jacobian as in LayerField.stage (0 or 1). */
-typedef struct {
-    double theta;
-    const unsigned char *inside;
-    const double *hat_x, *hat_y;
-    double ds, elapsed, h_own, vx, vy, phi, Vx;
-    int midpath, jacobian;
-} cf_field_stage_in;
-
-/* A stage's results (StageField): theta and shift, column positions x (nx), traction,
- * weights (ny x nx), the slip (slip & inside) and inside masks (bytes 0/1), the
- * resultant T = (Tx, Ty, Mz), dTx/dvx and (with jacobian) J = d(Tx, Ty, Mz)/d(vx, vy,
- * Omega_z), 3 x 3 row major. work: scratch of 5 ny nx + 3 nx doubles. */
-typedef struct {
-    double theta;
-    long long shift;
-    double *x, *tau_x, *tau_y, *w;
-    unsigned char *slip, *inside;
-    double *work;
-    double T[3];
-    double dTx_dvx;
-    double J[9];
-} cf_field_stage_out;
-
+/* LayerField.stage: one stage of the field's step (StageField into out). */
 CF_HIDDEN int cf_field_stage(const cf_field *f, const cf_field_stage_in *in,
                              cf_field_stage_out *out);
 /* LayerField._weights: w (ny x nx) at positions x (nx) for the masks inside and slip and
@@ -87,33 +56,9 @@ CF_HIDDEN int cf_field_summary(const cf_field *f, double theta, const double *ta
                                double *work, unsigned char *bytes);
 
 /* ---- the body on the field: TransientRollingBody.advance, scalar path ----------------- */
-/* The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and
- * Omega_z held at the ratios ry, rz to Vx (Lateral). Body: M (kg), Rx (m), A1, A2,
- * m_slip = M A2 (kg); the law's creep_full_slip; SDIRK2's gamma and a21 = 1 - gamma;
- * transient.SOLVE_RTOL, V_SCALE_FLOOR (m/s), MAX_STAGE_ITERATIONS. */
-typedef struct {
-    double M, Rx, A1, A2, m_slip, ry, rz, creep_full_slip, gamma, a21;
-    double solve_rtol, v_scale_floor;
-    int max_iterations;
-} cf_field_body;
-
 /* Scratch of cf_field_advance: doubles and bytes for an ny x nx field. */
 #define CF_FIELD_ADVANCE_WORK(ny, nx) (10 * (size_t)(ny) * (size_t)(nx) + 4 * (size_t)(nx))
 #define CF_FIELD_ADVANCE_BYTES(ny, nx) (3 * (size_t)(ny) * (size_t)(nx))
-
-/* The state: y = (Vx, vx, Vy, Omega_z), t (s), the contact impulse (N s, N s, N m s),
- * the field (theta, direction, tau_x, tau_y, slip: ny x nx, advanced in place), and the
- * contact at the end of the last step (T = (Tx, Ty, Mz), sliding: no adhesion). */
-typedef struct {
-    double y[4], t, impulse[3];
-    double theta, direction;
-    double *tau_x, *tau_y;
-    unsigned char *slip;
-    double T[3];
-    int sliding;
-    double *work;         /* CF_FIELD_ADVANCE_WORK(ny, nx) doubles */
-    unsigned char *bytes; /* CF_FIELD_ADVANCE_BYTES(ny, nx) */
-} cf_field_body_state;
 
 /* TransientRollingBody.advance(h, loads, substeps) under held loads (Fx_ex, Fy_ex,
  * My_ex, Mz_ex): substeps SDIRK2 steps of h/substeps. Anything but CF_FIELD_OK leaves

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from . import abi
 from . import library as _kernel
 
 OK = 0  # field.h: CF_FIELD_OK; anything else: the Python path takes the call
@@ -31,46 +32,33 @@ _P = ctypes.c_void_p
 
 
 class Field(ctypes.Structure):
-    """field.h's cf_field: the grid and law of a LayerField."""
+    """cf_abi.h's cf_field (declared in abi.py): the grid and law of a LayerField."""
 
-    _fields_ = [("ny", ctypes.c_int), ("nx", ctypes.c_int)] + [
-        (n, _D) for n in ("dx", "X", "a1", "p0", "mu", "k", "c0", "min_speed_fraction")
-    ] + [(n, _P) for n in ("y", "ell", "p_strip", "dy_w")]  # fmt: skip
+    _fields_ = abi.fields("cf_field")
 
 
 class StageIn(ctypes.Structure):
-    """field.h's cf_field_stage_in: LayerField.stage's arguments."""
+    """cf_abi.h's cf_field_stage_in (declared in abi.py): LayerField.stage's arguments."""
 
-    _fields_ = [("theta", _D), ("inside", _P), ("hat_x", _P), ("hat_y", _P)] + [
-        (n, _D) for n in ("ds", "elapsed", "h_own", "vx", "vy", "phi", "Vx")
-    ] + [("midpath", ctypes.c_int), ("jacobian", ctypes.c_int)]  # fmt: skip
+    _fields_ = abi.fields("cf_field_stage_in")
 
 
 class StageOut(ctypes.Structure):
-    """field.h's cf_field_stage_out: a StageField's arrays and numbers."""
+    """cf_abi.h's cf_field_stage_out (declared in abi.py): a StageField's arrays and numbers."""
 
-    _fields_ = [("theta", _D), ("shift", ctypes.c_longlong)] + [
-        (n, _P) for n in ("x", "tau_x", "tau_y", "w", "slip", "inside", "work")
-    ] + [("T", _D * 3), ("dTx_dvx", _D), ("J", _D * 9)]  # fmt: skip
+    _fields_ = abi.fields("cf_field_stage_out")
 
 
 class Body(ctypes.Structure):
-    """field.h's cf_field_body: the body of a TransientRollingBody's scalar path."""
+    """cf_abi.h's cf_field_body (declared in abi.py): the body of the scalar path."""
 
-    _fields_ = [
-        (n, _D)
-        for n in ("M", "Rx", "A1", "A2", "m_slip", "ry", "rz", "creep_full_slip", "gamma",
-                  "a21", "solve_rtol", "v_scale_floor")
-    ] + [("max_iterations", ctypes.c_int)]  # fmt: skip
+    _fields_ = abi.fields("cf_field_body")
 
 
 class BodyState(ctypes.Structure):
-    """field.h's cf_field_body_state: the body's and the field's state, and scratch."""
+    """cf_abi.h's cf_field_body_state (declared in abi.py): the body's and field's state."""
 
-    _fields_ = [("y", _D * 4), ("t", _D), ("impulse", _D * 3), ("theta", _D),
-                ("direction", _D), ("tau_x", _P), ("tau_y", _P), ("slip", _P),
-                ("T", _D * 3), ("sliding", ctypes.c_int), ("work", _P),
-                ("bytes", _P)]  # fmt: skip
+    _fields_ = abi.fields("cf_field_body_state")
 
 
 def library() -> Any:

@@ -71,6 +71,8 @@ struct cf_inst {
     char method_out[METHOD_TEXT]; /* what getString hands out */
     char scheme_out[METHOD_TEXT];
     spin_grid *grid;              /* CF_GRID only */
+    field_scratch *field;         /* CF_TRANSIENT only */
+    char field_out[2][FIELD_TEXT]; /* what getString hands out: field_file, field_times */
     double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
     unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
     cf_core **states;             /* the live FMU states handed out: an open-addressing */
@@ -214,10 +216,16 @@ static const char *requirement(const cf_var *v, double x) {
     return NULL;
 }
 
+/* a value as Python writes it: an Integer's whole value as an int, else repr */
+static void value_text(const cf_var *v, double x, char *out, size_t n) {
+    if (v->type == T_INTEGER && x == floor(x) && fabs(x) < 1e15) snprintf(out, n, "%.0f", x);
+    else py_repr(x, out, n);
+}
+
 /* "NAME = VALUE is invalid: must be REQ" */
 static void bad_text(const cf_var *v, double x, char *out, size_t n) {
     char r[40];
-    py_repr(x, r, sizeof r);
+    value_text(v, x, r, sizeof r);
     snprintf(out, n, "%s = %s is invalid: must be %s", v->name, r, requirement(v, x));
 }
 
@@ -227,17 +235,44 @@ static int any_bad(const cf_core *c) {
     return 0;
 }
 
-/* the String parameters, method and scheme (by the role of variable i): the text held,
- * and the requirement of RollingBody's check (its words) */
+/* the String parameters, method and scheme (by the role of variable i), and phase
+ * "transient"'s field_file and field_times: the text held, and the requirement (of
+ * RollingBody's check, its words; the field's file: none, here) */
 static int is_scheme(int i) { return CF_VARS[i].role == R_SCHEME; }
+/* field_file, field_times: 0, 1; -1 for method and scheme */
+static int field_string(int i) {
+    const int role = CF_VARS[i].role;
+    return role == R_FIELD_FILE || role == R_FIELD_TIMES ? role - R_FIELD_FILE : -1;
+}
 
 static const char *string_text(const cf_core *c, int i) {
+    const int f = field_string(i);
+    if (f >= 0) return c->field_text[f];
     return is_scheme(i) ? c->scheme_text : c->method_text;
 }
 
-static const char *string_choices(int i) {
+/* what a String held must be where the FMU refuses it (RollingBody's words, and
+ * body_transient.parse_times' for field_times), or NULL */
+static const char *string_requirement(const cf_core *c, int i) {
+    const int f = field_string(i);
+    if (f >= 0) {
+        const char *text = string_text(c, i);
+        if (strlen(text) >= FIELD_TEXT - 1) /* set longer: cut */
+            return "a text of fewer than 1023 characters (the native FMU's)";
+        if (f == 0) return NULL;
+        double times[CF_FIELD_CAPTURES];
+        const int n = cf_model_field_times(text, times);
+        return n == -1   ? "times in s separated by spaces or commas"
+               : n == -2 ? "finite times in s"
+               : n == -3 ? "at most 8 times (the native FMU's captures of the field)"
+                         : NULL;
+    }
+    if ((is_scheme(i) ? c->scheme : c->method) >= 0) return NULL;
     return is_scheme(i) ? "\"lobatto3c\" or \"sdirk2\"" : "\"full\" or \"quasistationary\"";
 }
+
+/* a String held that the FMU refuses */
+static int string_bad(const cf_core *c, int i) { return string_requirement(c, i) != NULL; }
 
 /* the message of the first bad value held that became bad after the order *last
  * (they are told in the order they became bad), *last moved to it; 0 when none is left */
@@ -249,7 +284,7 @@ static int next_bad(const cf_core *c, unsigned *last, char *one, size_t n) {
     *last = c->bad[best];
     if (CF_VARS[best].type == T_STRING)
         snprintf(one, n, "%s = '%s' is invalid: must be %s", CF_VARS[best].name,
-                 string_text(c, best), string_choices(best));
+                 string_text(c, best), string_requirement(c, best));
     else
         bad_text(&CF_VARS[best], c->var[best], one, n);
     return 1;
@@ -272,8 +307,11 @@ static void bad_list(const Inst *I, char *out, size_t n) {
 
 /* the outputs of the struct into the variables */
 static void publish(cf_core *c) {
-    for (int i = 0; i < CF_N_VARS; i++)
-        if (CF_VARS[i].kind == K_OUTPUT) c->var[i] = c->b.out[CF_VARS[i].role - R_OUT];
+    for (int i = 0; i < CF_N_VARS; i++) {
+        if (CF_VARS[i].kind != K_OUTPUT) continue;
+        const int k = CF_VARS[i].role - R_OUT;
+        c->var[i] = k < N_OUT ? c->b.out[k] : c->fs.fo[k - N_OUT];
+    }
 }
 
 /* the FMU's outputs: a bit per index of cf_body.out (cf_first_nonfinite) */
@@ -374,6 +412,101 @@ static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_para
     p->strips = cf_model_grid(I->grid, &I->c, law, b);
 }
 
+/* body_transient._in_contact: the traction field needs a contact */
+#define P_LIFTOFF "P = 0.0 is invalid: must be > 0 in the transient phase (lift-off, P = 0, " \
+                  "is the steady phase's)"
+
+/* the field's summary outputs served, finite (slave._collect), after cf_body_out_check:
+ * the index into out (N_OUT_ALL) of the first that is not, or -1 */
+static int field_nonfinite(const Inst *I, const double *out) {
+    for (int k = N_OUT; k < N_OUT_ALL; k++)
+        if ((I->served >> k & 1ul) && !isfinite(out[k])) return k;
+    return -1;
+}
+
+/* FieldRecorder.capture_due at the state tr (time tr->t, the law law, lb): each requested
+ * time reached (to TIME_RTOL 1e-9 of max(1, |t|)) and not yet captured, into c->cap[*n
+ * ...), and the file written whole when one is; *n the captures then. 0, or -1 with the
+ * write's failure in why (*n as it was: the captures are those of the state committed) */
+static int capture_due(Inst *I, const cf_tstate *tr, const cf_params *law, const cf_body *lb,
+                       int *n, char *why, size_t size) {
+    cf_core *c = &I->c;
+    double times[CF_FIELD_CAPTURES];
+    if (!CF_TRANSIENT || c->field_text[0][0] == '\0') return 0; /* no file: no times */
+    const int m = cf_model_field_times(c->field_text[1], times);
+    const int before = *n;
+    const double t = tr->t;
+    while (*n < m && !(times[*n] > t + 1e-9 * fmax(1.0, fabs(t)))) {
+        cf_capture *q = &c->cap[*n];
+        q->wanted = times[*n], q->t = t, q->theta = tr->theta, q->direction = tr->direction;
+        q->a1 = law->a1, q->a2 = lb->a2, q->p0 = lb->p0, q->mu = law->mu, q->P = law->P;
+        memcpy(q->tau_x, tr->tau_x, sizeof q->tau_x);
+        memcpy(q->tau_y, tr->tau_y, sizeof q->tau_y);
+        memcpy(q->slip, tr->slip, sizeof q->slip);
+        (*n)++;
+    }
+    if (*n == before) return 0;
+    char err[256];
+    if (cf_model_field_write(c->field_text[0], c->cap, *n, c->val[R_KB] + c->val[R_KS], tr,
+                             I->field, err, sizeof err) != 0) {
+        snprintf(why, size, "field_file = '%s' is invalid: must be a writable file (%s)",
+                 c->field_text[0], err);
+        *n = before;
+        return -1;
+    }
+    return 0;
+}
+
+/* TransientBodyModel set up (body_transient.build, TransientRollingBody.__init__): the
+ * field laid at the load and at rest (LayerField.__init__), the body at its initial state
+ * (BodyState: y = (Vx0, Vx0 - Omega_y0 Rx, ry Vx0, rz Vx0), Omega_y0 = (Vx0 - vx0)/Rx),
+ * the contact there (tau = 0: T = 0, not sliding), the outputs within range and finite */
+static int build_transient(Inst *I, cf_params *p, cf_body *b) {
+    cf_core *c = &I->c;
+    const double *v = c->val;
+    cf_tstate *fs = &I->field->trial;
+    memset(fs, 0, sizeof *fs);
+    cf_model_field_lay(p, b, fs);
+    const double Vx0 = v[R_VX0], Omega_y0 = (Vx0 - v[R_SLIP0]) / p->Rx;
+    fs->y[0] = Vx0;
+    fs->y[1] = Vx0 - Omega_y0 * p->Rx;
+    fs->y[2] = v[R_VY_RATIO] * Vx0; /* Lateral's held ratios (0 where none) */
+    fs->y[3] = v[R_SPIN_RATIO] * Vx0;
+    fs->t = c->time;
+    cf_field f;
+    cf_model_field(p, b, v[R_KB] + v[R_KS], fs, I->field, &f);
+    double out[N_OUT_ALL];
+    const int rc = cf_model_field_outputs(p, b, &f, fs, I->field, out);
+    memcpy(b->out, out, sizeof b->out);
+    if (!start_in_range(I, out)) return 0;
+    char r[40];
+    const char *bad = nonfinite(out, r, sizeof r);
+    const int k = bad ? -1 : field_nonfinite(I, out);
+    if (!bad && k >= 0) py_repr(out[k], r, sizeof r);
+    if (bad || k >= 0) {
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: output %s = %s "
+            "is not finite", bad ? bad : out_name(k), r);
+        return 0;
+    }
+    if (rc != CF_FIELD_OK) { /* the summary of a field at rest: no input reaches here */
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: the traction "
+            "field's summary is not finite");
+        return 0;
+    }
+    int n = 0; /* the captures due at the start time (body_transient.build) */
+    char why[FIELD_TEXT + 256];
+    if (capture_due(I, fs, p, b, &n, why, sizeof why) != 0) {
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", why);
+        return 0;
+    }
+    c->n_captured = n;
+    c->p = *p, c->b = *b, c->fs = *fs;
+    c->P_law = p->P;
+    c->built = 1;
+    publish(c);
+    return 1;
+}
+
 /* BodyModel / RollingBody set up from the parameters and inputs at the FMU's time;
  * 0 with the reasons logged (an error) where it cannot be */
 static int build(Inst *I) {
@@ -389,6 +522,10 @@ static int build(Inst *I) {
     const double *v = c->val;
     char r[40];
     if (CF_MODE == MODE_RIGID) return build_rigid(I);
+    if (CF_TRANSIENT && v[R_P] == 0.0) { /* body_transient.build's first check */
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: " P_LIFTOFF);
+        return 0;
+    }
     /* LayerContact.__post_init__ beyond the declared ranges */
     if (!CF_TABLE && !(v[R_K1] + v[R_K2] > 0.0)) {
         py_repr(v[R_K1] + v[R_K2], r, sizeof r);
@@ -457,6 +594,7 @@ static int build(Inst *I) {
     const double P = v[R_P];
     cf_model_law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = v[R_FX_EX], b.My_ex = v[R_MY_EX], b.h_max = v[R_H_MAX];
+    if (CF_TRANSIENT) return build_transient(I, &p, &b);
     if (CF_VECTOR) {
         /* VectorKernel._path: the held ratios (0 where a rate is an unknown), Iz */
         p.ry = CF_DYN_VY ? 0.0 : v[R_VY_RATIO];
@@ -585,6 +723,129 @@ static cf_status refresh(Inst *I) {
     return CF_STATUS_OK;
 }
 
+/* TransientBodyModel.step + the outputs, committed only when all is well: the load
+ * (set_load: the ellipse follows P, Eq. 34, the field is kept; the lattice and strips
+ * laid at the set-up load stay while the contact fits them, and a load whose contact
+ * outgrows them, which the Python field extends, is refused: the field here has the
+ * scene's fixed size), the budget (an internal step costs nx ny WORK_PER_CELL), the
+ * internal steps (max(ceil(h/h_max), the steps of cells_per_step cells at the present
+ * speed), at most the budget's), TransientRollingBody.advance (cf_field_advance) on a
+ * trial copy of the state, the outputs' checks. The words of the pythonfmu FMU. */
+static cf_status transient_step(Inst *I, double t, double h) {
+    cf_core *c = &I->c;
+    field_scratch *sc = I->field;
+    const double *v = c->val;
+    char why[FIELD_TEXT + 640] = "", r[40];
+    int n_captured = c->n_captured;
+    cf_params p = c->p;
+    cf_body b = c->b;
+    const double P = v[R_P];
+    const double work = (double)CF_FIELD_NX * CF_FIELD_NY * CF_WORK_PER_CELL;
+    const double cap = floor(v[R_MAX_WORK] / work); /* max_work <= 1e9: fits an int */
+    double needed = 1.0;
+    double out[N_OUT_ALL];
+    int n = 1;
+    if (P == 0.0) {
+        snprintf(why, sizeof why, P_LIFTOFF);
+    } else if (cap < 1.0) {
+        py_repr(v[R_MAX_WORK], r, sizeof r);
+        snprintf(why, sizeof why, "max_work = %s is invalid: must be >= %g, the work of one "
+                 "internal step on the %d x %d field", r, work, CF_FIELD_NX, CF_FIELD_NY);
+    } else {
+        const cf_tstate *fs = &c->fs;
+        if (P != c->P_law || v[R_MU] != p.mu) cf_model_law_at_load(c, P, &p, &b);
+        /* LayerField.set_load's growth: columns where a1 passes X, strips where a2 passes Y */
+        if (P != c->P_law && (ceil((p.a1 - fs->X) / fs->dx - 1e-12) > 0.0 || b.a2 > fs->Y)) {
+            py_repr(P, r, sizeof r);
+            snprintf(why, sizeof why, "P = %s is invalid: must be at most the load at set-up "
+                     "(its contact, a1 = %g m and a2 = %g m, outgrows the field laid there, X = "
+                     "%g m and Y = %g m: the native FMU's field has the fixed size of %d x %d "
+                     "cells, the pythonfmu FMU's grows)", r, p.a1, b.a2, fs->X, fs->Y,
+                     CF_FIELD_NX, CF_FIELD_NY);
+        }
+    }
+    if (!why[0]) {
+        /* TransientBodyModel.needed_steps: body_model.substeps (uncapped) and
+         * substeps_for(h, cells_per_step) at the state's Vx; inf where h/h_max overflows */
+        const double by_h = fmax(ceil(h / v[R_H_MAX] * (1.0 - CF_SUBSTEP_SLACK)), 1.0);
+        const double by_cells = fmax(1.0, ceil(h * fabs(c->fs.y[0]) /
+                                               (v[R_CELLS_PER_STEP] * c->fs.dx) - 1e-9));
+        needed = fmax(by_h, by_cells);
+        n = needed > cap ? (int)cap : (int)needed;
+        cf_tstate *tr = &sc->trial;
+        *tr = c->fs;
+        cf_field f;
+        cf_model_field(&p, &b, v[R_KB] + v[R_KS], tr, sc, &f);
+        const cf_field_body fb = {p.M, p.Rx, p.A1, p.A2, p.m_slip, v[R_VY_RATIO],
+                                  v[R_SPIN_RATIO], p.creep_full_slip, CF_FIELD_GAMMA,
+                                  CF_FIELD_A21, CF_FIELD_SOLVE_RTOL, CF_FIELD_V_SCALE_FLOOR,
+                                  CF_FIELD_MAX_ITERATIONS};
+        cf_field_body_state st;
+        memcpy(st.y, tr->y, sizeof st.y);
+        st.t = tr->t;
+        memcpy(st.impulse, tr->impulse, sizeof st.impulse);
+        st.theta = tr->theta, st.direction = tr->direction;
+        st.tau_x = tr->tau_x, st.tau_y = tr->tau_y, st.slip = tr->slip;
+        memcpy(st.T, tr->T, sizeof st.T);
+        st.sliding = tr->sliding;
+        st.work = sc->work, st.bytes = sc->bytes;
+        const double loads[4] = {v[R_FX_EX], v[R_FY_EX], v[R_MY_EX], v[R_MZ_EX]};
+        int rc = cf_field_advance(&f, &fb, &st, h, loads, n);
+        if (rc == CF_FIELD_OK) {
+            memcpy(tr->y, st.y, sizeof st.y);
+            tr->t = st.t;
+            memcpy(tr->impulse, st.impulse, sizeof st.impulse);
+            tr->theta = st.theta, tr->direction = st.direction;
+            memcpy(tr->T, st.T, sizeof st.T);
+            tr->sliding = st.sliding != 0;
+            rc = cf_model_field_outputs(&p, &b, &f, tr, sc, out);
+        }
+        int which = 0, k = -1;
+        const int check = rc == CF_FIELD_OK ? cf_body_out_check(out, I->served, &which) : CF_OK;
+        if (rc == CF_FIELD_OK && check == CF_OK) k = field_nonfinite(I, out);
+        if (rc == CF_FIELD_NO_ROOT) { /* TransientRollingBody._solve_scalar's words */
+            snprintf(why, sizeof why, "StageSolveError: no slip velocity satisfies the stage "
+                     "equation (target force %.6g N against mu P = %.6g N)",
+                     p.A2 * v[R_FX_EX] - p.A1 * v[R_MY_EX] / p.Rx, p.mu * p.P);
+        } else if (rc == CF_FIELD_RANGE) {
+            snprintf(why, sizeof why, "the step would roll the traction field's lattice by "
+                     "more than %g columns (the loads or the step drive the body beyond what "
+                     "the field resolves)", CF_FIELD_SHIFT_MAX);
+        } else if (rc != CF_FIELD_OK) {
+            snprintf(why, sizeof why, "FloatingPointError: the traction field's step is not "
+                     "finite (the loads or the step drive it beyond the doubles)");
+        } else if (check != CF_OK) {
+            out_check_text(check, which, out, why, sizeof why);
+        } else if (k >= 0) {
+            py_repr(out[k], r, sizeof r);
+            snprintf(why, sizeof why, "FloatingPointError: output %s = %s is not finite",
+                     out_name(k), r);
+        } else {
+            capture_due(I, tr, &p, &b, &n_captured, why, sizeof why); /* why: its failure */
+        }
+    }
+    if (why[0]) {
+        char rt[40], rh[40];
+        py_repr(t, rt, sizeof rt);
+        py_repr(h, rh, sizeof rh);
+        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s",
+            rt, rh, why);
+        return CF_STATUS_DISCARD;
+    }
+    memcpy(b.out, out, sizeof b.out);
+    c->p = p, c->b = b, c->fs = sc->trial, c->P_law = P, c->n_captured = n_captured;
+    publish(c);
+    c->time = t + h;
+    if (needed > cap) { /* TransientBodyModel.step's cap_note */
+        say(I, CF_STATUS_WARNING, "communication step h = %g s needs more internal steps "
+            "(h_max = %g s, cells_per_step = %g) than max_work = %g allows (each costs %g): "
+            "taken in %d steps of %g s", h, v[R_H_MAX], v[R_CELLS_PER_STEP], v[R_MAX_WORK],
+            work, n, h / n);
+        return CF_STATUS_WARNING;
+    }
+    return CF_STATUS_OK;
+}
+
 /* BodyModel.step + the outputs, committed only when all is well */
 static cf_status fmu_step(Inst *I, double t, double h) {
     cf_core *c = &I->c;
@@ -629,6 +890,7 @@ static cf_status fmu_step(Inst *I, double t, double h) {
         return CF_STATUS_DISCARD;
     }
     if (CF_MODE != MODE_BODY) return other_step(I, t, h);
+    if (CF_TRANSIENT) return transient_step(I, t, h);
     cf_params p = c->p;
     cf_body b = c->b;
     cf_state w = c->s;
@@ -870,6 +1132,17 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
         for (int k = 0; k < 5; k++) I->grid->key[k] = NAN;
         I->grid->strips.ny = 0;
     }
+    if (CF_TRANSIENT) {
+        I->field = (field_scratch *)I->cb.alloc(I->env, 1, sizeof(field_scratch));
+        if (I->field == NULL) {
+            if (I->grid) I->cb.release(I->env, I->grid);
+            I->cb.release(I->env, I->name);
+            cb->release(env, I);
+            say(&probe, CF_STATUS_ERROR, "%s%s: out of memory",
+                api, call_name(&probe, C_INSTANTIATE));
+            return NULL;
+        }
+    }
     I->logging = logging != 0;
     I->served = served_mask();
     start_values(I);
@@ -882,6 +1155,7 @@ void cf_free_instance(cf_inst *I) {
         if (I->states[i]) I->cb.release(I->env, I->states[i]);
     if (I->states) I->cb.release(I->env, I->states);
     if (I->grid) I->cb.release(I->env, I->grid);
+    if (I->field) I->cb.release(I->env, I->field);
     if (I->table) I->cb.release(I->env, I->table);
     I->cb.release(I->env, I->name);
     const cf_callbacks cb = I->cb; /* env may live in the instance: released last */
@@ -1011,8 +1285,9 @@ cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
     if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_INTEGER, C_GET_INTEGER)) return CF_STATUS_ERROR;
-        double x = I->c.var[vr[i]];
-        v[i] = x > 0.5 ? 1 : 0; /* the only Integer: regime, 0 or 1 */
+        const double x = I->c.var[vr[i]];
+        if (CF_VARS[vr[i]].kind == K_OUTPUT) v[i] = x > 0.5 ? 1 : 0; /* regime, 0 or 1 */
+        else v[i] = x >= INT_MIN && x <= INT_MAX ? (int)x : 0; /* nx, ny: set as int */
     }
     return status;
 }
@@ -1029,8 +1304,10 @@ cf_status cf_get_string(cf_inst *I, const unsigned *vr, size_t n, const char **v
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_STRING, C_GET_STRING)) return CF_STATUS_ERROR;
-        char *out = is_scheme((int)vr[i]) ? I->scheme_out : I->method_out;
-        snprintf(out, METHOD_TEXT, "%s", string_text(&I->c, (int)vr[i]));
+        const int f = field_string((int)vr[i]);
+        char *out = f >= 0 ? I->field_out[f] : is_scheme((int)vr[i]) ? I->scheme_out
+                                                                        : I->method_out;
+        snprintf(out, f >= 0 ? FIELD_TEXT : METHOD_TEXT, "%s", string_text(&I->c, (int)vr[i]));
         v[i] = out;
     }
     return CF_STATUS_OK;
@@ -1047,7 +1324,7 @@ static int settable(Inst *I, int i, const char *value) {
     if (v->kind == K_PARAMETER && I->c.built && v->role != R_MU) { /* mu is tunable */
         char now[80];
         if (v->type == T_STRING) snprintf(now, sizeof now, "'%s'", string_text(&I->c, i));
-        else py_repr(I->c.var[i], now, sizeof now);
+        else value_text(v, I->c.var[i], now, sizeof now);
         say(I, CF_STATUS_ERROR, "%s is a fixed parameter and the model is initialised: %s = %s "
             "is ignored (%s stays %s)", v->name, v->name, value, v->name, now);
         return 0;
@@ -1092,15 +1369,35 @@ cf_status cf_set_real(cf_inst *I, const unsigned *vr, size_t n, const double *v)
     return status;
 }
 
+/* the Integers: the output regime (refused) and phase "transient"'s nx and ny (the
+ * Reals' rules: range, an integer, the value the build fixed) */
 cf_status cf_set_integer(cf_inst *I, const unsigned *vr, size_t n, const int *v) {
+    if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
+    cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (vr == NULL || !vr_ok(I, vr[k], T_INTEGER, C_SET_INTEGER)) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[k], T_INTEGER, C_SET_INTEGER)) return CF_STATUS_ERROR;
+        const int i = (int)vr[k];
+        const cf_var *var = &CF_VARS[i];
         char r[24];
-        snprintf(r, sizeof r, "%d", v ? v[k] : 0);
-        settable(I, (int)vr[k], r); /* the only Integer is an output */
-        return CF_STATUS_ERROR;
+        snprintf(r, sizeof r, "%d", v[k]);
+        if (!settable(I, i, r)) {
+            status = CF_STATUS_ERROR;
+            continue;
+        }
+        cf_core *C = &I->c;
+        C->var[i] = (double)v[k];
+        if (var->role < R_COUNT) C->val[var->role] = (double)v[k];
+        const int bad = requirement(var, (double)v[k]) != NULL;
+        mark(C, i, bad);
+        if (bad) {
+            char msg[256];
+            bad_text(var, (double)v[k], msg, sizeof msg);
+            say(I, CF_STATUS_ERROR, "%s; doStep answers %sDiscard until it is corrected", msg,
+                I->api);
+            status = CF_STATUS_ERROR;
+        }
     }
-    return CF_STATUS_OK;
+    return status;
 }
 
 cf_status cf_set_boolean(cf_inst *I, const unsigned *vr, size_t n) {
@@ -1124,18 +1421,25 @@ cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n, const char *co
             continue;
         }
         cf_core *C = &I->c;
-        const int i = (int)vr[k], scheme = is_scheme(i);
-        char *text = scheme ? C->scheme_text : C->method_text;
-        int *choice = scheme ? &C->scheme : &C->method;
-        snprintf(text, METHOD_TEXT, "%s", s);
-        *choice = -1;
-        for (int m = 0; m < (scheme ? N_SCHEMES : N_METHODS); m++)
-            if (strcmp(s, (scheme ? SCHEME_NAMES : METHOD_NAMES)[m]) == 0) *choice = m;
+        const int i = (int)vr[k], scheme = is_scheme(i), f = field_string(i);
+        if (f >= 0) { /* field_file, field_times (longer than the buffer: refused) */
+            snprintf(C->field_text[f], FIELD_TEXT, "%s", s);
+        } else {
+            char *text = scheme ? C->scheme_text : C->method_text;
+            int *choice = scheme ? &C->scheme : &C->method;
+            snprintf(text, METHOD_TEXT, "%s", s);
+            *choice = -1;
+            for (int m = 0; m < (scheme ? N_SCHEMES : N_METHODS); m++)
+                if (strcmp(s, (scheme ? SCHEME_NAMES : METHOD_NAMES)[m]) == 0) *choice = m;
+        }
         /* RollingBody's check, at set-up in Python: here at once, the same words */
-        mark(C, i, *choice < 0);
-        if (*choice < 0) {
+        const int bad = string_bad(C, i);
+        mark(C, i, bad);
+        if (bad) {
+            const char *text = string_text(C, i);
             say(I, CF_STATUS_ERROR, "%s = '%s' is invalid: must be %s; doStep answers %sDiscard "
-                "until it is corrected", CF_VARS[i].name, text, string_choices(i), I->api);
+                "until it is corrected", CF_VARS[i].name, text, string_requirement(C, i),
+                I->api);
             status = CF_STATUS_ERROR;
         }
     }
@@ -1254,6 +1558,11 @@ static void sanitize(cf_core *c) {
     cf_model_constants(&c->p, &c->b);
     c->method_text[METHOD_TEXT - 1] = '\0';
     c->scheme_text[METHOD_TEXT - 1] = '\0';
+    c->field_text[0][FIELD_TEXT - 1] = c->field_text[1][FIELD_TEXT - 1] = '\0';
+    for (int k = 0; k < (CF_TRANSIENT ? CF_FIELD_CAPTURES : 1); k++)
+        for (int i = 0; i < FIELD_N; i++) c->cap[k].slip[i] = c->cap[k].slip[i] != 0;
+    c->fs.sliding = c->fs.sliding != 0;
+    for (int i = 0; i < FIELD_N; i++) c->fs.slip[i] = c->fs.slip[i] != 0;
     c->method = c->scheme = -1; /* the texts decide, as at setString */
     for (int m = 0; m < N_METHODS; m++)
         if (strcmp(c->method_text, METHOD_NAMES[m]) == 0) c->method = m;
@@ -1317,7 +1626,7 @@ static const char *state_problem(const cf_core *c, char *why, size_t n) {
         int bad;
         char one[256];
         if (v->type == T_STRING) {
-            bad = (is_scheme(i) ? c->scheme : c->method) < 0;
+            bad = string_bad(c, i);
         } else {
             if (v->role < R_COUNT && !same_double(c->val[v->role], c->var[i])) {
                 snprintf(why, n, "its values of %s disagree", v->name);
@@ -1362,7 +1671,28 @@ static const char *state_problem(const cf_core *c, char *why, size_t n) {
         const int law_ok = CF_MODE == MODE_RIGID || all_finite(law, CF_MODE == MODE_BODY ? 17 : 13);
         const int jac_ok = !(CF_MODE == MODE_BODY && CF_VECTOR && c->vs.jac_valid) ||
                            (isfinite(c->vs.jac_h) && all_finite(c->vs.J, 36));
-        if (!(body_ok && rigid_ok && law_ok && jac_ok && all_finite(c->b.out, N_OUT))) {
+        const cf_tstate *fs = &c->fs; /* phase "transient": the body and its field */
+        const double lattice[] = {fs->t, fs->T[0], fs->T[1], fs->T[2], fs->theta,
+                                  fs->direction, fs->dx, fs->X, fs->Y};
+        const int field_ok = !CF_TRANSIENT ||
+            (all_finite(fs->y, 4) && all_finite(fs->impulse, 3) && all_finite(lattice, 9) &&
+             fs->dx > 0.0 && fs->X > 0.0 && fs->Y > 0.0 && fs->theta >= 0.0 && fs->theta <= 1.0 &&
+             (fs->direction == 0.0 || fabs(fs->direction) == 1.0) &&
+             all_finite(fs->ys, CF_FIELD_NY) && all_finite(fs->dy, CF_FIELD_NY) &&
+             all_finite(fs->tau_x, FIELD_N) && all_finite(fs->tau_y, FIELD_N) &&
+             all_finite(fs->fo, N_OUT_ALL - N_OUT));
+        double times[CF_FIELD_CAPTURES];
+        const int m = c->field_text[0][0] ? cf_model_field_times(c->field_text[1], times) : 0;
+        int captures_ok = !CF_TRANSIENT || (c->n_captured >= 0 && c->n_captured <= m);
+        for (int q = 0; captures_ok && q < c->n_captured; q++) {
+            const cf_capture *cq = &c->cap[q];
+            const double at[] = {cq->wanted, cq->t, cq->theta, cq->direction, cq->a1, cq->a2,
+                                 cq->p0, cq->mu, cq->P};
+            captures_ok = all_finite(at, 9) && cq->a1 > 0.0 && cq->a2 > 0.0 &&
+                          all_finite(cq->tau_x, FIELD_N) && all_finite(cq->tau_y, FIELD_N);
+        }
+        if (!(body_ok && rigid_ok && law_ok && jac_ok && field_ok && captures_ok &&
+              all_finite(c->b.out, N_OUT))) {
             snprintf(why, n, "its model state cannot be restored (it is not finite)");
             return why;
         }
@@ -1464,16 +1794,31 @@ cf_status cf_set_state(cf_inst *I, const void *state) {
         return CF_STATUS_ERROR;
     }
     if (!live_or_refuse(I, state, C_SET_STATE)) return CF_STATUS_ERROR;
-    cf_core c = *(const cf_core *)state;
-    sanitize(&c);
+    /* checked on a copy (on the heap: a transient field's core is hundreds of kB) */
+    cf_core *c = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core));
+    if (c == NULL) {
+        say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, C_SET_STATE));
+        return CF_STATUS_ERROR;
+    }
+    *c = *(const cf_core *)state;
+    sanitize(c);
     char why[512];
-    if (state_problem(&c, why, sizeof why)) { /* slave._set_fmu_state's words */
+    if (state_problem(c, why, sizeof why)) { /* slave._set_fmu_state's words */
+        I->cb.release(I->env, c);
         say(I, CF_STATUS_ERROR, "the FMU state given to setFMUstate is refused: %s; the "
             "instance's state is unchanged", why);
         return CF_STATUS_ERROR;
     }
-    I->c = c;
+    const int captured = I->c.n_captured;
+    I->c = *c;
+    I->cb.release(I->env, c);
     cf_model_attach_table(I->table, &I->c.p);
+    if (CF_TRANSIENT && I->c.built && I->c.field_text[0][0] && I->c.n_captured != captured) {
+        char err[256]; /* FieldRecorder.set_state: rewritten, best effort */
+        cf_model_field_write(I->c.field_text[0], I->c.cap, I->c.n_captured,
+                             I->c.val[R_KB] + I->c.val[R_KS], &I->c.fs, I->field, err,
+                             sizeof err);
+    }
     if (CF_VECTOR && I->c.built) ensure_grid(I, &I->c.p, &I->c.b, &I->c.p); /* its load's */
     return CF_STATUS_OK;
 }
@@ -1569,19 +1914,25 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
             I->api, call_name(I, C_DESERIALIZE), why);
         return CF_STATUS_ERROR;
     }
-    cf_core c;
-    memcpy(&c, p + 16 + glen + 8, sizeof(cf_core));
-    sanitize(&c);
+    cf_core *c = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core)); /* on the heap */
+    if (c == NULL) {
+        say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, C_DESERIALIZE));
+        return CF_STATUS_ERROR;
+    }
+    memcpy(c, p + 16 + glen + 8, sizeof(cf_core));
+    sanitize(c);
     char problem[512];
-    if (state_problem(&c, problem, sizeof problem)) {
+    if (state_problem(c, problem, sizeof problem)) {
+        I->cb.release(I->env, c);
         say(I, CF_STATUS_ERROR, "%s%s: the bytes are refused: %s",
             I->api, call_name(I, C_DESERIALIZE),
             problem);
         return CF_STATUS_ERROR;
     }
     cf_core *s = state_to_fill(I, state, C_DESERIALIZE);
+    if (s != NULL) *s = *c;
+    I->cb.release(I->env, c);
     if (s == NULL) return CF_STATUS_ERROR;
-    *s = c;
     *state = s;
     return CF_STATUS_OK;
 }

@@ -5,7 +5,17 @@
  * rigid_body mode's step (fmu/rigid_body.py) and the contact mode's analytic directional
  * derivatives. No FMI here and no message: the instance layer (instance.c) checks,
  * words and commits. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#ifdef _WIN32
+#include <direct.h>
+#define make_dir(p) _mkdir(p)
+#else
+#include <sys/stat.h>
+#define make_dir(p) mkdir((p), 0777)
+#endif
 
 #include "model.h"
 
@@ -272,6 +282,174 @@ int cf_model_centre_line(const cf_core *c, const cf_params *law, const cf_body *
     for (int j = 0; j < N; j++) {
         const double sx = vx, sy = vy + phi * line[0][j], mag = hypot(sx, sy);
         if (mag > 0.0) line[1][j] = cap[j] * sx / mag, line[2][j] = cap[j] * sy / mag;
+    }
+    return 0;
+}
+
+/* ---- phase "transient": the body on the thin-layer traction field -------------------- */
+
+/* LayerField.__init__ (transient.py) at the law's load: dx = 2 a1/nx, X = a1, Y = a2, the
+ * strips of _strips("sine", ny, a2): phi at the midpoints of ny intervals of (-pi/2,
+ * pi/2), y = a2 sin(phi), dy = a2 cos(phi) dphi; the field at rest (theta = 0.5, no
+ * rolling yet, tau = 0, no slip) */
+void cf_model_field_lay(const cf_params *law, const cf_body *lb, cf_tstate *fs) {
+    const double dphi = M_PI / CF_FIELD_NY;
+    fs->dx = 2.0 * law->a1 / CF_FIELD_NX;
+    fs->X = law->a1;
+    fs->Y = lb->a2;
+    for (int i = 0; i < CF_FIELD_NY; i++) {
+        const double phi = -0.5 * M_PI + ((double)i + 0.5) * dphi;
+        fs->ys[i] = lb->a2 * sin(phi);
+        fs->dy[i] = lb->a2 * cos(phi) * dphi;
+    }
+    fs->theta = 0.5;
+    fs->direction = 0.0;
+    memset(fs->tau_x, 0, sizeof fs->tau_x);
+    memset(fs->tau_y, 0, sizeof fs->tau_y);
+    memset(fs->slip, 0, sizeof fs->slip);
+}
+
+/* LayerField._update_contact at the law's load: l(y) = a1 sqrt(max(1 - (y/a2)^2, 0))
+ * (Eq. 37), p at x = 0: p0 (1 - (y/a2)^2), the strip widths scaled so that the rule
+ * integrates the pressure to P (sum dy_w (4/3) p0 l^3/a1^2 = P; numpy's dot sums in
+ * another order: the scale agrees to rounding); c0 = mu p0/a1^2 (Eq. 33); k = kb + ks */
+void cf_model_field(const cf_params *law, const cf_body *lb, double k, const cf_tstate *fs,
+                    field_scratch *sc, cf_field *f) {
+    const double a1 = law->a1, a2 = lb->a2, p0 = lb->p0, a1sq = pow(a1, 2.0);
+    double held = 0.0;
+    for (int i = 0; i < CF_FIELD_NY; i++) {
+        const double q = fs->ys[i] / a2, r = 1.0 - q * q;
+        sc->ell[i] = a1 * sqrt(r > 0.0 ? r : 0.0);
+        sc->p_strip[i] = p0 * r;
+        held += fs->dy[i] * ((4.0 / 3.0) * p0 * pow(sc->ell[i], 3.0) / a1sq);
+    }
+    const double scale = held > 0.0 ? law->P / held : 1.0;
+    for (int i = 0; i < CF_FIELD_NY; i++) sc->dy_w[i] = fs->dy[i] * scale;
+    f->ny = CF_FIELD_NY, f->nx = CF_FIELD_NX;
+    f->dx = fs->dx, f->X = fs->X;
+    f->a1 = a1, f->p0 = p0, f->mu = law->mu, f->k = k;
+    f->c0 = law->mu * p0 / a1sq;
+    f->min_speed_fraction = CF_FIELD_MIN_SPEED_FRACTION;
+    f->y = fs->ys, f->ell = sc->ell, f->p_strip = sc->p_strip, f->dy_w = sc->dy_w;
+}
+
+/* TransientRollingBody.outputs(): the kinematics of the state (BodyState.kinematics),
+ * the contact of the last step (T, sliding), the creepages (kinematics.creepage: |Vx|
+ * floored at V_CREEP_FLOOR), the law's a1, a2, p0, and LayerField.summary (adhesion,
+ * slip-area centroid, peak |tau|: cf_field_summary) */
+int cf_model_field_outputs(const cf_params *law, const cf_body *lb, const cf_field *f,
+                           cf_tstate *fs, field_scratch *sc, double out[N_OUT_ALL]) {
+    double s[4];
+    const int rc = cf_field_summary(f, fs->theta, fs->tau_x, fs->tau_y, fs->slip, s, sc->work,
+                                    sc->bytes);
+    const double Vx = fs->y[0], vx = fs->y[1], Vy = fs->y[2], Oz = fs->y[3];
+    const double V = py_max(fabs(Vx), CF_V_CREEP_FLOOR);
+    for (int i = 0; i < N_OUT_ALL; i++) out[i] = 0.0;
+    out[O_VX] = Vx, out[O_VY] = Vy, out[O_OMEGA_Y] = (Vx - vx) / law->Rx, out[O_OMEGA_Z] = Oz;
+    out[O_TX] = fs->T[0], out[O_TY] = fs->T[1], out[O_MZ] = fs->T[2];
+    out[O_VX_SLIP] = vx, out[O_VY_SLIP] = Vy;
+    out[O_XI_X] = vx / V, out[O_XI_Y] = Vy / V, out[O_XI_SP] = Oz / V;
+    out[O_A1] = law->a1, out[O_A2] = lb->a2, out[O_P0] = lb->p0;
+    out[O_REGIME] = fs->sliding ? 1.0 : 0.0;
+    if (rc != CF_FIELD_OK) return rc;
+    out[O_ADHESION] = s[0];
+    out[O_SLIP_CX] = s[1], out[O_SLIP_CY] = s[2], out[O_TAU_PEAK] = s[3];
+    for (int k = 0; k < N_OUT_ALL - N_OUT; k++) fs->fo[k] = out[N_OUT + k];
+    return CF_FIELD_OK;
+}
+
+/* ---- the field file (body_transient.FieldRecorder) ----------------------------------- */
+
+static int by_value(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+int cf_model_field_times(const char *text, double times[CF_FIELD_CAPTURES]) {
+    int n = 0;
+    const char *s = text;
+    for (;;) {
+        while (*s == ' ' || *s == ',' || *s == ';' || *s == '\t' || *s == '\n' || *s == '\r')
+            s++;
+        if (*s == '\0') break;
+        char *end;
+        const double t = strtod(s, &end);
+        if (end == s || !(*end == '\0' || *end == ' ' || *end == ',' || *end == ';' ||
+                          *end == '\t' || *end == '\n' || *end == '\r'))
+            return -1;
+        if (!isfinite(t)) return -2;
+        if (n == CF_FIELD_CAPTURES) return -3;
+        times[n++] = t;
+        s = end;
+    }
+    qsort(times, (size_t)n, sizeof times[0], by_value);
+    return n;
+}
+
+/* the folders of path made (Path.parent.mkdir(parents=True, exist_ok=True)) */
+static void make_parents(const char *path) {
+    char dir[FIELD_TEXT];
+    snprintf(dir, sizeof dir, "%s", path);
+    for (char *q = dir + 1; *q; q++)
+        if (*q == '/' || *q == '\\') {
+            const char keep = *q;
+            *q = '\0';
+            make_dir(dir); /* an existing one: EEXIST, fine; a failure shows at fopen */
+            *q = keep;
+        }
+}
+
+/* LayerField.traction_field / arrays of a capture, one row per node: requested, time, i,
+ * j, x, y, tau_x, tau_y (0 outside the contact), p (Eq. 33, 0 outside), slip, inside,
+ * weight (LayerField._weights at the field's direction: cf_field_weights), as numpy's
+ * savetxt writes them (%.17g, %d) */
+int cf_model_field_write(const char *path, const cf_capture *cap, int n, double k,
+                         const cf_tstate *fs, field_scratch *sc, char *why, size_t why_size) {
+    make_parents(path);
+    errno = 0;
+    FILE *out = fopen(path, "w");
+    if (out == NULL) {
+        snprintf(why, why_size, "%s", strerror(errno));
+        return -1;
+    }
+    fprintf(out, "requested,time,i,j,x,y,tau_x,tau_y,p,slip,inside,weight\n");
+    double x[CF_FIELD_NX];
+    for (int c = 0; c < n; c++) {
+        const cf_capture *q = &cap[c];
+        cf_params law;
+        cf_body lb;
+        memset(&law, 0, sizeof law);
+        memset(&lb, 0, sizeof lb);
+        law.a1 = q->a1, law.mu = q->mu, law.P = q->P, lb.a2 = q->a2, lb.p0 = q->p0;
+        cf_field f;
+        cf_model_field(&law, &lb, k, fs, sc, &f);
+        for (int j = 0; j < CF_FIELD_NX; j++) x[j] = -fs->X + ((double)j + q->theta) * fs->dx;
+        unsigned char *inside = sc->bytes;
+        for (int i = 0; i < CF_FIELD_NY; i++)
+            for (int j = 0; j < CF_FIELD_NX; j++)
+                inside[i * CF_FIELD_NX + j] = fabs(x[j]) < sc->ell[i];
+        double *w = sc->work + 3 * CF_FIELD_NX; /* after the weights' own scratch */
+        if (cf_field_weights(&f, x, inside, q->tau_x, q->tau_y, q->slip, q->direction, w,
+                             sc->work) != CF_FIELD_OK) {
+            fclose(out);
+            snprintf(why, why_size, "the field's weights are not finite");
+            return -1;
+        }
+        for (int i = 0; i < CF_FIELD_NY; i++)
+            for (int j = 0; j < CF_FIELD_NX; j++) {
+                const int e = i * CF_FIELD_NX + j;
+                const double qx = x[j] / q->a1, qy = fs->ys[i] / q->a2;
+                const double r = 1.0 - qx * qx - qy * qy;
+                fprintf(out, "%.17g,%.17g,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%.17g\n",
+                        q->wanted, q->t, i, j, x[j], fs->ys[i], inside[e] ? q->tau_x[e] : 0.0,
+                        inside[e] ? q->tau_y[e] : 0.0, q->p0 * (r > 0.0 ? r : 0.0),
+                        q->slip[e] != 0, inside[e], w[e]);
+            }
+    }
+    const int bad = ferror(out) != 0;
+    if (fclose(out) != 0 || bad) {
+        snprintf(why, why_size, "%s", errno ? strerror(errno) : "the write failed");
+        return -1;
     }
     return 0;
 }

@@ -7,6 +7,7 @@
 #ifndef CF_MODEL_H_INTERNAL
 #define CF_MODEL_H_INTERNAL
 
+#include "field.h"
 #include "stepper.h"
 
 /* ---- the variables (cf_model.h, generated from variables.py) ---------------------- */
@@ -21,11 +22,16 @@ enum {
     R_IZ, R_VY0, R_OMEGA_Z0, R_SPIN_RATIO, R_FY_EX, R_MZ_EX, /* Eqs. (10)-(11) */
     R_SCHEME, /* the integrator's scheme (a String, as R_METHOD) */
     R_MAX_WORK, /* the budget of one doStep (work units) */
+    R_NX, R_NY, R_CELLS_PER_STEP, /* phase "transient": the field's grid and step */
+    R_FIELD_FILE, R_FIELD_TIMES,  /* ... and its CSV file (Strings, as R_METHOD) */
     R_COUNT
 };
 /* the modes (CF_MODE): fmu/body_model.py, contact_model.py, rigid_body.py */
 enum { MODE_BODY, MODE_CONTACT, MODE_RIGID };
-#define R_OUT 1000 /* outputs: R_OUT + the index in cf_body.out */
+#define R_OUT 1000 /* outputs: R_OUT + the index in cf_body.out, or in out_field: */
+/* phase "transient": the field's summary outputs after cf_body.out's (TransientRollingBody
+ * .outputs(): LayerField.summary), held in cf_tstate.fo */
+enum { O_SLIP_CX = N_OUT, O_SLIP_CY, O_TAU_PEAK, N_OUT_ALL };
 
 typedef struct {
     const char *name;
@@ -41,6 +47,40 @@ typedef struct {
 #include "cf_model.h"
 
 #define METHOD_TEXT 64
+
+/* ---- phase "transient": the body on the thin-layer traction field (field.c) ---------- */
+/* The grid is the scene's (CF_FIELD_NX cells along 2 a1, CF_FIELD_NY strips across 2 a2:
+ * cf_model.h, 1 x 1 without the phase), compiled into the core so that an FMU state is
+ * plain data; nx and ny are fixed to it (CF_VARS' fix). */
+#define FIELD_N (CF_FIELD_NX * CF_FIELD_NY)
+typedef struct {
+    double y[4];                  /* TransientRollingBody.y: (Vx, vx, Vy, Omega_z) */
+    double t, impulse[3];         /* its t and impulse */
+    double T[3];                  /* out: (Tx, Ty, Mz) of the last step */
+    int sliding;                  /* out.sliding */
+    /* the field (LayerField): the lattice laid at the set-up load (dx, X), the strips
+     * (ys, dy over Y = a2 there; sine rule), its state */
+    double dx, X, Y;
+    double ys[CF_FIELD_NY], dy[CF_FIELD_NY];
+    double theta, direction;
+    double tau_x[FIELD_N], tau_y[FIELD_N]; /* Pa, ny x nx row major */
+    unsigned char slip[FIELD_N];
+    double fo[N_OUT_ALL - N_OUT]; /* the summary outputs O_SLIP_CX ... */
+} cf_tstate;
+
+/* The field file (body_transient.FieldRecorder): field_file and field_times as set (a
+ * longer text is refused), at most CF_FIELD_CAPTURES times, and a capture of the field at
+ * each time reached (the law's a1, a2, p0, mu, P with it: the file is written from them
+ * whole at each capture and after a restore of an FMU state with other captures) */
+#define FIELD_TEXT (CF_TRANSIENT ? 1024 : 8)
+#define CF_FIELD_CAPTURES 8
+typedef struct {
+    double wanted, t;             /* the requested time and the step's end (s) */
+    double theta, direction;
+    double a1, a2, p0, mu, P;     /* the law then */
+    double tau_x[FIELD_N], tau_y[FIELD_N];
+    unsigned char slip[FIELD_N];
+} cf_capture;
 
 /* ---- the instance's core ------------------------------------------------------------ */
 enum { PH_INSTANTIATED, PH_INIT, PH_STEP, PH_TERMINATED };
@@ -65,6 +105,10 @@ typedef struct {
     cf_params p;
     cf_state s;
     cf_body b;
+    cf_tstate fs;                 /* phase "transient" (1 x 1 without it) */
+    char field_text[2][FIELD_TEXT]; /* field_file, field_times as set */
+    int n_captured;               /* captures of the field file taken ... */
+    cf_capture cap[CF_TRANSIENT ? CF_FIELD_CAPTURES : 1]; /* ... in cap[0 ... n_captured) */
 } cf_core;
 
 /* the spin grid of the vector path and of the contact mode's spin input (layer._Grid of
@@ -84,7 +128,16 @@ typedef struct {
 /* the traction along the contact's centre line y = 0 (the FMI 3.0 FMU's arrays x_centre,
  * tau_x_centre, tau_y_centre): CF_LINE_N cells, on the thin-layer law in body and contact
  * mode (model_description3.has_line; CF_LINE_N, its LINE_N, comes with cf_model.h) */
-#define CF_LINE (CF_MODE != MODE_RIGID && !CF_TABLE)
+#define CF_LINE (CF_MODE != MODE_RIGID && !CF_TABLE && !CF_TRANSIENT)
+
+/* the scratch of the transient field's step (not state): the trial state, the field's
+ * geometry at the law's load, cf_field_advance's work */
+typedef struct {
+    cf_tstate trial;
+    double ell[CF_FIELD_NY], p_strip[CF_FIELD_NY], dy_w[CF_FIELD_NY];
+    double work[CF_FIELD_ADVANCE_WORK(CF_FIELD_NY, CF_FIELD_NX)];
+    unsigned char bytes[CF_FIELD_ADVANCE_BYTES(CF_FIELD_NY, CF_FIELD_NX)];
+} field_scratch;
 
 /* ---- the model's numerics (model.c) -------------------------------------------------- */
 /* the Python integrator's constants into p and b (cf_abi.h) */
@@ -114,5 +167,28 @@ CF_HIDDEN int cf_model_centre_line(const cf_core *c, const cf_params *law, const
 /* an output's row of d(outputs)/d(Vx, Vy, Omega_y, Omega_z) where analytic, else 0 */
 CF_HIDDEN int cf_model_analytic_row(const cf_core *c, int role, int have, double J[3][4],
                                     double row[4]);
+
+/* ---- phase "transient" (model.c) ------------------------------------------------------ */
+/* LayerField.__init__ at the law's load (law, lb: a1, a2): the lattice (dx = 2 a1/nx, X =
+ * a1), the strips (the sine rule over Y = a2), the field at rest (theta 0.5, tau 0) */
+CF_HIDDEN void cf_model_field_lay(const cf_params *law, const cf_body *lb, cf_tstate *fs);
+/* The field's geometry at the law's load (LayerField._update_contact: l(y), p at x = 0,
+ * the scaled strip widths) into sc, the struct f (k = kb + ks) pointing there and into
+ * fs's strips */
+CF_HIDDEN void cf_model_field(const cf_params *law, const cf_body *lb, double k,
+                              const cf_tstate *fs, field_scratch *sc, cf_field *f);
+/* field_times parsed (body_transient.parse_times: numbers separated by spaces, commas or
+ * semicolons, sorted) into times; their count, or -1 not numbers, -2 not finite, -3 more
+ * than CF_FIELD_CAPTURES */
+CF_HIDDEN int cf_model_field_times(const char *text, double times[CF_FIELD_CAPTURES]);
+/* FieldRecorder.write: the captures cap[0 ... n) as the CSV file path (its folders made);
+ * k = kb + ks; fs: the lattice and strips; 0, or -1 with errno's text in why */
+CF_HIDDEN int cf_model_field_write(const char *path, const cf_capture *cap, int n, double k,
+                                   const cf_tstate *fs, field_scratch *sc, char *why,
+                                   size_t why_size);
+/* TransientRollingBody.outputs() into out (N_OUT_ALL: cf_body.out's then the summary's)
+ * and fs->fo; CF_FIELD_OK or field.c's refusal of the summary */
+CF_HIDDEN int cf_model_field_outputs(const cf_params *law, const cf_body *lb, const cf_field *f,
+                                     cf_tstate *fs, field_scratch *sc, double out[N_OUT_ALL]);
 
 #endif
