@@ -29,10 +29,10 @@ from .ranges import within_range
 # us here) or WORK_VECTOR (Vy and/or Omega_z as unknowns, Eqs. 10-11: each stage solve
 # evaluates the law on its spin grid, 0.3 ms compiled, up to 7 ms where a hostile step
 # takes many Newton iterations; 30 ms where Python solves it), the transient field's
-# one nx ny WORK_PER_CELL (0.6 us per cell compiled here, 15 us in Python). Beyond the budget h_max is enlarged
-# for that step (the scheme stays stable; only the accuracy of the slow dynamics
-# drops), so that one doStep cannot take unbounded time: at the default, well under a
-# second on every path (docs/reliability.md, "Worst-case time").
+# one nx ny WORK_PER_CELL (0.6 us per cell compiled here, 15 us in Python). Beyond the
+# budget h_max is enlarged for that step (the scheme stays stable; only the accuracy of
+# the slow dynamics drops), so that one doStep cannot take unbounded time: at the
+# default, well under a second on every path (docs/reliability.md, "Worst-case time").
 MAX_WORK = 10_000
 WORK_SCALAR = 1
 WORK_VECTOR = 200
