@@ -63,7 +63,7 @@ from scipy.optimize import root
 from ._validate import InputError, count, finite, positive
 from .body_state import ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
-from .integrator import V_SCALE_FLOOR, EvalBudget, LoadInput, StageSolveError
+from .integrator import GAMMA, V_SCALE_FLOOR, EvalBudget, LoadInput, StageSolveError
 from .layer import LayerContact, TractionField
 from .native import field as native_field
 from .solvers import SOLVE_RTOL, bracketed_newton
@@ -73,8 +73,8 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 # Alexander's two-stage SDIRK (L-stable, stiffly accurate, order 2; Hairer & Wanner,
-# Solving ODEs II, IV.6): c = (gamma, 1), A = [[gamma, 0], [1 - gamma, gamma]].
-GAMMA = 1.0 - 0.5 * math.sqrt(2.0)
+# Solving ODEs II, IV.6): c = (gamma, 1), A = [[gamma, 0], [1 - gamma, gamma]]; gamma is
+# the rolling body's (integrator.GAMMA).
 A21 = 1.0 - GAMMA
 STAGE_C = (GAMMA, 1.0)
 

@@ -288,7 +288,7 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
     "cf_field_body": (
         "The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and "
         "Omega_z held at the ratios ry, rz to Vx (Lateral); the law's creep_full_slip; SDIRK2's "
-        "gamma and a21 = 1 - gamma; transient.SOLVE_RTOL, V_SCALE_FLOOR (m/s), "
+        "gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s), "
         "MAX_STAGE_ITERATIONS. field.Body.",
         [
             ("M", "double", "kg"),
@@ -358,10 +358,7 @@ CONSTANTS: tuple[tuple[str, str, str, str], ...] = (
     ("CF_WORK_SCALAR", "int", "fmu.body_model.WORK_SCALAR", "(work units per internal step)"),
     ("CF_WORK_VECTOR", "int", "fmu.body_model.WORK_VECTOR", "(Eqs. 10-11: per internal step)"),
     ("CF_WORK_PER_CELL", "int", "fmu.body_model.WORK_PER_CELL", "(the field's step, per cell)"),
-    ("CF_FIELD_GAMMA", "double", "transient.GAMMA", "(the field's SDIRK2)"),
     ("CF_FIELD_A21", "double", "transient.A21", ""),
-    ("CF_FIELD_SOLVE_RTOL", "double", "transient.SOLVE_RTOL", ""),
-    ("CF_FIELD_V_SCALE_FLOOR", "double", "transient.V_SCALE_FLOOR", "(m/s)"),
     ("CF_FIELD_MIN_SPEED_FRACTION", "double", "transient.MIN_SPEED_FRACTION", ""),
     ("CF_FIELD_MAX_ITERATIONS", "int", "transient.MAX_STAGE_ITERATIONS", ""),
 )  # fmt: skip

@@ -37,10 +37,7 @@
 #define CF_WORK_SCALAR 1 /* fmu.body_model.WORK_SCALAR (work units per internal step) */
 #define CF_WORK_VECTOR 200 /* fmu.body_model.WORK_VECTOR (Eqs. 10-11: per internal step) */
 #define CF_WORK_PER_CELL 2 /* fmu.body_model.WORK_PER_CELL (the field's step, per cell) */
-#define CF_FIELD_GAMMA 0.2928932188134524    /* transient.GAMMA (the field's SDIRK2) */
 #define CF_FIELD_A21 0.7071067811865476      /* transient.A21 */
-#define CF_FIELD_SOLVE_RTOL 1e-13            /* transient.SOLVE_RTOL */
-#define CF_FIELD_V_SCALE_FLOOR 1e-09         /* transient.V_SCALE_FLOOR (m/s) */
 #define CF_FIELD_MIN_SPEED_FRACTION 0.1      /* transient.MIN_SPEED_FRACTION */
 #define CF_FIELD_MAX_ITERATIONS 200          /* transient.MAX_STAGE_ITERATIONS */
 
@@ -256,7 +253,7 @@ typedef struct {
 
 /* The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and
  * Omega_z held at the ratios ry, rz to Vx (Lateral); the law's creep_full_slip; SDIRK2's
- * gamma and a21 = 1 - gamma; transient.SOLVE_RTOL, V_SCALE_FLOOR (m/s),
+ * gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s),
  * MAX_STAGE_ITERATIONS. field.Body. */
 typedef struct {
     double M;                /* kg */

@@ -777,8 +777,8 @@ static cf_status transient_step(Inst *I, double t, double h) {
         cf_field f;
         cf_model_field(&p, &b, v[R_KB] + v[R_KS], tr, sc, &f);
         const cf_field_body fb = {p.M, p.Rx, p.A1, p.A2, p.m_slip, v[R_VY_RATIO],
-                                  v[R_SPIN_RATIO], p.creep_full_slip, CF_FIELD_GAMMA,
-                                  CF_FIELD_A21, CF_FIELD_SOLVE_RTOL, CF_FIELD_V_SCALE_FLOOR,
+                                  v[R_SPIN_RATIO], p.creep_full_slip, CF_GAMMA,
+                                  CF_FIELD_A21, CF_SOLVE_RTOL, CF_V_SCALE_FLOOR,
                                   CF_FIELD_MAX_ITERATIONS};
         cf_field_body_state st;
         memcpy(st.y, tr->y, sizeof st.y);
