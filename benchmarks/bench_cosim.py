@@ -57,14 +57,15 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
 DOC = ROOT / "docs" / "performance.md"
 BLOCK = "bench_cosim.py"  # the marker block it writes
-TARGET_RATIO = 1.5  # issue 6: thin-layer body FMU step at most 1.5 x the trivial FMU's
-TARGET_RATE = 1e6  # issue 6: vectorised creep-law evaluations per second
+TARGET_RATIO = 1.5  # target: the thin-layer body FMU's step at most 1.5 x the trivial FMU's
+TARGET_RATE = 1e6  # target: vectorised creep-law evaluations per second
 
 NULL_FMU = '''"""Benchmark FMU without physics: inputs {inputs}, outputs {outputs}.
 
 One state x with dx/dt = u (explicit Euler); every output reads x. With one input and
-one output this is the trivial FMU of issue 6; with a scene's numbers of inputs and
-outputs it is that scene's interface floor (pythonfmu + fmpy exchanging as many values).
+one output this is the trivial FMU (the baseline of the step cost); with a scene's
+numbers of inputs and outputs it is that scene's interface floor (pythonfmu + fmpy
+exchanging as many values).
 """
 
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Real
@@ -118,7 +119,7 @@ def null_fmu(out: Path, n_in: int = 1, n_out: int = 1) -> tuple[Path, tuple, tup
 
 
 def build_trivial(out: Path) -> Path:
-    """The trivial FMU of issue 6: one state x, one input u, dx/dt = u."""
+    """The trivial FMU, the step-cost baseline: one state x, one input u, dx/dt = u."""
     return null_fmu(out)[0]
 
 
