@@ -27,6 +27,15 @@ from contact_fmu.halfspace import (  # noqa: E402
 from contact_fmu.halfspace.validation import KALKER_E3, NUS, kalker_contact  # noqa: E402
 
 G, NU, MU, P = 8.0e10, 0.28, 0.3, 1.0e5
+# Kalker (1990), Table E3, five rows as printed (a/b -> (C11, C22, C23), each for nu = 0,
+# 0.25, 0.5): a transcription apart from the package's table, against its typing errors.
+TABLE_E3_PRINTED = {
+    0.2: ((2.59, 3.37, 4.81), (2.59, 2.63, 2.66), (0.483, 0.603, 0.809)),
+    0.5: ((2.88, 3.62, 4.83), (2.88, 3.01, 3.14), (0.827, 0.929, 1.07)),
+    1.0: ((3.40, 4.12, 5.20), (3.40, 3.67, 3.98), (1.33, 1.47, 1.63)),
+    2.0: ((4.37, 5.10, 6.11), (4.37, 4.90, 5.56), (2.35, 2.62, 2.96)),
+    5.0: ((6.96, 7.78, 8.82), (6.96, 8.14, 9.79), (5.72, 6.63, 7.89)),
+}
 
 
 def xref(f: Fastsim) -> float:
@@ -35,9 +44,11 @@ def xref(f: Fastsim) -> float:
 
 
 def test_kalker_coefficients_at_the_table_nodes_are_kalkers_table_e3():
-    """At the five a/b of the package's copy of Kalker's Table E3 and nu = 0, 0.25, 0.5
-    the interpolation returns the table's entries (rounding only)."""
-    for aob, table in KALKER_E3.items():
+    """At five a/b of Kalker's Table E3 as printed and nu = 0, 0.25, 0.5 the
+    interpolation returns the table's entries (rounding only), and the rows the
+    validation uses (validation.KALKER_E3) are those entries."""
+    assert KALKER_E3 == TABLE_E3_PRINTED
+    for aob, table in TABLE_E3_PRINTED.items():
         for j, nu in enumerate(NUS):
             C = kalker_coefficients(aob, nu)
             np.testing.assert_allclose(C, [table[i][j] for i in range(3)], rtol=1e-12)

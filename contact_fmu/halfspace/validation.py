@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import examples as ex
 from .contact import HalfSpaceContact
+from .fastsim import KALKER_NUS, KALKER_TABLE
 from .hertz import Hertz, Material
 from .influence import Grid
 from .line import LineContact
@@ -27,16 +28,19 @@ from .rolling import ellipse_patch, solve_rolling
 from .transient import HalfSpaceField
 
 COMMAND = "python -m contact_fmu.halfspace.validation"
-# Kalker (1990), Table E3 (CONTACT's m_hertz.f90, linrol): a/b -> (C11, C22, C23) for
-# nu = 0, 0.25, 0.5.
-KALKER_E3 = {
-    0.2: ((2.59, 3.37, 4.81), (2.59, 2.63, 2.66), (0.483, 0.603, 0.809)),
-    0.5: ((2.88, 3.62, 4.83), (2.88, 3.01, 3.14), (0.827, 0.929, 1.07)),
-    1.0: ((3.40, 4.12, 5.20), (3.40, 3.67, 3.98), (1.33, 1.47, 1.63)),
-    2.0: ((4.37, 5.10, 6.11), (4.37, 4.90, 5.56), (2.35, 2.62, 2.96)),
-    5.0: ((6.96, 7.78, 8.82), (6.96, 8.14, 9.79), (5.72, 6.63, 7.89)),
-}
-NUS = (0.0, 0.25, 0.5)
+
+
+def _kalker_row(aob: float) -> tuple[tuple[float, ...], ...]:
+    """Kalker (1990), Table E3 at one of its nodes a/b = 0.1 k or b/a = 0.1 k (fastsim's
+    copy of the table): (C11, C22, C23), each for nu = 0, 0.25, 0.5."""
+    case, g = (0, aob) if aob <= 1.0 else (1, 1.0 / aob)
+    row = KALKER_TABLE[case, round(10.0 * g) - 1]
+    return tuple(tuple(float(c) for c in coefficient) for coefficient in row)
+
+
+# The validated rows: a/b -> (C11, C22, C23) for nu in NUS.
+KALKER_E3 = {aob: _kalker_row(aob) for aob in (0.2, 0.5, 1.0, 2.0, 5.0)}
+NUS = KALKER_NUS
 # The convergence cases: elements per side.
 GRIDS = (16, 32, 64, 128)
 # The spin case: ellipse a/b = 2 (7 x 3.5 mm, steel, 50 kN), eta = -6e-4, phi = 0.6
