@@ -152,13 +152,13 @@ def made_by(command: str, how: str = "") -> str:
 # --- marker blocks --------------------------------------------------------------------
 
 
-def blocks(text: str) -> dict[str, str]:
-    """The marker blocks of a page: name -> the text between its two markers. A marker
-    without its partner, a block inside another or a name used twice is an error."""
-    found: dict[str, str] = {}
+def block_spans(text: str) -> dict[str, tuple[int, int]]:
+    """The marker blocks of a page: name -> (line of its table marker, line of its end
+    marker), counted from 0. A marker without its partner, a block inside another or a
+    name used twice is an error."""
+    found: dict[str, tuple[int, int]] = {}
     open_name, start = None, 0
-    lines = text.split("\n")
-    for i, line in enumerate(lines):
+    for i, line in enumerate(text.split("\n")):
         m = MARKER.match(line)
         if not m:
             continue
@@ -168,15 +168,22 @@ def blocks(text: str) -> dict[str, str]:
                 raise ValueError(f"marker block {name!r} opens inside {open_name!r}")
             if name in found:
                 raise ValueError(f"marker block {name!r} appears twice")
-            open_name, start = name, i + 1
+            open_name, start = name, i
         else:
             if name != open_name:
                 raise ValueError(f"end marker of {name!r} without its table marker")
-            found[name] = "\n".join(lines[start:i])
+            found[name] = (start, i)
             open_name = None
     if open_name is not None:
         raise ValueError(f"marker block {open_name!r} has no end marker")
     return found
+
+
+def blocks(text: str) -> dict[str, str]:
+    """The marker blocks of a page: name -> the text between its two markers
+    (``block_spans``' errors)."""
+    lines = text.split("\n")
+    return {name: "\n".join(lines[a + 1 : b]) for name, (a, b) in block_spans(text).items()}
 
 
 def replace_block(text: str, name: str, body: str) -> str:

@@ -10,6 +10,7 @@ the docs, not for the tests.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import re
 import subprocess
@@ -54,30 +55,16 @@ def _listing() -> list[tuple[str, bool, tuple[str, ...]]]:
 
 
 def _doc_blocks(text: str) -> dict[str, tuple[int, int, str]]:
-    """name -> (first line, last line, text) of each marker block; a marker without its
-    partner or a name twice fails."""
-    found: dict[str, tuple[int, int, str]] = {}
+    """name -> (first line, last line, text) of each marker block (harness.block_spans,
+    which refuses a marker without its partner or a name twice)."""
     lines = text.split("\n")
-    open_at: tuple[str, int] | None = None
-    for i, line in enumerate(lines):
-        m = MARKER.match(line)
-        if not m:
-            continue
-        name, kind = m.groups()
-        if kind == "table":
-            assert open_at is None, f"block {name!r} opens inside {open_at}"
-            assert name not in found, f"block {name!r} twice"
-            open_at = (name, i)
-        else:
-            assert open_at is not None and open_at[0] == name, f"stray end marker {name!r}"
-            found[name] = (open_at[1], i, "\n".join(lines[open_at[1] + 1 : i]))
-            open_at = None
-    assert open_at is None, f"block {open_at} has no end marker"
-    return found
+    spans = _load_harness().block_spans(text)
+    return {name: (a, b, "\n".join(lines[a + 1 : b])) for name, (a, b) in spans.items()}
 
 
+@functools.cache
 def _load_harness():
-    """benchmarks/harness.py as a module of its own (no change to sys.path)."""
+    """benchmarks/harness.py as a module of its own (no change to sys.path), loaded once."""
     spec = importlib.util.spec_from_file_location(
         "bench_harness", ROOT / "benchmarks" / "harness.py"
     )
