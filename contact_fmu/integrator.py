@@ -642,7 +642,8 @@ class RollingBody(BodyState, EvalBudget):
                 return m * (U - u_hat) / hg + self._forces(states(U))[:, self._act] - target
 
             # from the explicit part; where that fails (a start beyond full slip, where
-            # the law is flat), from its creepages pulled back, then without slip
+            # the law is flat), from its creepages pulled back, then without slip (stepper.c's
+            # sdirk_vstep tries the same)
             starts = (
                 lambda u_hat=u_hat: u_hat,
                 lambda u_hat=u_hat, Vb=Vb, y_hat=y_hat: self._creep_start(u_hat, Vb, y_hat),
@@ -650,7 +651,7 @@ class RollingBody(BodyState, EvalBudget):
                     self._creep_start(u_hat, Vb, y_hat)
                 ),
             )
-            u = _newton_starts(residuals, starts, self._scale(Vb))
+            u, _ = _newton_from(residuals, starts, self._scale(Vb), None, None)
             y = states(u[None, :])[0]
             if i == 0:
                 y_hat = self.y + (1 - GAMMA) / GAMMA * (y - self.y)
@@ -672,30 +673,20 @@ def _shift(f_df: tuple[float, float], target: float) -> tuple[float, float]:
     return f_df[0] - target, f_df[1]
 
 
-def _newton_from(residuals, starts, scale, jacobian, memo) -> tuple[FloatArray, dict]:
+def _newton_from(residuals, starts, scale, jacobian, memo) -> tuple[FloatArray, dict | None]:
     """solvers.newton from each start (a function forming it, called only when the one
     before has failed) in turn until one converges: the first with the kept matrix
-    ``memo``, the others with a new one; scipy's hybrid method only from the last (the
-    compiled step tries the same Newton starts before it leaves a step to this code).
-    Returns u and the memo of the solve that converged; StageSolveError if none does."""
+    ``memo``, the others with a new one (memo None: no matrix kept at all, Newton's own
+    at every iterate, as the SDIRK2 stages solve); scipy's hybrid method only from the
+    last (the compiled step tries the same Newton starts before it leaves a step to
+    this code). Returns u and the memo of the solve that converged; StageSolveError if
+    none does."""
     for start in starts[:-1]:
         try:
             return newton(residuals, start(), scale, jacobian, memo, hybrid=False), memo
         except StageSolveError:
-            memo = {}
+            memo = None if memo is None else {}
     return newton(residuals, starts[-1](), scale, jacobian, memo), memo
-
-
-def _newton_starts(residuals, starts, scale) -> FloatArray:
-    """solvers.newton (no kept Jacobian) from each start (a function forming it) in turn
-    until one converges; scipy's hybrid method only from the last; StageSolveError if
-    none does. The SDIRK2 stages (stepper.c's sdirk_vstep tries the same starts)."""
-    for start in starts[:-1]:
-        try:
-            return newton(residuals, start(), scale, hybrid=False)
-        except StageSolveError:
-            pass
-    return newton(residuals, starts[-1](), scale)
 
 
 def _signed(V: float) -> float:
