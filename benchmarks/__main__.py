@@ -106,6 +106,7 @@ BENCHMARKS = [
         "halfspace_fmu", "bench_halfspace_fmu",
         "half-space FMUs against thin-layer twins (JSON; docs/halfspace.md)",
         quick=("--points", "5", "--steps", "5", "--repeats", "1"),
+        blocks=("bench_halfspace_fmu.py", "bench_halfspace_fmu.py step"),
     ),
     Benchmark(
         "halfspace", "bench_halfspace", "steady-rolling half-space solver, 16 .. 128 per side",
@@ -123,12 +124,14 @@ BENCHMARKS = [
     Benchmark(
         "halfspace_fastsim", "bench_halfspace_fastsim",
         "FASTSIM against the exact solver (docs/halfspace.md)",
-        quick=("--grid", "16", "--points", "2", "--repeat", "1"), cheap=True,
+        quick=("--grid", "16", "--points", "2", "--repeat", "1"),
+        blocks=("bench_halfspace_fastsim.py",), cheap=True,
     ),
     Benchmark(
         "halfspace_transient", "bench_halfspace_transient",
         "transient half-space field and body (docs/halfspace.md)",
-        quick=("--grids", "8", "--skip-coupled"),
+        args=("--skip-coupled",), quick=("--grids", "8", "--skip-coupled"),
+        blocks=("bench_halfspace_transient.py",),
     ),
     Benchmark(
         "report", "",
