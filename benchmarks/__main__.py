@@ -104,7 +104,7 @@ BENCHMARKS = [
     ),
     Benchmark(
         "halfspace_fmu", "bench_halfspace_fmu",
-        "half-space FMUs against thin-layer twins (JSON; docs/halfspace.md)",
+        "the rail table's error; half-space FMUs against thin-layer twins",
         quick=("--points", "5", "--steps", "5", "--repeats", "1"),
         blocks=("bench_halfspace_fmu.py", "bench_halfspace_fmu.py step"),
     ),
@@ -123,13 +123,13 @@ BENCHMARKS = [
     ),
     Benchmark(
         "halfspace_fastsim", "bench_halfspace_fastsim",
-        "FASTSIM against the exact solver (docs/halfspace.md)",
+        "FASTSIM against the exact solver: accuracy and cost",
         quick=("--grid", "16", "--points", "2", "--repeat", "1"),
         blocks=("bench_halfspace_fastsim.py",), cheap=True,
     ),
     Benchmark(
         "halfspace_transient", "bench_halfspace_transient",
-        "transient half-space field and body (docs/halfspace.md)",
+        "transient half-space field and body: cost per step, durations",
         args=("--skip-coupled",), quick=("--grids", "8", "--skip-coupled"),
         blocks=("bench_halfspace_transient.py",),
     ),

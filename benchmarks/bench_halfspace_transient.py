@@ -3,7 +3,7 @@
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace_transient.py \
         [--grids 16 24 32] [--skip-coupled] [--json out.json] [--write]
 
-Prints markdown tables (docs/halfspace.md, "Transient rolling"):
+Prints markdown tables (docs/halfspace.md, "Transient rolling"; the first is its block):
 
 1. cost: steps of one element at constant creepage (the field alone) and the body on
    the field (railway wheel, Fx_ex with My_ex = -Fx_ex Rx), per grid: ms per step,
