@@ -37,6 +37,7 @@ REPORT_SECTIONS = (PERF_WP_SECTION, PERF_STIFF_SECTION)
 WRITTEN_SECTIONS = {"performance.md": REPORT_SECTIONS, "accuracy.md": (ACCURACY_WP, ACCURACY_STIFF)}
 # a table's header that names a time or a rate: a measurement of the machine, which only
 # a benchmark (or the report) may write
+SEPARATOR = re.compile(r"^\|(:?-+:?\|)+$")
 TIMED_HEADER = re.compile(r"\((s|ms|us|ns)\)|\b(ms|us|ns)\b|seconds|\bwall\b|per second|steps/s")
 # marker blocks written by the package itself, not by a benchmark: the table of
 # docs/variables.md (python -m contact_fmu.fmu.variables --write-docs)
@@ -116,13 +117,18 @@ def _unblocked_rows(page: Path, row) -> list[str]:
     spans = [(a, b) for a, b, _ in _doc_blocks(text).values()]
     written = WRITTEN_SECTIONS.get(page.name, ())
     section, header, found = "", "", []
-    for i, line in enumerate(text.split("\n")):
+    lines = text.split("\n")
+    for i, line in enumerate(lines):
         if line.startswith("## "):
             section = line
         if not line.startswith("|"):
             header = ""
             continue
-        header = header or line
+        if not header:  # a table starts at a row followed by its separator row
+            following = lines[i + 1] if i + 1 < len(lines) else ""
+            if not SEPARATOR.match(following.replace(" ", "")):
+                continue  # a line of prose that starts with |x|
+            header = line
         if section in written or any(a < i < b for a, b in spans):
             continue
         if row(line, header):
@@ -146,7 +152,7 @@ def test_the_timed_table_check_sees_a_pasted_table(tmp_path):
     block is not, nor is a table without times."""
     page = tmp_path / "page.md"
     table = "| grid | solve (ms) |\n|---|---|\n| 16 | 1.0 |\n"
-    page.write_text("# P\n\n" + table + "\n| a | b |\n|---|---|\n| 1 | 2 |\n")
+    page.write_text("# P\n\n" + table + "\n| a | b |\n|---|---|\n| 1 | 2 |\n\n|v| (s) is prose\n")
     rows = _unblocked_rows(page, lambda line, header: bool(TIMED_HEADER.search(header)))
     assert [r.split(": ", 1)[1] for r in rows] == ["| grid | solve (ms) |", "|---|---|",
                                                    "| 16 | 1.0 |"]  # fmt: skip
