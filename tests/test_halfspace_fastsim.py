@@ -205,7 +205,7 @@ def test_fastsim_beside_the_exact_solver():
     agree within the exact solver's own coefficient error on this grid (about 1.5 %,
     docs/halfspace.md); over the creep curves FASTSIM with the parabolic bound is within
     6 % of mu P for pure creepage and 13 % for pure spin (the theory's difference
-    measured on 66 x 66: 3.7 % and 9.6 %, benchmarks/bench_halfspace_fastsim.py, plus
+    measured on 66 x 66: 3.6 % and 9.6 %, benchmarks/bench_halfspace_fastsim.py, plus
     the exact solver's discretisation error on 34 x 34, 1-1.5 % for creepage and up to
     3 % with spin); it is not the exact theory: the spin curve is at least 5 % off."""
     c = wheel_on_rail(n=(34, 34))
