@@ -5,6 +5,7 @@ mx x my elements with one rule for both axes, forces prescribed instead of creep
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -38,20 +39,42 @@ def test_ellipse_and_curvatures_reproduce_hertz():
 
 
 def test_grid_of_mx_by_my_elements():
-    """n = (mx, my): the ellipse's bounding box spans (mx - 2) x (my - 2) elements, one
-    element to spare on every side, its edges on element edges; the contact touches
-    the second and the last but one element in each direction."""
+    """n = (mx, my): the ellipse's bounding box spans (mx - 2) x my elements, one
+    element to spare on each side along x (the rolling direction) and none along y,
+    its edges on element edges; the contact touches the second and the last but one
+    column and the first and the last row."""
     c = HalfSpaceContact.from_ellipse(6e-3, 4e-3, STEEL, STEEL, 0.3, P=1e5, n=(48, 44))
     g = c.patch.grid
     assert (g.nx, g.ny) == (48, 44)
     assert g.dx == pytest.approx(2 * 6e-3 / 46, rel=1e-12)
-    assert g.dy == pytest.approx(2 * 4e-3 / 42, rel=1e-12)
-    assert (g.x0, g.y0) == pytest.approx((-6e-3 - g.dx, -4e-3 - g.dy), rel=1e-12)
+    assert g.dy == pytest.approx(2 * 4e-3 / 44, rel=1e-12)
+    assert (g.x0, g.y0) == pytest.approx((-6e-3 - g.dx, -4e-3), rel=1e-12)
     C = c.patch.contact
     cols, rows = np.flatnonzero(C.any(axis=0)), np.flatnonzero(C.any(axis=1))
-    assert (cols[0], cols[-1], rows[0], rows[-1]) == (1, 46, 1, 42)
+    assert (cols[0], cols[-1], rows[0], rows[-1]) == (1, 46, 0, 43)
     # the load invariant on this grid
     assert float(c.patch.p.sum() * g.area) == pytest.approx(1e5, rel=1e-12)
+
+
+def test_an_int_grid_is_the_pair_grid():
+    """One grid rule: n = 32 is n = (32, 32), the same grid (dx = 2 a1/30, dy = 2 a2/32)
+    and, through the same operations, the same solution bit for bit (combined
+    creepage and spin, partial slip), the same linear theory and the same Richardson
+    estimate."""
+    w = wheel_on_rail()
+    xref = w.mu * w.P / (w.elastic.G * w.c**2)
+    a = (0.1 * xref, 0.1 * xref, 0.15 * xref / w.c)
+    one, two = wheel_on_rail(n=32), wheel_on_rail(n=(32, 32))
+    assert one.patch.grid == two.patch.grid
+    g = one.patch.grid
+    assert (g.dx, g.dy) == pytest.approx((2 * w.a1 / 30, 2 * w.a2 / 32), rel=1e-12)
+    s1, s2 = one.solve(*a, richardson=True), two.solve(*a, richardson=True)
+    assert 0.3 < s1.adhesion_fraction < 0.8  # partial slip: the Newton path, not linear
+    assert np.array_equal(s1.tau, s2.tau)
+    assert (s1.Tx, s1.Ty, s1.Mz, s1.error, s1.extrapolated) == (
+        s2.Tx, s2.Ty, s2.Mz, s2.error, s2.extrapolated
+    )  # fmt: skip
+    assert one.creep_coefficients() == two.creep_coefficients()
 
 
 def test_creepages_for_prescribed_forces():
@@ -136,45 +159,65 @@ def test_transient_rolling_at_a_held_force():
 def test_richardson_error_estimate_for_a_spin_case():
     """solve(richardson=True): the combined lateral creepage and spin case of a railway user
     (ellipse a/b = 2, 7 x 3.5 mm, steel, 50 kN, mu = 0.3, eta = -6e-4, phi = 0.6 rad/m)
-    converges at first order with a large constant (Ty/(mu P) 0.575, 0.594, 0.603 on
-    34, 66, 130 per side, docs/validation.md). The coarse grid's elements are exactly
-    twice as large (richardson_grids: ratio 2 for even grids), so that the first-order
-    estimate (F(2h) - F(h)) on 66 x 66 is within 10 % of the true error (measured 3.5 %,
-    against the extrapolation from 130) and the extrapolated value at least ten times
-    closer than the 66 x 66 value (measured 29 times)."""
+    converges with a large constant at an order p of 1.12-1.24 (the successive
+    doublings 32..256, docs/halfspace.md "Spin and the grid"). For F(h) = F + C h^p the
+    first-order estimate F(2h) - F(h) is 2^p - 1 times the true error and the
+    extrapolated value is off by (2 - 2^p) of it: for p in [1, 1.35], 1 to 1.55 times
+    and at most 0.55 of it. Measured on 66 x 66 against the extrapolation from 130 x 130:
+    1.21 and 0.21."""
     steel = Material(210e9, 0.28)
     cases = []
     for n in (66, 130):
-        c = HalfSpaceContact.from_ellipse(7e-3, 3.5e-3, steel, steel, 0.3, P=5e4, n=(n, n))
+        c = HalfSpaceContact.from_ellipse(7e-3, 3.5e-3, steel, steel, 0.3, P=5e4, n=n)
         assert c.richardson_grids()[2] == 2.0
         cases.append(c.solve(0.0, -6e-4, 0.6, richardson=True))
     s66, s130 = cases
     best = s130.extrapolated[1]
     true_error = s66.Ty - best
-    assert s66.error[1] == pytest.approx(true_error, rel=0.10)
-    assert abs(s66.extrapolated[1] - best) < 0.1 * abs(true_error)
+    assert 1.0 <= s66.error[1] / true_error <= 1.55
+    assert abs(s66.extrapolated[1] - best) <= 0.55 * abs(true_error)
     with pytest.raises(InputError, match="richardson"):
         wheel_on_rail(n=12).solve(0.0, richardson=True)
 
 
 def test_richardson_on_combined_creepage_with_spin():
-    """Wheel on rail, xi = eta = 0.2 mu P/(G c^2), phi = 0.3 mu P/(G c^3): the
-    richardson estimate of Tx and Ty on 66 x 66 (exactly halved grid) is within 25 %
-    of the true error (measured 6 % and 17 %, against the extrapolation from 130) and
-    the extrapolated forces at least three times closer than the 66 x 66 ones (measured
-    16 and 5.7 times). An odd box halves to the rounded-up count, its ratio the mean of
-    the two directions' (within 1/b of 2); an even int n (box n - 2 by n) halves
-    exactly too."""
-    c66, c130 = wheel_on_rail(n=(66, 66)), wheel_on_rail(n=(130, 130))
+    """Wheel on rail, xi = eta = 0.2 mu P/(G c^2), phi = 0.3 mu P/(G c^3), on 66 x 66.
+
+    The coarse solve is on exactly twice the element size over the same ellipse
+    (n = (34, 33): dx and dy doubled, the box's edges the same), and the estimate is
+    that solve's forces minus the fine ones (r = 2, first order). Tx (error 0.3 % of mu
+    P, order 1.06 from 66, 130, 258): for p in [0.81, 1.17] the estimate is within
+    |2^p - 2| <= 25 % of the true error and the extrapolation at least four times closer
+    (asserted: three); measured against the extrapolation from 130 x 130: 0.3 % and
+    more than 100 times. Ty's error (0.11 % of mu P) is the size of the grid-cut jitter
+    of the estimate (-0.11, -0.17, -0.12 % of mu P on (66, 64), (66, 66), (66, 68)), so
+    only what holds for any p in (0, 1.58) is asserted: the extrapolation is closer than
+    the fine value (measured 1.75 times). An odd box halves to the rounded-up count, its
+    ratio the mean of the two directions' (within 1/b of 2)."""
+    c66, c130 = wheel_on_rail(n=66), wheel_on_rail(n=130)
     xref = c66.mu * c66.P / (c66.elastic.G * c66.c**2)
     a = (0.2 * xref, 0.2 * xref, 0.3 * xref / c66.c)
     s66, s130 = c66.solve(*a, richardson=True), c130.solve(*a, richardson=True)
-    for k, F in ((0, s66.Tx), (1, s66.Ty)):
-        best = s130.extrapolated[k]
-        assert s66.error[k] == pytest.approx(F - best, rel=0.25)
-        assert abs(s66.extrapolated[k] - best) < abs(F - best) / 3.0
-    boxes, coarse, r = wheel_on_rail(n=(35, 20)).richardson_grids()
-    assert (boxes, coarse) == ((33, 18), (17, 9))
+    # the grid the estimate comes from: twice the element size, the same ellipse's box
+    (bx, by), (cx, cy), r = c66.richardson_grids()
+    assert ((bx, by), (cx, cy), r) == ((64, 66), (32, 33), 2.0)
+    fine, coarse = c66.patch.grid, replace(c66, n=(cx + 2, cy)).patch.grid
+    assert (coarse.dx, coarse.dy) == pytest.approx((2 * fine.dx, 2 * fine.dy), rel=1e-12)
+    assert (coarse.x0 + coarse.dx, coarse.y0) == pytest.approx(
+        (fine.x0 + fine.dx, fine.y0), rel=1e-12
+    )
+    sc = replace(c66, n=(cx + 2, cy)).solve(*a)
+    F66, Fc = np.array([s66.Tx, s66.Ty, s66.Mz]), np.array([sc.Tx, sc.Ty, sc.Mz])
+    assert s66.error == pytest.approx(tuple(Fc - F66), rel=1e-12)
+    # Tx: first order with the measured order
+    best = s130.extrapolated[0]
+    assert s66.error[0] == pytest.approx(s66.Tx - best, rel=0.25)
+    assert abs(s66.extrapolated[0] - best) < abs(s66.Tx - best) / 3.0
+    # Ty: an improvement, within the jitter
+    best = s130.extrapolated[1]
+    assert abs(s66.extrapolated[1] - best) < abs(s66.Ty - best)
+    boxes, coarse_box, r = wheel_on_rail(n=(35, 20)).richardson_grids()
+    assert (boxes, coarse_box) == ((33, 20), (17, 10))
     assert r == pytest.approx((33 / 17 + 2.0) / 2, rel=1e-15)
     assert wheel_on_rail(n=32).richardson_grids() == ((30, 32), (15, 16), 2.0)
 
@@ -182,7 +225,7 @@ def test_richardson_on_combined_creepage_with_spin():
 def test_default_tolerance_at_small_creepages():
     """The default Newton tolerance (1e-7 of max mu p) gives the forces at small
     creepages (1e-6 and 1e-7, lateral and spin) to 0.1 % of themselves: measured at most
-    1.1e-5 relative against solves to 1e-13, on 32 x 32 and 24 x 24."""
+    2.6e-5 (32 x 32) and 9.4e-6 (24 x 24) relative against solves to 1e-13."""
     for n in (32, (24, 24)):
         c = wheel_on_rail(n=n)
         for xi, eta, phi in ((1e-6, 0, 0), (0, 1e-6, 0), (1e-7, 0, 0), (1e-6, 1e-6, 2e-3)):

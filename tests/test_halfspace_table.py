@@ -196,6 +196,19 @@ def test_npz_round_trip_is_exact(table, tmp_path):
     assert loaded.creep_full_slip == table.creep_full_slip
 
 
+def test_table_of_the_pair_grid_is_the_int_grids(table, tmp_path):
+    """One grid rule: the table of n = (12, 12) is that of n = 12 (the same grid, the
+    same solves: equal bit for bit, here on 3 x 3 x 3 nodes), and a table keeps the
+    pair grid (mx, my) through its .npz file."""
+    small = build_table(wheel_on_rail(n=GRID), nodes=(3, 3, 3))
+    pair = build_table(wheel_on_rail(n=(GRID, GRID)), nodes=(3, 3, 3))
+    assert np.array_equal(small.data.values, pair.data.values)
+    assert np.array_equal(small.data.onset, pair.data.onset)
+    loaded = CreepTable.load(pair.save(tmp_path / "pair.npz"))
+    assert loaded.data.n == (GRID, GRID) and table.data.n == GRID
+    assert np.array_equal(loaded.data.values, pair.data.values)
+
+
 def test_with_load_uses_hertz_similarity(contact, table):
     """Kalker's similarity: for layer-free Hertz contact T/(mu P) depends on the
     creepages only through xi G c^2/(mu P); a table at one load gives another load's

@@ -92,12 +92,10 @@ class HalfSpaceContact:
     coupling B(p) of the Appendix (zero for quasi-identical bodies; it breaks the odd
     symmetry of T).
 
-    n: the grid. ``(mx, my)``: mx elements along x and my along y over the potential
-    contact area, the Hertz ellipse's bounding box with one element to spare on every
-    side (the box is (mx - 2) x (my - 2) elements, dx = 2 a1/(mx - 2), dy = 2 a2/(my -
-    2); CONTACT's mx x my over its potential contact area). An int n: an n x n grid
-    with one element to spare along x only (dx = 2 a1/(n - 2), dy = 2 a2/n), the grid
-    of the creep-force tables and the scenes.
+    n: the grid, ``(mx, my)``: mx elements along x and my along y over the potential
+    contact area, the Hertz ellipse's bounding box with one element to spare on each
+    side along x (the rolling direction) and none along y (``rolling.ellipse_patch``):
+    dx = 2 a1/(mx - 2), dy = 2 a2/my. An int n is the grid (n, n).
 
     Other ways in: ``from_ellipse`` (semi-axes and the load or the approach),
     ``from_curvatures`` (the relative curvatures A, B).
@@ -229,7 +227,6 @@ class HalfSpaceContact:
             kappa=e.kappa if self.coupling else 0.0,
             P=self.P,
             ny=my,
-            spare_y=isinstance(self.n, tuple),
         )
         return patch
 
@@ -254,11 +251,10 @@ class HalfSpaceContact:
 
         richardson: also solve on the grid of twice the element size over the same
         ellipse (``richardson_grids``: its box of half the elements; ratio r = 2 exactly
-        for grids of an even number of elements per side) and return, with this grid's
-        solution, the error estimate (F(r h) - F(h))/(r - 1) of F(h) and the extrapolated
-        forces F(h) minus it (``error``, ``extrapolated`` of RollingSolution; the scheme
-        is first order, docs/validation.md). The coarse solve costs about a quarter of
-        the fine one."""
+        when mx and my are even) and return, with this grid's solution, the error
+        estimate (F(r h) - F(h))/(r - 1) of F(h) and the extrapolated forces F(h) minus
+        it (``error``, ``extrapolated`` of RollingSolution; the scheme is first order,
+        docs/validation.md). The coarse solve costs about a quarter of the fine one."""
         phi = finite("phi", phi)
         if 0.0 < abs(phi) * self.c < SPIN_PLAUSIBLE:
             unit_warning("phi", phi, "rad/mm (here 1/m)", flag("check_units", check_units))
@@ -266,7 +262,7 @@ class HalfSpaceContact:
         if not flag("richardson", richardson):
             return sol
         (bx, by), (cx, cy), r = self.richardson_grids()
-        coarse = replace(self, n=(cx + 2, cy + 2)).solve(xi, eta, phi, tol=tol, check_units=False)
+        coarse = replace(self, n=(cx + 2, cy)).solve(xi, eta, phi, tol=tol, check_units=False)
         fine = np.array([sol.Tx, sol.Ty, sol.Mz])
         # first order: F(h) = F + C h, so F(h) - F = (F(r h) - F(h))/(r - 1)
         err = (np.array([coarse.Tx, coarse.Ty, coarse.Mz]) - fine) / (r - 1.0)
@@ -292,18 +288,20 @@ class HalfSpaceContact:
         return Fastsim.of(self, bound=bound, C=C).solve(xi, eta, phi, check_units=check_units)
 
     def richardson_grids(self) -> tuple[tuple[int, int], tuple[int, int], float]:
-        """The grids of ``solve(richardson=True)``: the elements (bx, by) of this grid's
-        bounding box of the ellipse (an int n: (n - 2, n)), those (cx, cy) of the coarse
-        grid's (half of them, rounded up; the coarse grid spares one element on every
-        side, ``n=(cx + 2, cy + 2)``, for every form of this grid) and the ratio r of the
-        element sizes, coarse over fine: exactly 2 for an even box (every even n),
-        (bx/cx + by/cy)/2 otherwise (within 1/b of 2)."""
+        """The grids of ``solve(richardson=True)``: the elements (bx, by) = (mx - 2, my)
+        of this grid's bounding box of the ellipse, those (cx, cy) of the coarse grid's
+        (half of them, rounded up; the coarse grid is ``n=(cx + 2, cy)``) and the ratio r
+        of the element sizes, coarse over fine: exactly 2 for an even box (mx and my
+        even), (bx/cx + by/cy)/2 otherwise (within 1/b of 2)."""
         mx, my = self.elements
-        # the box of an int n spans all n rows (no spare element in y)
-        bx, by = mx - 2, my - 2 if isinstance(self.n, tuple) else my
+        bx, by = mx - 2, my
         cx, cy = (bx + 1) // 2, (by + 1) // 2
-        if min(cx, cy) + 2 < MIN_N:
-            raise InputError("n", self.n, f">= {2 * MIN_N - 2} per side for richardson=True")
+        if cx + 2 < MIN_N or cy < MIN_N:
+            raise InputError(
+                "n",
+                self.n,
+                f"(mx, my) with mx >= {2 * MIN_N - 3}, my >= {2 * MIN_N - 1} for richardson=True",
+            )
         return (bx, by), (cx, cy), 0.5 * (bx / cx + by / cy)
 
     def traction(self, vx: float, vy: float, phi: float, Vx: float) -> RollingSolution:

@@ -149,8 +149,8 @@ class Fastsim:
     Hertz peak pressure p0 = 3 P/(2 pi a1 a2) (Pa), exactly one (both are set after
     construction). bound: the traction bound, "parabolic" (Kalker's FASTSIM) or
     "elliptic" (the Hertz pressure; module docstring). n: the grid, as for
-    ``HalfSpaceContact`` (an int n: n x n elements, one to spare along x; (mx, my): mx x
-    my elements, one to spare on every side). C: (C11, C22, C23) of the linear theory
+    ``HalfSpaceContact`` ((mx, my): mx x my elements, one to spare on each side along x;
+    an int n: (n, n)). C: (C11, C22, C23) of the linear theory
     that fixes the flexibilities (default: ``kalker_coefficients(a1/a2, nu)``; e.g.
     ``HalfSpaceContact.linear_coefficients()`` for those of a grid). A semi-axis above
     0.1 m or a G below 1 MPa warns (UnitWarning) unless ``check_units=False``.
@@ -262,7 +262,6 @@ class Fastsim:
             self.nu,
             P=self.P,
             ny=my,
-            spare_y=isinstance(self.n, tuple),
         )
 
     @cached_property

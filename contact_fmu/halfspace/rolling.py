@@ -1014,27 +1014,25 @@ def ellipse_patch(
     ny: int | None = None,
     backend: str = "fft",
     P: float | None = None,
-    spare_y: bool = False,
 ) -> RollingPatch:
     """Patch on an ellipse x^2/a1^2 + y^2/a2^2 < 1 with n x ny elements (ny = n default).
 
     The potential contact area is the ellipse's bounding box with one element to spare
-    on each side in x, dx = 2 a1/(n - 2), and with ``spare_y`` in y too, dy = 2 a2/(ny -
-    2) (one rule for both axes: the bounding box is (n - 2) x (ny - 2) elements);
-    without it dy = 2 a2/ny (the grids of ``HalfSpaceContact(n=int)``). Either way the
-    box's edges are element edges. pressure(X, Y) gives p (Pa) at the centres, scaled so
-    that sum p dA = P (N) when P is given (the load invariant); theta follows from the
-    exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
+    on each side along x, the rolling direction (the difference du/dx of an element at
+    the leading edge reads the element ahead of it), and none along y (a row beyond the
+    ellipse carries no traction and changes no solution): dx = 2 a1/(n - 2), dy = 2
+    a2/ny, the box (n - 2) x ny elements, its edges element edges. pressure(X, Y) gives
+    p (Pa) at the centres, scaled so that sum p dA = P (N) when P is given (the load
+    invariant); theta follows from the exact leading edge l(y) = a1 (1 - y^2/a2^2)^(1/2).
     """
     a1, a2 = positive("a1", a1), positive("a2", a2)
     if not callable(pressure):
         raise InputError("pressure", type(pressure).__name__, "a function p(X, Y) (Pa)")
-    least = 4 if spare_y else 1
     n = count("n", n, 4)
-    ny = n if ny is None else count("ny", ny, least)
+    ny = n if ny is None else count("ny", ny, 1)
     dx = 2.0 * a1 / (n - 2)
-    dy = 2.0 * a2 / (ny - 2 if spare_y else ny)
-    grid = Grid(n, ny, dx, dy, -a1 - dx, -a2 - (dy if spare_y else 0.0))
+    dy = 2.0 * a2 / ny
+    grid = Grid(n, ny, dx, dy, -a1 - dx, -a2)
     X, Y = grid.mesh()
     inside = (X / a1) ** 2 + (Y / a2) ** 2 < 1.0
     p = np.where(inside, pressure(X, Y), 0.0)
@@ -1048,9 +1046,7 @@ def ellipse_patch(
     if n // 2 >= NESTED_MIN_N and ny // 2 >= NESTED_MIN_N:
 
         def coarsen(bk: str) -> RollingPatch:
-            return ellipse_patch(
-                a1, a2, n // 2, pressure, mu, G, nu, k, kappa, ny // 2, bk, P, spare_y
-            )
+            return ellipse_patch(a1, a2, n // 2, pressure, mu, G, nu, k, kappa, ny // 2, bk, P)
 
     return RollingPatch(grid, p, mu, G, nu, k, theta, kappa, backend, coarsen=coarsen)
 

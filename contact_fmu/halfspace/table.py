@@ -91,7 +91,8 @@ class TableData:
     values (nP, N1, N2, N3, 4): the OUTPUTS at the nodes;
     onset (nP,): normalised creepage magnitude at the onset of full slip (min of the
     longitudinal and lateral directions); A, B (1/m), Estar, G (Pa), nu, mu, k (m/Pa):
-    the contact; n: elements per direction of the solver grid; meta: free text (JSON).
+    the contact; n: the solver grid (``HalfSpaceContact.n``: an int n is (n, n)); meta:
+    free text (JSON).
     """
 
     axes: tuple[FloatArray, FloatArray, FloatArray]
@@ -105,7 +106,7 @@ class TableData:
     nu: float
     mu: float
     k: float
-    n: int
+    n: int | tuple[int, int]
     meta: str = "{}"
 
     @property
@@ -158,9 +159,14 @@ class TableData:
                 nu,
                 mu,
                 k,
-                int(f["n"]),
+                _grid(f["n"]),
                 str(f["meta"]),
             )
+
+
+def _grid(n: NDArray) -> int | tuple[int, int]:
+    """The stored solver grid: an int, or the pair (mx, my)."""
+    return int(n) if n.ndim == 0 else (int(n[0]), int(n[1]))
 
 
 # ---- tricubic Hermite patches ---------------------------------------------------------

@@ -50,7 +50,8 @@ SPIN_CASE = dict(a1=7e-3, a2=3.5e-3, P=5e4, w=(0.0, -6e-4, 0.6))
 
 
 def square_grid(aob: float, elements: int) -> tuple[int, int]:
-    """(mx, my) of about elements^2 square elements on an ellipse of ratio a/b."""
+    """(mx, my) of about elements^2 elements, about square (dx = 2 a1/(mx - 2), dy = 2
+    a2/my), on an ellipse of ratio a/b."""
     r = math.sqrt(aob)
     return max(round(elements * r), 10), max(round(elements / r), 10)
 
@@ -227,7 +228,7 @@ def convergence() -> dict[str, list[float]]:
     out: dict[str, list[float]] = {"spin": [], "creep": []}
     a1, a2, P, w = SPIN_CASE["a1"], SPIN_CASE["a2"], SPIN_CASE["P"], SPIN_CASE["w"]
     for n in GRIDS:
-        c = HalfSpaceContact.from_ellipse(a1, a2, STEEL, STEEL, 0.3, P=P, n=(n, n))
+        c = HalfSpaceContact.from_ellipse(a1, a2, STEEL, STEEL, 0.3, P=P, n=n)
         out["spin"].append(c.solve(*w).Ty / (c.mu * c.P))
         r = wheel_on_rail(n=n)
         xref = r.mu * r.P / (r.elastic.G * r.c**2)
@@ -327,9 +328,10 @@ example's parabolic pressure; force in mu P.
 
 ## Grid convergence: one creepage case and one spin case
 
-Creepage: the railway wheel, xi = 0.3 mu P/(G c^2), Tx/(mu P) on n x n (the int grid).
-Spin: ellipse 7 x 3.5 mm (a/b = 2), steel, 50 kN, mu = 0.3, eta = -6e-4,
-phi = 0.6 rad/m, Ty/(mu P) on (n, n). Richardson: 2 F(2n) - F(n) (first order).
+Creepage: the railway wheel, xi = 0.3 mu P/(G c^2), Tx/(mu P). Spin: ellipse 7 x 3.5 mm
+(a/b = 2), steel, 50 kN, mu = 0.3, eta = -6e-4, phi = 0.6 rad/m, Ty/(mu P). Both on
+n x n elements (dx = 2 a1/(n - 2), dy = 2 a2/n). Richardson: 2 F(2n) - F(n) (first
+order).
 
 {table(["case", *(f"{n}" for n in GRIDS), *(f"R({n}, {2 * n})" for n in GRIDS[:-1])], conv_rows)}
 
