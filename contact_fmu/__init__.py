@@ -3,7 +3,7 @@
 from ._validate import InputError
 from .dynamics import Body, Lateral, Loads, load_utilisation
 from .integrator import RollingBody
-from .layer import LayerContact, TractionField
+from .laws.thin_layer import LayerContact, TractionField
 from .simulate import Trajectory, load_history, simulate
 from .solvers import StageSolveError
 

@@ -50,7 +50,7 @@ from ._validate import InputError, finite, positive
 from .body_state import BodyState, ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .kinematics import contact_quantities, is_full_slip
-from .law import ContactLaw
+from .laws.protocol import ContactLaw
 from .solvers import FD_STEP, StageSolveError, newton, newton_increasing
 
 FloatArray = NDArray[np.float64]

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from ._validate import InputError, finite, positive
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import LoadInput, RollingBody
-from .law import ContactLaw
+from .laws.protocol import ContactLaw
 
 FloatArray = NDArray[np.float64]
 Signal = float | Callable[[float], float]

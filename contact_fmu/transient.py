@@ -64,7 +64,7 @@ from ._validate import InputError, count, finite, positive
 from .body_state import ContactOutputs
 from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import GAMMA, V_SCALE_FLOOR, EvalBudget, LoadInput, StageSolveError
-from .layer import LayerContact, TractionField
+from .laws.thin_layer import LayerContact, TractionField
 from .native import field as native_field
 from .solvers import SOLVE_RTOL, bracketed_newton
 from .transient_body import TransientBody

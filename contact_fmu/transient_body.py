@@ -17,7 +17,7 @@ import numpy as np
 from ._validate import positive
 from .body_state import BodyState, ContactOutputs
 from .kinematics import ROLLING, SLIDING, creepage
-from .layer import FloatArray, TractionField
+from .laws.thin_layer import FloatArray, TractionField
 
 
 class TransientBody(BodyState):

@@ -12,7 +12,7 @@ import pytest
 
 from contact_fmu import examples as ex
 from contact_fmu import native
-from contact_fmu.layer import SPIN_GRID
+from contact_fmu.laws.thin_layer import SPIN_GRID
 
 LAW = ex.contact()
 MU_P = LAW.mu * LAW.P

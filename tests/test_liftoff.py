@@ -18,7 +18,7 @@ from contact_fmu import examples as ex
 from contact_fmu import native
 from contact_fmu.dynamics import Body, Lateral, Loads
 from contact_fmu.integrator import RollingBody
-from contact_fmu.layer import LayerContact
+from contact_fmu.laws.thin_layer import LayerContact
 
 
 def law(P: float) -> LayerContact:

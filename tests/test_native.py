@@ -455,7 +455,7 @@ def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
     by at most about 128 roundings: 2e-14 of mu p0. The resultants are summed strip by
     strip in C, pairwise in numpy: each differs by at most 3072 roundings of sum w |tau|
     <= mu P (times max(a1, a2) for Mz), and forces takes the difference of two: 7e-13."""
-    from contact_fmu.layer import SPIN_GRID
+    from contact_fmu.laws.thin_layer import SPIN_GRID
 
     grid = CONTACT._grid(*SPIN_GRID)
     rng = np.random.default_rng(11)
@@ -651,7 +651,7 @@ def test_compiled_vector_step_answers_not_ok_for_extreme_loads(lateral, scheme):
 def test_compiled_layer_law_and_march_answer_not_ok_for_extreme_inputs():
     """cf_layer_forces and cf_strip_march (spin included) on every combination of
     extreme inputs: no crash, and either finite results or CF_FALLBACK."""
-    from contact_fmu.layer import SPIN_GRID
+    from contact_fmu.laws.thin_layer import SPIN_GRID
 
     lib = _raw()
     law = ex.contact()

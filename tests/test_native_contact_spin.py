@@ -104,7 +104,7 @@ def test_spin_forces_are_the_compiled_laws_doubles(fmus, target, monkeypatch):
     from fmpy.validation import validate_fmu
 
     from contact_fmu import native
-    from contact_fmu.layer import LayerContact
+    from contact_fmu.laws.thin_layer import LayerContact
 
     if native.library() is None:
         pytest.skip("no compiled library")

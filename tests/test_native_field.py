@@ -32,7 +32,7 @@ from contact_fmu._validate import InputError
 from contact_fmu.dynamics import Body, Lateral, Loads
 from contact_fmu.fmu import body_transient
 from contact_fmu.integrator import StageSolveError
-from contact_fmu.layer import LayerContact
+from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.native import field as native_field
 from contact_fmu.scenario import load
 from contact_fmu.transient import LayerField, TransientRollingBody

@@ -33,7 +33,7 @@ from contact_fmu import examples as ex
 from contact_fmu import native
 from contact_fmu.dynamics import Body
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.layer import LayerContact
+from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.scenario import load, runner
 from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from fmu_build import native_fmu

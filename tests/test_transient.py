@@ -24,7 +24,7 @@ from contact_fmu import InputError
 from contact_fmu import examples as ex
 from contact_fmu.dynamics import Body, Lateral, Loads
 from contact_fmu.integrator import RollingBody
-from contact_fmu.layer import LayerContact
+from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.transient import LayerField, TransientRollingBody
 
 C = ex.contact()

@@ -23,7 +23,7 @@ from scipy.optimize import brentq, fsolve
 from .. import examples as ex
 from ..dynamics import Lateral, Loads
 from ..integrator import RollingBody
-from ..layer import LayerContact, TractionField
+from ..laws.thin_layer import LayerContact, TractionField
 from ..transient import TransientRollingBody
 from . import save
 

@@ -38,7 +38,7 @@ MODEL_MODULES = {
 }
 # The body model of phase "transient" (body mode, thin-layer field).
 TRANSIENT_MODULE = "fmu.body_transient"
-LAW_MODULES = {"layer": "layer", "halfspace": "halfspace.spec"}
+LAW_MODULES = {"layer": "laws.thin_layer", "halfspace": "halfspace.spec"}
 # Data files a law reads at run time (paths relative to the package, e.g. a table .npz):
 # the build copies them next to the law's module in the FMU's resources.
 LAW_DATA: dict[str, tuple[str, ...]] = {"layer": (), "halfspace": ()}

@@ -81,7 +81,7 @@ from .._validate import InputError, count, finite, positive
 from ..body_state import ContactOutputs
 from ..dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from ..integrator import V_SCALE_FLOOR, LoadInput
-from ..layer import LayerContact, TractionField
+from ..laws.thin_layer import LayerContact, TractionField
 from ..solvers import StageSolveError, bracketed_newton
 from ..transient_body import TransientBody
 from .contact import HalfSpaceContact

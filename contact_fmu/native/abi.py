@@ -76,9 +76,9 @@ LENGTHS = {"N_OUT": len(OUTPUTS)}
 STRUCTS: dict[str, tuple[str, list[tuple]]] = {
     "cf_params": (
         "The parameters of a step (stepper.c): the body, the law at its load, the path and "
-        "the constants of integrator.py, solvers.py and layer.py, passed so that they live "
-        "once (the ctypes Kernel from the Python values, the native FMU from the CF_* above: "
-        "model.c's cf_model_constants). native.Params.",
+        "the constants of the Python numerics (integrator.py, solvers.py, laws/thin_layer.py), "
+        "passed so that they live once (the ctypes Kernel from the Python values, the native "
+        "FMU from the CF_* above: model.c's cf_model_constants). native.Params.",
         [
             ("M", "double", "kg: the body's mass"),
             ("Rx", "double", "m: its rolling radius"),
@@ -88,8 +88,8 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("mu", "double", "the law: coefficient of friction"),
             ("P", "double", "N: the normal load"),
             ("a1", "double", "m: the contact's half-length"),
-            ("creep_full_slip", "double", "the creepage of full slip (layer.py)"),
-            ("beta_per_creep", "double", "beta per unit creepage (layer.py)"),
+            ("creep_full_slip", "double", "the creepage of full slip (laws/thin_layer.py)"),
+            ("beta_per_creep", "double", "beta per unit creepage (laws/thin_layer.py)"),
             ("ry", "double", "held ratio vy/Vx (Lateral.vy_ratio; the spin ratio: rz)"),
             ("v_standstill", "double", "integrator.V_STANDSTILL (m/s)"),
             ("v_scale_floor", "double", "integrator.V_SCALE_FLOOR (m/s)"),
@@ -97,8 +97,8 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("capacity_margin", "double", "integrator.CAPACITY_MARGIN"),
             ("solve_rtol", "double", "solvers.SOLVE_RTOL"),
             ("expand", "double", "solvers.EXPAND"),
-            ("beta_full_slip", "double", "layer.BETA_FULL_SLIP"),
-            ("beta_series", "double", "layer.BETA_SERIES"),
+            ("beta_full_slip", "double", "laws.thin_layer.BETA_FULL_SLIP"),
+            ("beta_series", "double", "laws.thin_layer.BETA_SERIES"),
             ("max_newton", "int", "solvers.MAX_NEWTON"),
             ("quasistationary", "int", 'method: 1 "quasistationary", 0 "full"'),
             ("law", "int", "LAW_LAYER or LAW_TABLE (stepper.h)"),
@@ -186,7 +186,7 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
         ],
     ),
     "cf_strips": (
-        "layer._Grid.march: the strip march of the spin law on its grid. native.Strips.",
+        "laws.thin_layer._Grid.march: the strip march of the spin law on its grid. native.Strips.",
         [
             ("ny", "int", "nodes across ..."),
             ("nx", "int", "... and along"),
@@ -197,7 +197,7 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("cap", "const double *", "... and mu p"),
             ("w", "const double *", "(ny x nx): resultant weights"),
             ("k", "double", "m/Pa: kb + ks"),
-            ("tiny", "double", "layer.TINY"),
+            ("tiny", "double", "laws.thin_layer.TINY"),
         ],
     ),
     "cf_vstate": (
@@ -350,8 +350,8 @@ CONSTANTS: tuple[tuple[str, str, str, str], ...] = (
     ("CF_CONTRACTION_MAX", "double", "solvers.CONTRACTION_MAX", ""),
     ("CF_CONTRACTION_FAST", "double", "solvers.CONTRACTION_FAST", ""),
     ("CF_NEWTON_ITERATIONS", "int", "solvers.NEWTON_ITERATIONS", ""),
-    ("CF_BETA_FULL_SLIP", "double", "layer.BETA_FULL_SLIP", ""),
-    ("CF_BETA_SERIES", "double", "layer.BETA_SERIES", ""),
+    ("CF_BETA_FULL_SLIP", "double", "laws.thin_layer.BETA_FULL_SLIP", ""),
+    ("CF_BETA_SERIES", "double", "laws.thin_layer.BETA_SERIES", ""),
     ("CF_V_CREEP_FLOOR", "double", "kinematics.V_CREEP_FLOOR", "(m/s)"),
     ("CF_SUBSTEP_SLACK", "double", "fmu.body_model.SUBSTEP_SLACK", ""),
     ("CF_MAX_SUBSTEPS", "int", "fmu.body_model.MAX_SUBSTEPS", ""),

@@ -29,8 +29,8 @@
 #define CF_CONTRACTION_MAX 0.25              /* solvers.CONTRACTION_MAX */
 #define CF_CONTRACTION_FAST 0.01             /* solvers.CONTRACTION_FAST */
 #define CF_NEWTON_ITERATIONS 50              /* solvers.NEWTON_ITERATIONS */
-#define CF_BETA_FULL_SLIP 2.0                /* layer.BETA_FULL_SLIP */
-#define CF_BETA_SERIES 0.0001                /* layer.BETA_SERIES */
+#define CF_BETA_FULL_SLIP 2.0                /* laws.thin_layer.BETA_FULL_SLIP */
+#define CF_BETA_SERIES 0.0001                /* laws.thin_layer.BETA_SERIES */
 #define CF_V_CREEP_FLOOR 1e-06               /* kinematics.V_CREEP_FLOOR (m/s) */
 #define CF_SUBSTEP_SLACK 1e-09               /* fmu.body_model.SUBSTEP_SLACK */
 #define CF_MAX_SUBSTEPS 10000                /* fmu.body_model.MAX_SUBSTEPS */
@@ -64,9 +64,9 @@ enum {
 };
 
 /* The parameters of a step (stepper.c): the body, the law at its load, the path and the
- * constants of integrator.py, solvers.py and layer.py, passed so that they live once (the
- * ctypes Kernel from the Python values, the native FMU from the CF_* above: model.c's
- * cf_model_constants). native.Params. */
+ * constants of the Python numerics (integrator.py, solvers.py, laws/thin_layer.py), passed
+ * so that they live once (the ctypes Kernel from the Python values, the native FMU from
+ * the CF_* above: model.c's cf_model_constants). native.Params. */
 typedef struct {
     double M;                 /* kg: the body's mass */
     double Rx;                /* m: its rolling radius */
@@ -76,8 +76,8 @@ typedef struct {
     double mu;                /* the law: coefficient of friction */
     double P;                 /* N: the normal load */
     double a1;                /* m: the contact's half-length */
-    double creep_full_slip;   /* the creepage of full slip (layer.py) */
-    double beta_per_creep;    /* beta per unit creepage (layer.py) */
+    double creep_full_slip;   /* the creepage of full slip (laws/thin_layer.py) */
+    double beta_per_creep;    /* beta per unit creepage (laws/thin_layer.py) */
     double ry;                /* held ratio vy/Vx (Lateral.vy_ratio; the spin ratio: rz) */
     double v_standstill;      /* integrator.V_STANDSTILL (m/s) */
     double v_scale_floor;     /* integrator.V_SCALE_FLOOR (m/s) */
@@ -85,8 +85,8 @@ typedef struct {
     double capacity_margin;   /* integrator.CAPACITY_MARGIN */
     double solve_rtol;        /* solvers.SOLVE_RTOL */
     double expand;            /* solvers.EXPAND */
-    double beta_full_slip;    /* layer.BETA_FULL_SLIP */
-    double beta_series;       /* layer.BETA_SERIES */
+    double beta_full_slip;    /* laws.thin_layer.BETA_FULL_SLIP */
+    double beta_series;       /* laws.thin_layer.BETA_SERIES */
     int max_newton;           /* solvers.MAX_NEWTON */
     int quasistationary;      /* method: 1 "quasistationary", 0 "full" */
     int law;                  /* LAW_LAYER or LAW_TABLE (stepper.h) */
@@ -157,7 +157,7 @@ typedef struct {
     double out[N_OUT];     /* the outputs, indexed by O_* */
 } cf_body;
 
-/* layer._Grid.march: the strip march of the spin law on its grid. native.Strips. */
+/* laws.thin_layer._Grid.march: the strip march of the spin law on its grid. native.Strips. */
 typedef struct {
     int ny;              /* nodes across ... */
     int nx;              /* ... and along */
@@ -168,7 +168,7 @@ typedef struct {
     const double *cap;   /* ... and mu p */
     const double *w;     /* (ny x nx): resultant weights */
     double k;            /* m/Pa: kb + ks */
-    double tiny;         /* layer.TINY */
+    double tiny;         /* laws.thin_layer.TINY */
 } cf_strips;
 
 /* The state of the vector path (cf_advance_vector: Vy and/or Omega_z as stage unknowns).

@@ -49,7 +49,7 @@ from scipy import integrate
 
 from ..dynamics import Body, Lateral, Loads
 from ..kinematics import rigid_slip, spin_for_slip
-from ..layer import LayerContact
+from ..laws.thin_layer import LayerContact
 from ..scenario.schema import Case, Scene
 from .equations import RollingEquations, quasistationary_force, quasistationary_slip
 

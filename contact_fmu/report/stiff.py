@@ -40,7 +40,7 @@ import fmu_build
 
 from ..fmu.config import METHODS, SCHEMES, ModelConfig
 from ..integrator import V_STANDSTILL, standstill_weight
-from ..layer import SPIN_GRID, LayerContact
+from ..laws.thin_layer import SPIN_GRID, LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
 from ..solvers import SOLVE_RTOL

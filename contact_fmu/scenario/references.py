@@ -48,7 +48,7 @@ from numpy.typing import NDArray
 from ..dynamics import Body, Lateral, Loads
 from ..integrator import RollingBody
 from ..kinematics import rigid_slip, spin_for_slip
-from ..layer import LayerContact
+from ..laws.thin_layer import LayerContact
 from .runner import write_reference
 from .schema import Case, Reference, Scene
 from .signals import held
