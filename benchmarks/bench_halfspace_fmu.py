@@ -206,8 +206,8 @@ def main(argv: list[str] | None = None) -> int:
         "error": table_error(spec, law, args.points),
     }
     if not args.no_timing:
-        from contact_fmu.dynamics import Body, Loads
-        from contact_fmu.integrator import RollingBody
+        from contact_fmu.dynamics.body import Body, Loads
+        from contact_fmu.dynamics.integrator import RollingBody
         from contact_fmu.laws.thin_layer import LayerContact
 
         params = layer_twin(cfg, spec, law)

@@ -32,11 +32,11 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from contact_fmu.dynamics import Loads  # noqa: E402
+from contact_fmu.dynamics.body import Loads  # noqa: E402
+from contact_fmu.dynamics.thin_layer_field import LayerField  # noqa: E402
 from contact_fmu.fmu import body_transient  # noqa: E402
 from contact_fmu.native import field as native_field  # noqa: E402
 from contact_fmu.scenario import load  # noqa: E402
-from contact_fmu.transient import LayerField  # noqa: E402
 
 if __package__:  # python -m benchmarks
     from . import harness

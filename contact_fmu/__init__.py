@@ -1,11 +1,11 @@
 """Rolling/sliding contact of an elastic body on an elastic substrate (Spector & Batra 1995)."""
 
 from ._validate import InputError
-from .dynamics import Body, Lateral, Loads, load_utilisation
-from .integrator import RollingBody
+from .dynamics.body import Body, Lateral, Loads, load_utilisation
+from .dynamics.integrator import RollingBody
+from .dynamics.simulate import Trajectory, load_history, simulate
+from .dynamics.solvers import StageSolveError
 from .laws.thin_layer import LayerContact, TractionField
-from .simulate import Trajectory, load_history, simulate
-from .solvers import StageSolveError
 
 __all__ = [
     "Body",

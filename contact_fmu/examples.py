@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from .dynamics import Body
+from .dynamics.body import Body
 from .laws.thin_layer import LayerContact
 
 # Normal load (N), radii of the ellipsoid of revolution (m), friction coefficient (-)

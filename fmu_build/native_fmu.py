@@ -53,7 +53,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from contact_fmu import integrator, native
+from contact_fmu import native
+from contact_fmu.dynamics import integrator
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.laws import thin_layer as layer

@@ -26,7 +26,7 @@ Explicit coupling and the step. A master exchanges Tx once per step, so the slip
 equation M A2 dvx/dt = -Tx(vx) + ... is integrated explicitly with a delay of one step:
 stable only for h below the slip relaxation time tau = M A2 |Vx| / (dTx/dxi), at first
 order in h/tau (tests/test_cosim_libcosim.py derives the bound). The default step is
-the power of ten at or below tau/5 (``contact_fmu.coupling.relaxation_time``).
+the power of ten at or below tau/5 (``contact_fmu.dynamics.coupling.relaxation_time``).
 
 Inputs: the system files hold them constant (SSP and OSP carry no signals); a scene's
 input that varies in time is refused unless a value is given (``overrides``).
@@ -46,8 +46,8 @@ from xml.dom import minidom
 import numpy as np
 
 from contact_fmu._validate import InputError
-from contact_fmu.coupling import relaxation_time
-from contact_fmu.dynamics import Body
+from contact_fmu.dynamics.body import Body
+from contact_fmu.dynamics.coupling import relaxation_time
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.fmu.laws import make_law

@@ -24,9 +24,10 @@ import numpy as np
 import pytest
 
 from contact_fmu import examples as ex
-from contact_fmu import native, solvers
-from contact_fmu.dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
-from contact_fmu.integrator import GAMMA, SCHEMES, RollingBody
+from contact_fmu import native
+from contact_fmu.dynamics import solvers
+from contact_fmu.dynamics.body import ROLLING_STRAIGHT, Body, Lateral, Loads
+from contact_fmu.dynamics.integrator import GAMMA, SCHEMES, RollingBody
 
 pytestmark = pytest.mark.skipif(native.library() is None, reason="no C compiler")
 
@@ -158,7 +159,7 @@ def test_kept_newton_matrix_changes_the_vector_step_only_within_the_stage_tolera
     1 s) and on a co-simulation's smooth one (both methods), where the law is
     evaluated at most 0.6 times as often (measured: 0.55; on the random histories
     0.81)."""
-    import contact_fmu.integrator as integrator
+    import contact_fmu.dynamics.integrator as integrator
 
     runs = {}
     for mode in ("kept", "newton"):

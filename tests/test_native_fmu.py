@@ -31,7 +31,7 @@ import pytest
 import fmu_build
 from contact_fmu import examples as ex
 from contact_fmu import native
-from contact_fmu.dynamics import Body
+from contact_fmu.dynamics.body import Body
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.scenario import load, runner

@@ -13,14 +13,14 @@ import pytest
 
 from contact_fmu import cli
 from contact_fmu import examples as ex
-from contact_fmu.dynamics import Loads
-from contact_fmu.integrator import RollingBody
+from contact_fmu.dynamics.body import Loads
+from contact_fmu.dynamics.integrator import RollingBody
+from contact_fmu.dynamics.simulate import load_history, simulate
 from contact_fmu.report import output, reference, sweep
 from contact_fmu.report.metrics import norms, observed_order, pairwise_orders
 from contact_fmu.report.workprecision import run_scene
 from contact_fmu.scenario import load
 from contact_fmu.scenario.signals import parse
-from contact_fmu.simulate import load_history, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"

@@ -17,9 +17,9 @@ from typing import Any
 
 from .. import native
 from .._validate import InputError
-from ..dynamics import Body, Lateral, Loads
-from ..integrator import RollingBody, WorkBudgetError
-from ..kinematics import V_CREEP_FLOOR, spin_for_slip
+from ..dynamics.body import Body, Lateral, Loads
+from ..dynamics.integrator import RollingBody, WorkBudgetError
+from ..dynamics.kinematics import V_CREEP_FLOOR, spin_for_slip
 from .config import ModelConfig
 from .laws import make_law
 from .ranges import within_range

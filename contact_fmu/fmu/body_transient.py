@@ -37,9 +37,9 @@ from typing import Any
 import numpy as np
 
 from .._validate import InputError
-from ..dynamics import Body, Lateral
-from ..kinematics import spin_for_slip
-from ..transient import TransientRollingBody
+from ..dynamics.body import Body, Lateral
+from ..dynamics.kinematics import spin_for_slip
+from ..dynamics.thin_layer_field import TransientRollingBody
 from .body_model import MAX_WORK, WORK_PER_CELL, WORK_PER_CELL_EVAL, BodyModel, substeps
 from .config import ModelConfig
 from .laws import make_law

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from .._validate import finite, positive
-from ..kinematics import spin_for_slip
+from ..dynamics.kinematics import spin_for_slip
 from .config import ModelConfig
 from .ranges import within_range
 

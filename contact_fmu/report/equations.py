@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..dynamics import Body, Lateral
-from ..integrator import forces_at_rest
+from ..dynamics.body import Body, Lateral
+from ..dynamics.integrator import forces_at_rest
 from ..laws.thin_layer import LayerContact
 
 FloatArray = NDArray[np.float64]

@@ -47,8 +47,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import integrate
 
-from ..dynamics import Body, Lateral, Loads
-from ..kinematics import rigid_slip, spin_for_slip
+from ..dynamics.body import Body, Lateral, Loads
+from ..dynamics.kinematics import rigid_slip, spin_for_slip
 from ..laws.thin_layer import LayerContact
 from ..scenario.schema import Case, Scene
 from .equations import RollingEquations, quasistationary_force, quasistationary_slip
@@ -266,7 +266,7 @@ def _require_transient(scene: Scene) -> None:
 def transient_grids(case: Case) -> tuple[tuple[int, int], tuple[int, int]]:
     """The (nx, ny) of the two reference fields: TRANSIENT_REFINE and twice that times
     the case's grid."""
-    from ..transient import DEFAULT_NX, DEFAULT_NY
+    from ..dynamics.thin_layer_field import DEFAULT_NX, DEFAULT_NY
 
     p = case.parameters
     nx, ny = int(p.get("nx", DEFAULT_NX)), int(p.get("ny", DEFAULT_NY))
@@ -284,8 +284,8 @@ def _transient_run(
     them: max(ceil(h/h_max), steps of cells_per_step cells) internal steps, the load P
     of the step's start. The other loads held over each step, or (``continuous``) the
     signals sampled at the stage times."""
+    from ..dynamics.thin_layer_field import TransientRollingBody
     from ..fmu.body_model import substeps
-    from ..transient import TransientRollingBody
 
     p = case.parameters
     u = signal_values(case, LOAD_NAMES, times)

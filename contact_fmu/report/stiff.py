@@ -38,12 +38,12 @@ from numpy.typing import NDArray
 
 import fmu_build
 
+from ..dynamics.integrator import V_STANDSTILL, standstill_weight
+from ..dynamics.solvers import SOLVE_RTOL
 from ..fmu.config import METHODS, SCHEMES, ModelConfig
-from ..integrator import V_STANDSTILL, standstill_weight
 from ..laws.thin_layer import SPIN_GRID, LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
-from ..solvers import SOLVE_RTOL
 from ..study.engine import Engine, once, release
 from .metrics import oscillation
 from .stiff_cases import StiffCase, cases

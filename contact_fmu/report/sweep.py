@@ -39,9 +39,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..dynamics.thin_layer_field import DEFAULT_NX, DEFAULT_NY, MIN_NX, MIN_NY
 from ..fmu.config import SCHEMES, ModelConfig
 from ..scenario.schema import Case, Scene
-from ..transient import DEFAULT_NX, DEFAULT_NY, MIN_NX, MIN_NY
 from .reference import quasistationary_allowed
 
 FloatArray = NDArray[np.float64]

@@ -45,9 +45,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..dynamics import Body, Lateral, Loads
-from ..integrator import RollingBody
-from ..kinematics import rigid_slip, spin_for_slip
+from ..dynamics.body import Body, Lateral, Loads
+from ..dynamics.integrator import RollingBody
+from ..dynamics.kinematics import rigid_slip, spin_for_slip
 from ..laws.thin_layer import LayerContact
 from .runner import write_reference
 from .schema import Case, Reference, Scene
@@ -158,7 +158,7 @@ def by_transient(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArr
     """The transient thin-layer stepper outside the FMU, at the reference's resolution:
     field grid ``grid`` = [nx, ny] and internal steps of at most ``cells`` cells rolled
     (and at most the scene's h_max), the loads of each communication step held."""
-    from ..transient import TransientRollingBody
+    from ..dynamics.thin_layer_field import TransientRollingBody
 
     cfg, p, o = scene.config, case.parameters, ref.options
     t = scene.grid

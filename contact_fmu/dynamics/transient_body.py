@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import positive
+from .._validate import positive
+from ..laws.thin_layer import FloatArray, TractionField
 from .body_state import BodyState, ContactOutputs
 from .kinematics import ROLLING, SLIDING, creepage
-from .laws.thin_layer import FloatArray, TractionField
 
 
 class TransientBody(BodyState):
