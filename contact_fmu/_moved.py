@@ -21,6 +21,7 @@ MOVED = {
     "contact_fmu.law": "contact_fmu.laws.protocol",
     "contact_fmu.layer": "contact_fmu.laws.thin_layer",
     "contact_fmu.transient": "contact_fmu.dynamics.thin_layer_field",
+    "contact_fmu.fmu.laws": "contact_fmu.fmu.factory",
     **{
         f"contact_fmu.{m}": f"contact_fmu.dynamics.{m}"
         for m in (

@@ -46,11 +46,10 @@ from xml.dom import minidom
 import numpy as np
 
 from contact_fmu._validate import InputError
-from contact_fmu.dynamics.body import Body
 from contact_fmu.dynamics.coupling import relaxation_time
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.fmu.laws import make_law
+from contact_fmu.fmu.factory import make_body, make_law
 from contact_fmu.scenario.schema import Case, Scene
 
 from . import DEFAULT_OUT, build, tables
@@ -257,12 +256,10 @@ def default_step(cfgs: dict[str, ModelConfig]) -> tuple[float, float]:
     contact, body = cfgs[CONTACT], cfgs[BODY]
     c = {v.name: contact.start(v) for v in contact.variables}
     b = {v.name: body.start(v) for v in body.variables}
-    if contact.has_table:  # the half-space law's table, as the FMU carries it
-        law = contact.table_spec.load_law(tables.ensure(contact))
-        law = law.with_load(c["P"]).with_mu(c["mu"])
-    else:
-        law = make_law(contact, c, c["P"])
-    tau = relaxation_time(law, Body(M=b["M"], Rx=b["Rx"], Iy=b["Iy"]), b["Vx0"])
+    # the half-space law's table as the FMU carries it (the build's cache)
+    table = tables.ensure(contact) if contact.has_table else None
+    law = make_law(contact, c, c["P"], table=table)
+    tau = relaxation_time(law, make_body(b), b["Vx0"])
     if not (tau > 0.0 and math.isfinite(tau)):
         raise InputError(
             "Vx0", b["Vx0"], "nonzero, with Iy > 0, for a default step (tau = 0): give --step"

@@ -14,7 +14,7 @@ from typing import Any
 
 from ..dynamics.kinematics import ROLLING, SLIDING, contact_quantities, rigid_slip
 from .config import ModelConfig
-from .laws import make_law
+from .factory import make_law
 
 
 class ContactElement:

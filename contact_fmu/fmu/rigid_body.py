@@ -19,8 +19,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from .._validate import finite, positive
-from ..dynamics.kinematics import spin_for_slip
 from .config import ModelConfig
+from .factory import initial_state
 from .ranges import within_range
 
 
@@ -64,5 +64,5 @@ def build(
     data_dir: Any = None,  # no contact law, no data
 ) -> RigidBody:
     p = params
-    Omega_y0 = spin_for_slip(p["Vx0"], p["vx0"], p["Rx"])
-    return RigidBody(p["M"], p["Rx"], p["Iy"], p["Vx0"], Omega_y0)
+    start = initial_state(p)
+    return RigidBody(p["M"], p["Rx"], p["Iy"], start["Vx0"], start["Omega_y0"])
