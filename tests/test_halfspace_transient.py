@@ -132,7 +132,7 @@ def test_cattaneo_mindlin_shift_at_rest():
 @pytest.mark.parametrize("G_factor", [1e4, 1e5])
 def test_layer_dominated_limit_is_the_thin_layer_field(G_factor):
     """With half-spaces much stiffer than the layers (G = G_factor a1/k) the field is the
-    thin-layer one of ``transient.LayerField`` (same element centres, pressure sampled
+    thin-layer one of ``thin_layer_field.LayerField`` (same element centres, pressure sampled
     without scaling): node by node, after a start from rest at constant creepage
     (vx/Vx = 1e-3, vy/Vx = 2e-3) with steps of one element. The remaining difference is
     the half-space compliance, relative size A_00/k (self-coefficient over k): measured

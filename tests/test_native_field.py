@@ -1,5 +1,5 @@
 """The transient field in C (contact_fmu/native/field.c) against the Python reference it
-mirrors: the field's stage (transient.LayerField.stage, _weights: cf_field_stage,
+mirrors: the field's stage (thin_layer_field.LayerField.stage, _weights: cf_field_stage,
 cf_field_weights) and the body's steps on it (TransientRollingBody.advance, _step,
 _stage, _solve_scalar: cf_field_advance), and their hostile inputs.
 

@@ -1,5 +1,5 @@
 """What the two transient rolling bodies share: a body whose contact is a traction
-field carried as state (transient.py: thin layers; halfspace/transient.py: the
+field carried as state (thin_layer_field.py: thin layers; halfspace/transient.py: the
 half-space).
 
 A subclass holds ``field`` (its ``dx``, ``set_shift``, ``summary``, ``traction_field``

@@ -1,6 +1,6 @@
 """Body mode, phase "transient": the body on the thin-layer traction field.
 
-The stepper is ``transient.TransientRollingBody``: the traction field of Eq. (15) with
+The stepper is ``thin_layer_field.TransientRollingBody``: the traction field of Eq. (15) with
 its time-derivative term on a material grid of nx cells along the contact and ny
 strips across it, advanced together with Eqs. (8)-(11) by an L-stable SDIRK2 step
 (docs/transient.md). The field is part of the state (FMU get/set state restores it).

@@ -1,7 +1,7 @@
 """The rigid body of Eqs. (8)-(9) alone, driven by the contact force Tx of another FMU.
 
     M  dVx/dt      = Fx_ex - Tx
-    Iy dOmega_y/dt = My_ex + Rx Tx      (the + sign of Eq. 9, see dynamics.py)
+    Iy dOmega_y/dt = My_ex + Rx Tx      (the + sign of Eq. 9, see dynamics/body.py)
 
 With the inputs held over a communication step the right-hand sides are constant, so
 the update Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx Tx)/Iy is exact. Coupled

@@ -17,7 +17,7 @@ Sources, by model:
   Vx(t) = Vx(0) + (A1/M) int (Fx_ex + My_ex/Rx) dt and vx = |Vx| T_x^-1(Tx) of
   Eq. (28) (the integral by scipy's ``quad``, exact sums for held inputs);
 - body mode, phase "transient": the thin-layer field of Eq. (15) with its time
-  derivative, coupled with Eqs. (8)-(11) (``transient.TransientRollingBody``, outside
+  derivative, coupled with Eqs. (8)-(11) (``thin_layer_field.TransientRollingBody``, outside
   the FMU) on TRANSIENT_REFINE and 2 TRANSIENT_REFINE times the scene's grid (nx, ny)
   at its cells_per_step (the internal step refined with the cell), combined by
   Richardson's extrapolation for a second-order method, R = R_f + (R_f - R_c)/3

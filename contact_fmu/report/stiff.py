@@ -92,7 +92,7 @@ MEM_BLOCKS = 200
 MEM_RSS_BYTES = 4 << 20
 # The spin law's grid error is measured against a grid this many times finer each way
 # (``spin_grid_roughness``): 128 x 96 against 64 x 48. The march is first order in the
-# cell size (layer.py), so the difference is about half the 64 x 48 grid's own error:
+# cell size (laws/thin_layer.py), so the difference is about half the 64 x 48 grid's own error:
 # the floor errs on the strict side.
 ROUGHNESS_REFINE = 2
 ROUGHNESS_CHUNK = 64  # states per march: 2 x 64 fields of 128 x 96 complex, 25 MB
