@@ -104,8 +104,9 @@ BENCHMARKS = [
     ),
     Benchmark(
         "halfspace_fmu", "bench_halfspace_fmu",
-        "half-space FMUs against thin-layer twins (JSON; docs/halfspace.md)",
+        "the rail table's error; half-space FMUs against thin-layer twins",
         quick=("--points", "5", "--steps", "5", "--repeats", "1"),
+        blocks=("bench_halfspace_fmu.py", "bench_halfspace_fmu.py step"),
     ),
     Benchmark(
         "halfspace", "bench_halfspace", "steady-rolling half-space solver, 16 .. 128 per side",
@@ -122,13 +123,15 @@ BENCHMARKS = [
     ),
     Benchmark(
         "halfspace_fastsim", "bench_halfspace_fastsim",
-        "FASTSIM against the exact solver (docs/halfspace.md)",
-        quick=("--grid", "16", "--points", "2", "--repeat", "1"), cheap=True,
+        "FASTSIM against the exact solver: accuracy and cost",
+        quick=("--grid", "16", "--points", "2", "--repeat", "1"),
+        blocks=("bench_halfspace_fastsim.py",), cheap=True,
     ),
     Benchmark(
         "halfspace_transient", "bench_halfspace_transient",
-        "transient half-space field and body (docs/halfspace.md)",
-        quick=("--grids", "8", "--skip-coupled"),
+        "transient half-space field and body: cost per step, durations",
+        args=("--skip-coupled",), quick=("--grids", "8", "--skip-coupled"),
+        blocks=("bench_halfspace_transient.py",),
     ),
     Benchmark(
         "report", "",

@@ -10,7 +10,7 @@ run (the machine is shared: the minimum filters out the other processes). "model
 the same model object called directly in Python (no FMI), timed between the scene FMU's
 steps, to separate the FMI/pythonfmu overhead from the numerics.
 ``--write`` replaces the section "## FMU step cost" of docs/performance.md (the only
-place the table lives; docs/fmu.md quotes its range and links to it).
+place the table lives; docs/fmu.md links to it).
 """
 
 from __future__ import annotations

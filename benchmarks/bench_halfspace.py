@@ -62,7 +62,7 @@ BLOCK = "bench_halfspace.py"  # the marker blocks it writes
 ITERATIONS_BLOCK = "bench_halfspace.py iterations"
 
 CASES = {"longitudinal": (0.3, 0.0, 0.0), "combined+spin": (0.2, 0.2, 0.3)}
-# CONTACT's published steady-rolling timings, Hertzian cases (references.md; 2016
+# CONTACT's published steady-rolling timings, Hertzian cases (its documentation; 2016
 # hardware, one thread): elements per side -> seconds
 CONTACT_PUBLISHED = {11: 1.9e-3, 19: 9.7e-3, 35: 0.134}
 

@@ -1,7 +1,7 @@
 """The half-space law in the FMU: the shipped table's error and the FMU's step cost.
 
     .venv/bin/python benchmarks/bench_halfspace_fmu.py [--points 200] [--steps 200]
-        [--repeats 5] [--json out.json] [--spec-override KEY=VALUE ...]
+        [--repeats 5] [--json out.json] [--spec-override KEY=VALUE ...] [--write]
 
 1. Interpolation error of the creep-force table that the rail scenes' FMUs ship
    (scenarios/rail_creep.toml [halfspace]; the same table as rail_traction's), against
@@ -17,6 +17,9 @@
    fastest of ``--repeats`` runs per step; likewise the contact-mode scene rail_creep and
    its twin; and the two laws' scalar calls and RollingBody steps without FMI. Ratios
    are within one run on one machine.
+
+--write replaces the block "bench_halfspace_fmu.py" of docs/halfspace.md (the table's
+error) and "bench_halfspace_fmu.py step" of docs/performance.md (the step cost).
 
 OPENBLAS_NUM_THREADS=1 is set before numpy is imported (the table's direct solves:
 threaded BLAS slows GMRES down tenfold on the shared machine).
@@ -44,6 +47,11 @@ from contact_fmu.fmu.config import GENERATED_DATA, ModelConfig  # noqa: E402
 from contact_fmu.halfspace.spec import TableSpec  # noqa: E402
 from contact_fmu.scenario import load, runner  # noqa: E402
 from contact_fmu.scenario.instance import OK, Instance  # noqa: E402
+
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -163,6 +171,74 @@ def law_calls(law, twin, reps: int = 3000) -> dict[str, float]:
     return out
 
 
+def _g(x: float) -> str:
+    """Two significant digits, as the docs' tables print them."""
+    return f"{x:.2g}"
+
+
+def error_block(report: dict, command: str) -> str:
+    """The block of docs/halfspace.md: the shipped table's error against direct solves."""
+    e, tab = report["error"], report["table"]
+    n = e["random_points"]
+    eta_label = f"eta = {0.002 / report['xi_ref']:.2f} xi_ref"
+    pct = [100.0, 100.0, 100.0, 1.0]  # Tx, Ty, Mz in %; the adhesion fraction as it is
+    rows = [
+        (f"{n} random, max", e["random_max"]),
+        (f"{n} random, rms", e["random_rms"]),
+        ("cell midpoints, eta = 0, max", e["lines"]["eta = 0"]["max"]),
+        (f"cell midpoints, {eta_label}, max", e["lines"]["eta = 0.002"]["max"]),
+    ]
+    lines = [
+        harness.made_by(command),
+        "",
+        f"The table: {tab['solves']} solves, {tab['bytes'] / 1024:.0f} KiB.",
+        "",
+        "| points | Tx (% of mu P) | Ty (% of mu P) | Mz (% of mu P c) | adhesion fraction |",
+        "|---|---|---|---|---|",
+    ]
+    for label, values in rows:
+        cells = " | ".join(_g(v * s) for v, s in zip(values, pct, strict=True))
+        lines.append(f"| {label} | {cells} |")
+    return "\n".join(lines)
+
+
+def step_block(report: dict, command: str) -> str:
+    """The block of docs/performance.md: the half-space FMUs' step cost against their
+    thin-layer twins."""
+    steps, body, calls = report["fmu_step"], report["rolling_body_step"], report["law_calls"]
+    tr, cr = steps["rail_traction"], steps["rail_creep"]
+    dTx = abs(tr["Tx_last"]["halfspace"] - tr["Tx_last"]["layer"])
+
+    def row(label: str, table: float, layer: float) -> str:
+        return f"| {label} | {_g(table)} | {_g(layer)} | {_g(table / layer)} |"
+
+    return "\n".join([
+        harness.made_by(command),
+        "",
+        "The rail scenes' half-space FMUs against thin-layer twins of the same scenes (k1 +"
+        " k2 giving the Hertz a1, kb + ks the table's onset of full slip), run alternately in"
+        " one process through fmpy's FMU2Slave, fastest of the repeats per step; both laws"
+        f" evaluated by the compiled stepper in body mode. The body FMUs end within {dTx:.2g} N"
+        " of each other in Tx.",
+        "",
+        "| | half-space (table) | thin layer | ratio |",
+        "|---|---|---|---|",
+        row("body FMU (rail_traction), ms per communication step (5 internal steps)",
+            tr["step_ms"]["halfspace"], tr["step_ms"]["layer"]),
+        row("contact FMU (rail_creep), ms per step", cr["step_ms"]["halfspace"],
+            cr["step_ms"]["layer"]),
+        row("RollingBody without FMI (compiled stages), ms per communication step",
+            body["table_ms"], body["layer_ms"]),
+        row("Python law call `forces`, us", calls["table_forces_us"], calls["layer_forces_us"]),
+        row("Python law call `tx_slope` (the Newton slope), us", calls["table_tx_slope_us"],
+            calls["layer_tx_slope_us"]),
+        "",
+        f"A direct solve on the table's grid costs {_g(report['error']['direct_solve_ms'])} ms"
+        " in the same run: a table call is over a thousand times cheaper than solving in the"
+        " step.",
+    ])  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
@@ -171,6 +247,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--json", type=str, default=None)
     ap.add_argument("--no-timing", action="store_true", help="only the table's error")
+    ap.add_argument("--write", action="store_true", help="replace the blocks in docs/")
     ap.add_argument("--spec-override", nargs="*", default=[], metavar="KEY=JSON",
                     help="measure a variant of the declaration (e.g. stretch=3.0)")  # fmt: skip
     args = ap.parse_args(argv)
@@ -249,6 +326,16 @@ def main(argv: list[str] | None = None) -> int:
     print(json.dumps(report, indent=1))
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=1))
+    if args.write:
+        if args.spec_override or args.no_timing:
+            ap.error("--write measures the shipped table with timing: no --spec-override, "
+                     "--no-timing")  # fmt: skip
+        command = (f"benchmarks/bench_halfspace_fmu.py --points {args.points} --steps "
+                   f"{args.steps} --repeats {args.repeats} --write")  # fmt: skip
+        harness.write_block(harness.DOCS / "halfspace.md", "bench_halfspace_fmu.py",
+                            error_block(report, command))  # fmt: skip
+        harness.write_block(harness.PERFORMANCE, "bench_halfspace_fmu.py step",
+                            step_block(report, command))  # fmt: skip
     return 0
 
 

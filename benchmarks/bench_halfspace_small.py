@@ -60,7 +60,7 @@ from contact_fmu.halfspace import influence  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 
 CASES = {"longitudinal": (0.3, 0.0, 0.0), "combined+spin": (0.2, 0.2, 0.3)}
-# CONTACT's published steady-rolling times (references.md; 2016 hardware, one thread)
+# CONTACT's published steady-rolling times (its documentation; 2016 hardware, one thread)
 CONTACT_PUBLISHED = {11: 1.9e-3, 19: 9.7e-3, 35: 0.134}
 
 

@@ -1,9 +1,9 @@
 """Kalker's transient rolling on the half-space: cost per step and measured durations.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_halfspace_transient.py \
-        [--grids 16 24 32] [--skip-coupled] [--json out.json]
+        [--grids 16 24 32] [--skip-coupled] [--json out.json] [--write]
 
-Prints markdown tables (docs/halfspace.md, "Transient rolling"):
+Prints markdown tables (docs/halfspace.md, "Transient rolling"; the first is its block):
 
 1. cost: steps of one element at constant creepage (the field alone) and the body on
    the field (railway wheel, Fx_ex with My_ex = -Fx_ex Rx), per grid: ms per step,
@@ -16,6 +16,9 @@ Prints markdown tables (docs/halfspace.md, "Transient rolling"):
    whole elements), per grid;
 4. the coupled transient of the railway wheel from rest under a sudden Fx_ex (with
    --skip-coupled left out).
+
+--write replaces the block "bench_halfspace_transient.py" of docs/halfspace.md (the cost
+table, 1.) with this run's.
 
 Threaded BLAS is switched off before numpy is imported (see bench_halfspace.py).
 """
@@ -42,6 +45,11 @@ from contact_fmu.dynamics.thin_layer_field import LayerField  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
 from contact_fmu.halfspace.transient import HalfSpaceField, TransientHalfSpaceBody  # noqa: E402
+
+if __package__:  # python -m benchmarks
+    from . import harness
+else:  # run as a script: benchmarks/ is first on sys.path
+    import harness  # type: ignore[no-redef]
 
 V_RAIL = 30.0  # m/s
 # creepages of the duration table in units of mu P/(G c^2) (railway: Tx = 0.10, 0.41,
@@ -220,6 +228,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--only-coupled", action="store_true")
     ap.add_argument("--coupled-lengths", type=int, default=30)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--write", action="store_true", help="replace the cost block in docs/")
     a = ap.parse_args(argv)
     res: dict = {"machine": platform.platform()}
     if a.only_coupled:
@@ -227,18 +236,27 @@ def main(argv: list[str] | None = None) -> None:
         _print_coupled(res["coupled"])
         return
     res["cost"] = [cost(n) for n in a.grids]
-    print(
-        "| grid | elements in contact | field: ms/step | Newton/GMRES per step | body: ms/step |"
-        " evaluations/Newton/GMRES per step | body: s per contact length |"
-    )
-    print("|---|---|---|---|---|---|---|")
+    table = [
+        "| grid | elements in contact | field: ms per step | Newton / GMRES per step "
+        "| body: ms per step | evaluations / Newton / GMRES per step "
+        "| body: s per contact length |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for r in res["cost"]:
-        print(
+        table.append(
             f"| {r['n']} x {r['n']} | {r['elements_in_contact']} | {r['field_ms']:.1f} | "
             f"{r['field_newton']:.1f} / {r['field_gmres']:.0f} | {r['body_ms']:.1f} | "
             f"{r['body_evaluations']:.1f} / {r['body_newton']:.1f} / {r['body_gmres']:.0f} | "
             f"{r['body_ms'] * r['cells_per_length'] / 1e3:.2f} |"
         )
+    print("\n".join(table), flush=True)
+    if a.write:
+        grids = " ".join(map(str, a.grids))
+        command = f"benchmarks/bench_halfspace_transient.py --grids {grids} --skip-coupled --write"
+        harness.write_block(
+            harness.DOCS / "halfspace.md", "bench_halfspace_transient.py",
+            "\n".join([harness.made_by(command), "", *table]),
+        )  # fmt: skip
     rail = wheel_on_rail(n=24)
     layered = replace(rail, kb=1.0 / (rail.elastic.G / (2 * rail.a1)))  # k ~ A's scale
     dur = durations_halfspace(rail, 24, "half-space (railway)")

@@ -1,7 +1,7 @@
 """The benchmark runner (``python -m benchmarks``) and the generated blocks of the docs.
 
 The runner cannot rot unnoticed: the cheap benchmarks run with ``--quick`` (small sizes,
-seconds each, nothing written), and every marker block of docs/*.md
+seconds each, nothing written), and every marker block of the docs (docs/**/*.md)
 (``<!-- NAME: table -->`` ... ``<!-- NAME: end -->``) must be one that a benchmark of
 the runner writes, and the other way round, so that ``python -m benchmarks --write``
 finds every block it writes. No timing is asserted: the benchmarks' numbers are for
@@ -20,14 +20,25 @@ from pathlib import Path
 import pytest
 
 from contact_fmu.fmu.variables import DOCS_MARKS as VARIABLES_MARKS
-from contact_fmu.report.command import PERF_STIFF_SECTION, PERF_WP_SECTION
+from contact_fmu.report.command import (
+    ACCURACY_STIFF,
+    ACCURACY_WP,
+    PERF_STIFF_SECTION,
+    PERF_WP_SECTION,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
-DOCS = sorted((ROOT / "docs").glob("*.md"))
+DOCS = sorted((ROOT / "docs").rglob("*.md"))
 PERFORMANCE = ROOT / "docs" / "performance.md"
 MARKER = re.compile(r"^<!-- (.+): (table|end) -->$")
 # the sections of performance.md that `contact-fmu report --write-docs` writes whole
 REPORT_SECTIONS = (PERF_WP_SECTION, PERF_STIFF_SECTION)
+# ... and of every page (docs/accuracy.md too), by page name
+WRITTEN_SECTIONS = {"performance.md": REPORT_SECTIONS, "accuracy.md": (ACCURACY_WP, ACCURACY_STIFF)}
+# a table's header that names a time or a rate: a measurement of the machine, which only
+# a benchmark (or the report) may write
+SEPARATOR = re.compile(r"^\|(:?-+:?\|)+$")
+TIMED_HEADER = re.compile(r"\((s|ms|us|ns)\)|\b(ms|us|ns)\b|seconds|\bwall\b|per second|steps/s")
 # marker blocks written by the package itself, not by a benchmark: the table of
 # docs/variables.md (python -m contact_fmu.fmu.variables --write-docs)
 PACKAGE_BLOCKS = {MARKER.match(VARIABLES_MARKS[0]).group(1)}
@@ -97,6 +108,56 @@ def test_every_table_of_the_performance_page_is_generated():
             if not any(a < i < b for a, b in spans):
                 pasted.append(f"{i + 1}: {line[:60]}")
     assert pasted == []
+
+
+def _unblocked_rows(page: Path, row) -> list[str]:
+    """The table lines of ``page`` for which ``row(line, header)`` holds that lie neither
+    in a marker block nor in a section the report writes whole."""
+    text = page.read_text()
+    spans = [(a, b) for a, b, _ in _doc_blocks(text).values()]
+    written = WRITTEN_SECTIONS.get(page.name, ())
+    section, header, found = "", "", []
+    lines = text.split("\n")
+    for i, line in enumerate(lines):
+        if line.startswith("## "):
+            section = line
+        if not line.startswith("|"):
+            header = ""
+            continue
+        if not header:  # a table starts at a row followed by its separator row
+            following = lines[i + 1] if i + 1 < len(lines) else ""
+            if not SEPARATOR.match(following.replace(" ", "")):
+                continue  # a line of prose that starts with |x|
+            header = line
+        if section in written or any(a < i < b for a, b in spans):
+            continue
+        if row(line, header):
+            found.append(f"{page.parent.name}/{page.name}:{i + 1}: {line[:60]}")
+    return found
+
+
+def test_every_timed_table_of_the_docs_is_generated():
+    """On every page of the docs, a table that reports times or rates (a header naming
+    s, ms, us, seconds, wall or a rate) lies in a marker block a benchmark writes, or in a
+    section the report writes: the numbers of a machine are never pasted by hand, so
+    that a page quoting them links to the one generated table."""
+    timed = []
+    for page in DOCS:
+        timed += _unblocked_rows(page, lambda line, header: bool(TIMED_HEADER.search(header)))
+    assert timed == []
+
+
+def test_the_timed_table_check_sees_a_pasted_table(tmp_path):
+    """The check is not vacuous: a pasted table of times is found, the same table in a
+    block is not, nor is a table without times."""
+    page = tmp_path / "page.md"
+    table = "| grid | solve (ms) |\n|---|---|\n| 16 | 1.0 |\n"
+    page.write_text("# P\n\n" + table + "\n| a | b |\n|---|---|\n| 1 | 2 |\n\n|v| (s) is prose\n")
+    rows = _unblocked_rows(page, lambda line, header: bool(TIMED_HEADER.search(header)))
+    assert [r.split(": ", 1)[1] for r in rows] == ["| grid | solve (ms) |", "|---|---|",
+                                                   "| 16 | 1.0 |"]  # fmt: skip
+    page.write_text("# P\n\n<!-- b.py: table -->\n" + table + "<!-- b.py: end -->\n")
+    assert _unblocked_rows(page, lambda line, header: True) == []
 
 
 def test_every_block_names_the_command_that_made_it():

@@ -46,3 +46,19 @@ def test_docs_site_fails_on_a_broken_link(tmp_path):
         timeout=120,
     )
     assert proc.returncode != 0 and "nowhere.md" in proc.stdout + proc.stderr
+
+
+def test_the_docs_name_no_tracker_issue():
+    """The docs say what a thing is, not which tracker issue asked for it: the tracker is
+    not part of the repository, so "issue 28" tells a reader nothing."""
+    import re
+
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    found = [
+        f"{page.relative_to(ROOT)}:{n}: {line.strip()[:80]}"
+        for page in pages
+        for n, line in enumerate(page.read_text().split("\n"), 1)
+        if re.search(r"\b[Ii]ssues? #?\d+|(?<![\w/])#\d{1,4}\b", line)
+    ]
+    assert found == []
+    assert re.search(r"\b[Ii]ssues? #?\d+", "see issue 28")  # the pattern finds one
