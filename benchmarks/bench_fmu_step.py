@@ -226,7 +226,7 @@ def cornering(rows: list[dict]) -> str:
         "\nCornering: the full model with Fy_ex = "
         f"{CORNERING['Fy_ex']} mu P and Mz_ex = {CORNERING['Mz_ex']} mu P Rx added to "
         "the scene's inputs, so that Vy and Omega_z move and the law marches its spin "
-        f"grid (layer.SPIN_GRID) in every evaluation, compiled / Python: {cells}.\n"
+        f"grid (thin_layer.SPIN_GRID) in every evaluation, compiled / Python: {cells}.\n"
     )
 
 

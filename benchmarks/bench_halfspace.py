@@ -286,7 +286,7 @@ def table_report(n: int, nodes: tuple[int, int, int], points: int, seed: int = 1
             [abs(T[0] - s.Tx) / muP, abs(T[1] - s.Ty) / muP, abs(T[2] - s.Mz) / (muP * contact.c)]
         )
     err = np.array(err)
-    from contact_fmu.layer import LayerContact
+    from contact_fmu.laws.thin_layer import LayerContact
 
     lc = LayerContact(1e5, 0.46, 0.3, 5e-13, 5e-13, 3.2e-13, 3.2e-13, 0.3)
     calls = {}

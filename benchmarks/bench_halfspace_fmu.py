@@ -105,7 +105,7 @@ def layer_twin(scene_cfg: ModelConfig, spec: TableSpec, law) -> dict[str, float]
     """Thin-layer parameters of the same contact: a1 at the first load node from k1 + k2
     (a1^2 = 2 Rx delta with delta from Eq. 33), Ry the substrate's lateral radius, and
     kb + ks scaled so that the thin-layer onset of full slip is the table's."""
-    from contact_fmu.layer import LayerContact
+    from contact_fmu.laws.thin_layer import LayerContact
 
     P, Rx, Ry, mu = spec.loads[0], spec.Rx, spec.substrate.Ry, spec.mu
     k12 = 5e-13
@@ -283,9 +283,9 @@ def main(argv: list[str] | None = None) -> int:
         "error": table_error(spec, law, args.points),
     }
     if not args.no_timing:
-        from contact_fmu.dynamics import Body, Loads
-        from contact_fmu.integrator import RollingBody
-        from contact_fmu.layer import LayerContact
+        from contact_fmu.dynamics.body import Body, Loads
+        from contact_fmu.dynamics.integrator import RollingBody
+        from contact_fmu.laws.thin_layer import LayerContact
 
         params = layer_twin(cfg, spec, law)
         report["layer_twin"] = params

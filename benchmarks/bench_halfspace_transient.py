@@ -40,11 +40,11 @@ from dataclasses import replace  # noqa: E402
 import numpy as np  # noqa: E402
 
 from contact_fmu import examples as ex  # noqa: E402
-from contact_fmu.dynamics import Body, Loads  # noqa: E402
+from contact_fmu.dynamics.body import Body, Loads  # noqa: E402
+from contact_fmu.dynamics.thin_layer_field import LayerField  # noqa: E402
 from contact_fmu.halfspace.railway import wheel_on_rail  # noqa: E402
 from contact_fmu.halfspace.rolling import solve_rolling  # noqa: E402
 from contact_fmu.halfspace.transient import HalfSpaceField, TransientHalfSpaceBody  # noqa: E402
-from contact_fmu.transient import LayerField  # noqa: E402
 
 if __package__:  # python -m benchmarks
     from . import harness

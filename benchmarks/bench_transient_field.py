@@ -32,11 +32,11 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from contact_fmu.dynamics import Loads  # noqa: E402
+from contact_fmu.dynamics.body import Loads  # noqa: E402
+from contact_fmu.dynamics.thin_layer_field import LayerField  # noqa: E402
 from contact_fmu.fmu import body_transient  # noqa: E402
 from contact_fmu.native import field as native_field  # noqa: E402
 from contact_fmu.scenario import load  # noqa: E402
-from contact_fmu.transient import LayerField  # noqa: E402
 
 if __package__:  # python -m benchmarks
     from . import harness
@@ -115,7 +115,7 @@ def step_cost(repeats: int, steps: int) -> dict[str, tuple[float, float, int]]:
 def report(stages: dict, steps: dict, args: argparse.Namespace) -> str:
     when = datetime.date.today().isoformat()
     lines = [
-        "The thin-layer field of the transient phase (`transient.LayerField`) runs its stage"
+        "The thin-layer field of the transient phase (`thin_layer_field.LayerField`) runs its stage"
         " (re-indexing, loading, radial return, slip-aware weights, resultant and tangent) in"
         " C where the kernel library is there (`contact_fmu/native/field.c`), and so does the"
         " body's advance on it (`TransientRollingBody.advance`: the SDIRK2 steps, their"

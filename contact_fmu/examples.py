@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import math
 
-from .dynamics import Body
-from .layer import LayerContact
+from .dynamics.body import Body
+from .laws.thin_layer import LayerContact
 
 # Normal load (N), radii of the ellipsoid of revolution (m), friction coefficient (-)
 P = 1000.0

@@ -32,7 +32,7 @@ LOG_CATEGORIES = (
 
 # The traction along the contact's centre line y = 0 as three Float64 arrays of LINE_N
 # cells (FMI 3.0 arrays, fixed size): the cells' x and the traction there, at the
-# outputs' kinematics (layer.LayerContact.traction with ny = 1; native cf_get_line). After
+# outputs' kinematics (thin_layer.LayerContact.traction with ny = 1; native cf_get_line). After
 # time's value reference, in this order. The C side's CF_LINE_N is LINE_N (cf_model.h).
 LINE_N = 41
 LINE = (

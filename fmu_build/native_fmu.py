@@ -53,9 +53,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from contact_fmu import integrator, layer, native
+from contact_fmu import native
+from contact_fmu.dynamics import integrator
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.laws import thin_layer as layer
 from fmu_build import model_description3
 
 from . import CACHE, documentation, model_description, publish, write_archive

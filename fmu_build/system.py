@@ -26,7 +26,7 @@ Explicit coupling and the step. A master exchanges Tx once per step, so the slip
 equation M A2 dvx/dt = -Tx(vx) + ... is integrated explicitly with a delay of one step:
 stable only for h below the slip relaxation time tau = M A2 |Vx| / (dTx/dxi), at first
 order in h/tau (tests/test_cosim_libcosim.py derives the bound). The default step is
-the power of ten at or below tau/5 (``contact_fmu.coupling.relaxation_time``).
+the power of ten at or below tau/5 (``contact_fmu.dynamics.coupling.relaxation_time``).
 
 Inputs: the system files hold them constant (SSP and OSP carry no signals); a scene's
 input that varies in time is refused unless a value is given (``overrides``).
@@ -46,11 +46,10 @@ from xml.dom import minidom
 import numpy as np
 
 from contact_fmu._validate import InputError
-from contact_fmu.coupling import relaxation_time
-from contact_fmu.dynamics import Body
+from contact_fmu.dynamics.coupling import relaxation_time
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.fmu.laws import make_law
+from contact_fmu.fmu.factory import make_body, make_law
 from contact_fmu.scenario.schema import Case, Scene
 
 from . import DEFAULT_OUT, build, tables
@@ -257,12 +256,10 @@ def default_step(cfgs: dict[str, ModelConfig]) -> tuple[float, float]:
     contact, body = cfgs[CONTACT], cfgs[BODY]
     c = {v.name: contact.start(v) for v in contact.variables}
     b = {v.name: body.start(v) for v in body.variables}
-    if contact.has_table:  # the half-space law's table, as the FMU carries it
-        law = contact.table_spec.load_law(tables.ensure(contact))
-        law = law.with_load(c["P"]).with_mu(c["mu"])
-    else:
-        law = make_law(contact, c, c["P"])
-    tau = relaxation_time(law, Body(M=b["M"], Rx=b["Rx"], Iy=b["Iy"]), b["Vx0"])
+    # the half-space law's table as the FMU carries it (the build's cache)
+    table = tables.ensure(contact) if contact.has_table else None
+    law = make_law(contact, c, c["P"], table=table)
+    tau = relaxation_time(law, make_body(b), b["Vx0"])
     if not (tau > 0.0 and math.isfinite(tau)):
         raise InputError(
             "Vx0", b["Vx0"], "nonzero, with Iy > 0, for a default step (tau = 0): give --step"

@@ -9,9 +9,9 @@ import pytest
 
 from contact_fmu import InputError
 from contact_fmu import examples as ex
-from contact_fmu.dynamics import Body, Lateral, Loads, load_utilisation
-from contact_fmu.integrator import RollingBody, StageSolveError
-from contact_fmu.simulate import load_history, simulate
+from contact_fmu.dynamics.body import Body, Lateral, Loads, load_utilisation
+from contact_fmu.dynamics.integrator import RollingBody, StageSolveError
+from contact_fmu.dynamics.simulate import load_history, simulate
 
 C = ex.contact()
 MU_P = C.mu * C.P
@@ -251,7 +251,7 @@ def test_law_at_standstill_is_continuous_through_zero_speed():
     continuous at 0 and at +-V_STANDSTILL: across 2e-3 V_STANDSTILL about each of these
     points the forces move by at most 1e-3 of the jump (1.1e-3 with the law's own
     variation outside)."""
-    from contact_fmu.integrator import V_STANDSTILL
+    from contact_fmu.dynamics.integrator import V_STANDSTILL
 
     b = Body(ex.M, ex.Rx, ex.M * ex.Rx**2 / 3, Iz=0.4 * ex.M * ex.Rx**2)
     rb = RollingBody(C, b, Lateral(vy_ratio=None, spin_ratio=None))
@@ -393,7 +393,7 @@ def test_long_lobatto_step_that_reverses_vx_converges(monkeypatch):
     (RollingBody._creep_start, _no_slip): the step completes with finite outputs,
     |T| <= mu P and non-negative friction power on the rigid slip (Tx vx + Ty vy + Mz
     Omega_z), and the first start still fails (so the further ones were needed)."""
-    import contact_fmu.integrator as integrator
+    import contact_fmu.dynamics.integrator as integrator
 
     failed = []
     newton = integrator.newton

@@ -110,13 +110,20 @@ def test_scene_fmu_holds_only_the_variables_it_uses(built):
 
 def test_fmu_carries_only_the_model_parts_it_imports(built):
     body, contact, rigid = (_vendored(built[n]) for n in ("fig13", "sweep", "full_rigid_body"))
-    assert {"integrator.py", "dynamics.py", "layer.py", "fmu/body_model.py"} <= body
+    assert {
+        "dynamics/integrator.py",
+        "dynamics/body.py",
+        "laws/thin_layer.py",
+        "fmu/body_model.py",
+    } <= body
     assert "fmu/contact_model.py" not in body and "fmu/rigid_body.py" not in body
-    assert {"layer.py", "kinematics.py", "fmu/contact_model.py"} <= contact
-    assert not contact & {"integrator.py", "dynamics.py", "fmu/body_model.py"}
-    assert "layer.py" not in rigid and "integrator.py" not in rigid
+    assert {"laws/thin_layer.py", "dynamics/kinematics.py", "fmu/contact_model.py"} <= contact
+    # the contact FMU has the body's parameter types (dynamics/body.py, through the
+    # package), not its steppers
+    assert not contact & {"dynamics/integrator.py", "dynamics/solvers.py", "fmu/body_model.py"}
+    assert "laws/thin_layer.py" not in rigid and "dynamics/integrator.py" not in rigid
     for files in (body, contact, rigid):
-        assert "simulate.py" not in files and "examples.py" not in files
+        assert "dynamics/simulate.py" not in files and "examples.py" not in files
         assert "fmu/slave.py" in files
 
 

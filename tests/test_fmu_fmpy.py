@@ -15,10 +15,10 @@ from fmpy.fmi1 import FMICallException
 
 import fmu_build
 from contact_fmu import examples as ex
-from contact_fmu.dynamics import Body
+from contact_fmu.dynamics.body import Body
+from contact_fmu.dynamics.simulate import load_history, simulate
 from contact_fmu.scenario import load, runner
 from contact_fmu.scenario.instance import FATAL, OK, Instance
-from contact_fmu.simulate import load_history, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -293,8 +293,8 @@ def test_full_body_fmu_lateral_extremes(kind, method):
     (16 eps), and the power of the creep forces on the rigid slip of Eq. (3), Tx vx +
     Ty vy + Mz Omega_z, never negative beyond the stage tolerance (100 SOLVE_RTOL mu P
     v_s, as the stiff suite's dissipation check)."""
+    from contact_fmu.dynamics.solvers import SOLVE_RTOL
     from contact_fmu.fmu.config import ModelConfig
-    from contact_fmu.solvers import SOLVE_RTOL
 
     path = fmu_build.build(ModelConfig.full("body"), OUT).path
     h = 1e-5

@@ -9,11 +9,11 @@ import pytest
 
 import fmu_build
 from contact_fmu import examples as ex
-from contact_fmu import integrator
 from contact_fmu._validate import InputError
-from contact_fmu.dynamics import Loads
+from contact_fmu.dynamics import integrator
+from contact_fmu.dynamics.body import Loads
+from contact_fmu.dynamics.integrator import RollingBody
 from contact_fmu.fmu import config as fc
-from contact_fmu.integrator import RollingBody
 from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import OK, Instance
 

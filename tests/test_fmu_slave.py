@@ -21,10 +21,10 @@ import pytest
 
 from contact_fmu import examples as ex
 from contact_fmu import native
+from contact_fmu.dynamics.kinematics import rigid_slip
 from contact_fmu.fmu.body_model import MAX_SUBSTEPS, substeps
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.fmu.slave import CELL_VR, ContactSlave
-from contact_fmu.kinematics import rigid_slip
 
 F = ex.force_unit()
 H = 1.75e-4  # s, the communication step of the Fig. 13 scene
@@ -377,7 +377,7 @@ def test_compiled_step_state_survives_a_python_step_that_fails_late(monkeypatch)
     """A step Python takes (here: a new load P) whose stepper succeeds but whose outputs
     then fail is discarded with the state unchanged, in the struct too: the next
     compiled steps continue from the state before it, as the Python adapter does."""
-    from contact_fmu.integrator import RollingBody
+    from contact_fmu.dynamics.integrator import RollingBody
 
     fast, slow = _compiled_and_python(monkeypatch)
     for s in (fast, slow):

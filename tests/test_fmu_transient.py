@@ -22,12 +22,12 @@ from fmpy.validation import validate_fmu
 
 import fmu_build
 from contact_fmu import examples as ex
-from contact_fmu.dynamics import Lateral, Loads
+from contact_fmu.dynamics.body import Lateral, Loads
+from contact_fmu.dynamics.thin_layer_field import TransientRollingBody
 from contact_fmu.fmu.body_model import substeps
 from contact_fmu.fmu.body_transient import FIELD_COLUMNS
 from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
-from contact_fmu.transient import TransientRollingBody
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -81,8 +81,8 @@ def test_transient_fmu_validates_declares_the_field_and_carries_its_module(fmu):
             return {n.split("/", 2)[-1] for n in z.namelist() if n.startswith("resources/cfmu_")}
 
     steady = fmu_build.build(load(ROOT / "scenarios" / "fig12.toml").config, OUT).path
-    assert {"transient.py", "fmu/body_transient.py"} <= vendored(fmu)
-    assert not {"transient.py", "fmu/body_transient.py"} & vendored(steady)
+    assert {"dynamics/thin_layer_field.py", "fmu/body_transient.py"} <= vendored(fmu)
+    assert not {"dynamics/thin_layer_field.py", "fmu/body_transient.py"} & vendored(steady)
 
 
 def test_fmu_state_with_the_field_repeats_bit_for_bit(fmu, tmp_path):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from contact_fmu import InputError
-from contact_fmu.dynamics import Body, Loads
+from contact_fmu.dynamics.body import Body, Loads
 from contact_fmu.halfspace import HalfSpaceContact, Hertz, Material
 from contact_fmu.halfspace.railway import STEEL, wheel_on_rail
 from contact_fmu.halfspace.transient import HalfSpaceField, TransientHalfSpaceBody

@@ -2,7 +2,7 @@
 invariants.
 
 References: Carter (1926) and Kalker's creep coefficients (references.md), the
-closed form of the thin-layer law (contact_fmu.layer, an independent implementation of
+closed form of the thin-layer law (contact_fmu.laws.thin_layer, an independent implementation of
 Eqs. 40-43), and the invariants of references.md (full slip, symmetry, dissipation).
 """
 

@@ -13,10 +13,10 @@ import math
 import numpy as np
 import pytest
 
-from contact_fmu.dynamics import Body, Lateral, Loads
+from contact_fmu.dynamics.body import Body, Lateral, Loads
+from contact_fmu.dynamics.simulate import simulate
 from contact_fmu.halfspace.railway import wheel_on_rail
 from contact_fmu.halfspace.table import CreepTable, build_table, saturate
-from contact_fmu.simulate import simulate
 
 NODES = (13, 13, 9)
 GRID = 12

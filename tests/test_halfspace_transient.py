@@ -8,9 +8,9 @@ References used as expected values (none computed by the code under test):
   shift delta at rest gives Q/(mu P) = 1 - (1 - delta/delta_s)^(3/2), delta_s =
   3 mu P (2 - nu)/(8 G a) for the combined shear modulus G (both bodies), and an
   adhesion disc of radius c = a (1 - Q/(mu P))^(1/3);
-- the thin-layer transient (``contact_fmu.transient``: LayerField, TransientRollingBody,
-  an independent implementation with its own quadrature and time integrator), which the
-  half-space model must reproduce when the layers dominate;
+- the thin-layer transient (``contact_fmu.dynamics.thin_layer_field``: LayerField,
+  TransientRollingBody, an independent implementation with its own quadrature and time
+  integrator), which the half-space model must reproduce when the layers dominate;
 - references.md: steady rolling is reached after "one to a few contact lengths".
 """
 
@@ -24,14 +24,14 @@ import pytest
 
 from contact_fmu import InputError
 from contact_fmu import examples as ex
-from contact_fmu.dynamics import Body, Lateral, Loads
+from contact_fmu.dynamics.body import Body, Lateral, Loads
+from contact_fmu.dynamics.solvers import StageSolveError
+from contact_fmu.dynamics.thin_layer_field import LayerField, TransientRollingBody
 from contact_fmu.halfspace.contact import HalfSpaceContact
 from contact_fmu.halfspace.hertz import Material
 from contact_fmu.halfspace.railway import wheel_on_rail
 from contact_fmu.halfspace.rolling import solve_rolling
 from contact_fmu.halfspace.transient import HalfSpaceField, TransientHalfSpaceBody
-from contact_fmu.solvers import StageSolveError
-from contact_fmu.transient import LayerField, TransientRollingBody
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
@@ -132,7 +132,7 @@ def test_cattaneo_mindlin_shift_at_rest():
 @pytest.mark.parametrize("G_factor", [1e4, 1e5])
 def test_layer_dominated_limit_is_the_thin_layer_field(G_factor):
     """With half-spaces much stiffer than the layers (G = G_factor a1/k) the field is the
-    thin-layer one of ``transient.LayerField`` (same element centres, pressure sampled
+    thin-layer one of ``thin_layer_field.LayerField`` (same element centres, pressure sampled
     without scaling): node by node, after a start from rest at constant creepage
     (vx/Vx = 1e-3, vy/Vx = 2e-3) with steps of one element. The remaining difference is
     the half-space compliance, relative size A_00/k (self-coefficient over k): measured

@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 
 from contact_fmu import InputError, LayerContact
 from contact_fmu import examples as ex
-from contact_fmu.layer import force_fraction, moment_fraction
+from contact_fmu.laws.thin_layer import force_fraction, moment_fraction
 
 C = ex.contact()
 MU_P = C.mu * C.P

@@ -1,5 +1,5 @@
 """The strip march of the thin-layer law with spin at a vanishing rolling speed: its gain
-1/(|Vx| k) is bounded (layer._Grid.gain, stepper.c march_gain; docs/model.md) so that
+1/(|Vx| k) is bounded (thin_layer._Grid.gain, stepper.c march_gain; docs/model.md) so that
 for |Vx| down to the smallest subnormal the increments stay finite and every node slides
 along the slip of Eq. (3) at its midpoint, the |Vx| -> 0+ limit of Eqs. (35), (4)-(5)."""
 
@@ -12,7 +12,7 @@ import pytest
 
 from contact_fmu import examples as ex
 from contact_fmu import native
-from contact_fmu.layer import SPIN_GRID
+from contact_fmu.laws.thin_layer import SPIN_GRID
 
 LAW = ex.contact()
 MU_P = LAW.mu * LAW.P

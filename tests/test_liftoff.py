@@ -16,9 +16,9 @@ import pytest
 
 from contact_fmu import examples as ex
 from contact_fmu import native
-from contact_fmu.dynamics import Body, Lateral, Loads
-from contact_fmu.integrator import RollingBody
-from contact_fmu.layer import LayerContact
+from contact_fmu.dynamics.body import Body, Lateral, Loads
+from contact_fmu.dynamics.integrator import RollingBody
+from contact_fmu.laws.thin_layer import LayerContact
 
 
 def law(P: float) -> LayerContact:
@@ -112,7 +112,7 @@ def test_without_contact_the_body_moves_under_the_external_loads(
 def test_eta_infinity_takes_no_moment_without_contact(monkeypatch, compiled):
     """Iy = 0 in the air with My_ex != 0 would spin up instantly: the step is refused
     (StageSolveError, as beyond mu P in contact), the state unchanged."""
-    from contact_fmu.integrator import StageSolveError
+    from contact_fmu.dynamics.integrator import StageSolveError
 
     if not compiled:
         monkeypatch.setattr(native, "library", lambda: None)

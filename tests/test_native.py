@@ -24,9 +24,10 @@ import numpy as np
 import pytest
 
 from contact_fmu import examples as ex
-from contact_fmu import native, solvers
-from contact_fmu.dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
-from contact_fmu.integrator import GAMMA, SCHEMES, RollingBody
+from contact_fmu import native
+from contact_fmu.dynamics import solvers
+from contact_fmu.dynamics.body import ROLLING_STRAIGHT, Body, Lateral, Loads
+from contact_fmu.dynamics.integrator import GAMMA, SCHEMES, RollingBody
 
 pytestmark = pytest.mark.skipif(native.library() is None, reason="no C compiler")
 
@@ -158,7 +159,7 @@ def test_kept_newton_matrix_changes_the_vector_step_only_within_the_stage_tolera
     1 s) and on a co-simulation's smooth one (both methods), where the law is
     evaluated at most 0.6 times as often (measured: 0.55; on the random histories
     0.81)."""
-    import contact_fmu.integrator as integrator
+    import contact_fmu.dynamics.integrator as integrator
 
     runs = {}
     for mode in ("kept", "newton"):
@@ -455,7 +456,7 @@ def test_strip_march_of_the_spin_law_agrees_to_rounding(monkeypatch):
     by at most about 128 roundings: 2e-14 of mu p0. The resultants are summed strip by
     strip in C, pairwise in numpy: each differs by at most 3072 roundings of sum w |tau|
     <= mu P (times max(a1, a2) for Mz), and forces takes the difference of two: 7e-13."""
-    from contact_fmu.layer import SPIN_GRID
+    from contact_fmu.laws.thin_layer import SPIN_GRID
 
     grid = CONTACT._grid(*SPIN_GRID)
     rng = np.random.default_rng(11)
@@ -651,7 +652,7 @@ def test_compiled_vector_step_answers_not_ok_for_extreme_loads(lateral, scheme):
 def test_compiled_layer_law_and_march_answer_not_ok_for_extreme_inputs():
     """cf_layer_forces and cf_strip_march (spin included) on every combination of
     extreme inputs: no crash, and either finite results or CF_FALLBACK."""
-    from contact_fmu.layer import SPIN_GRID
+    from contact_fmu.laws.thin_layer import SPIN_GRID
 
     lib = _raw()
     law = ex.contact()

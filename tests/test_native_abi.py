@@ -126,8 +126,8 @@ def test_compiled_constants_are_their_python_homes_values(tmp_path):
         assert (int(text) if ctype == "int" else float(text)) == python, (home, text)
         assert type(python) is (int if ctype == "int" else float), home
     # the homes themselves, not copies: the ranges of the FMU's declarations
+    from contact_fmu.dynamics.integrator import LOAD_LIMIT
     from contact_fmu.fmu.variables import RATE_MAX, SPEED_MAX
-    from contact_fmu.integrator import LOAD_LIMIT
 
     assert (values["CF_SPEED_MAX"], values["CF_RATE_MAX"]) == (SPEED_MAX, RATE_MAX)
     assert values["CF_LOAD_LIMIT"] == LOAD_LIMIT

@@ -89,7 +89,7 @@ def test_full_contact_fmu_with_spin_gives_the_pythonfmu_outputs(fmus):
 @pytest.mark.parametrize("target", ["native", "pythonfmu"])
 def test_spin_forces_are_the_compiled_laws_doubles(fmus, target, monkeypatch):
     """Where the same C runs: LayerContact.forces in this process marches its spin grid
-    (numpy's layer._Grid) with the compiled library (cf_layer_forces). The native FMU
+    (numpy's thin_layer._Grid) with the compiled library (cf_layer_forces). The native FMU
     marches the grid it built in C (cf_grid_build) for each load; the pythonfmu FMU
     carries the library (fmu_build.compiles) and its law calls it, loaded from the FMU's
     own resources. Rolling inputs with spin, a new load each time: the same doubles (so
@@ -104,7 +104,7 @@ def test_spin_forces_are_the_compiled_laws_doubles(fmus, target, monkeypatch):
     from fmpy.validation import validate_fmu
 
     from contact_fmu import native
-    from contact_fmu.layer import LayerContact
+    from contact_fmu.laws.thin_layer import LayerContact
 
     if native.library() is None:
         pytest.skip("no compiled library")

@@ -1,5 +1,5 @@
 """The transient field in C (contact_fmu/native/field.c) against the Python reference it
-mirrors: the field's stage (transient.LayerField.stage, _weights: cf_field_stage,
+mirrors: the field's stage (thin_layer_field.LayerField.stage, _weights: cf_field_stage,
 cf_field_weights) and the body's steps on it (TransientRollingBody.advance, _step,
 _stage, _solve_scalar: cf_field_advance), and their hostile inputs.
 
@@ -29,13 +29,13 @@ import pytest
 from contact_fmu import examples as ex
 from contact_fmu import native
 from contact_fmu._validate import InputError
-from contact_fmu.dynamics import Body, Lateral, Loads
+from contact_fmu.dynamics.body import Body, Lateral, Loads
+from contact_fmu.dynamics.integrator import StageSolveError
+from contact_fmu.dynamics.thin_layer_field import LayerField, TransientRollingBody
 from contact_fmu.fmu import body_transient
-from contact_fmu.integrator import StageSolveError
-from contact_fmu.layer import LayerContact
+from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.native import field as native_field
 from contact_fmu.scenario import load
-from contact_fmu.transient import LayerField, TransientRollingBody
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = load(ROOT / "scenarios" / "fig12_transient.toml")

@@ -30,7 +30,7 @@ from fmpy.fmi3 import FMU3Slave
 
 from contact_fmu import examples as ex
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.layer import LayerContact
+from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.scenario import load, runner
 from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from fmu_build import __main__ as cli
@@ -581,7 +581,7 @@ def test_centre_line_is_eq_36_in_the_adhesion_area_and_the_laws_field(fmus):
     """Fig. 13's body under a traction force (partial slip, no spin): along the centre line
     y = 0 the traction is Eq. (36) where the material adheres, tau_x = vx (l - x)/(|Vx| k)
     from the leading edge l = a1 (Vx > 0, k = kb + ks), and mu p(x) = mu p0 (1 - (x/a1)^2)
-    where it slips (Eqs. 4-5); the cells are layer.LayerContact.traction's (nx = 41, ny = 1)
+    where it slips (Eqs. 4-5); the cells are thin_layer.LayerContact.traction's (nx = 41, ny = 1)
     and so is the whole field. The C march and the Python one run the same recurrence of
     41 projections on the same doubles, so they agree to rounding: 1e-12 mu p0 covers a
     few ulp per step."""

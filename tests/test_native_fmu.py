@@ -4,7 +4,7 @@ the pythonfmu FMU and the scenes' references.
 
 Both FMUs run the same C step (stepper.c's cf_advance and cf_body_outputs), the native
 one with the law's and the body's constants derived in C (cf_layer_law, cf_body_inertia)
-from the same expressions as layer.py and dynamics.py: their outputs must be the same
+from the same expressions as laws/thin_layer.py and dynamics/body.py: their outputs must be the same
 doubles, step for step. Tests that need a C compiler, cmake or a sanitizer skip only
 where the tool is missing (CI has them all).
 """
@@ -31,9 +31,9 @@ import pytest
 import fmu_build
 from contact_fmu import examples as ex
 from contact_fmu import native
-from contact_fmu.dynamics import Body
+from contact_fmu.dynamics.body import Body
 from contact_fmu.fmu.config import ModelConfig
-from contact_fmu.layer import LayerContact
+from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.scenario import load, runner
 from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from fmu_build import native_fmu
@@ -94,7 +94,7 @@ def test_scene_through_the_native_fmu_passes_its_references_bit_for_bit(
 def test_law_and_body_constants_in_c_are_pythons_doubles():
     """The contact ellipse and the law's constants (Eqs. 33-34, creep_full_slip and
     beta per creepage: LayerContact.native_fields, a2, p0) and the body's A1, A2, M A2
-    (Eq. 23), derived in C for every new load, equal layer.py's and dynamics.py's bit for
+    (Eq. 23), derived in C for every new load, equal thin_layer.py's and body.py's bit for
     bit over random parameters spanning twelve decades."""
     lib = native.library()
     lib.cf_layer_law.argtypes = (

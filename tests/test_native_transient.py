@@ -3,7 +3,7 @@ traction field, field.c's cf_field_advance in the instance layer) against the py
 FMU, the scene's references and hostile calls.
 
 Both FMUs step the body with the same C (cf_field_advance, cf_field_summary), the
-pythonfmu FMU through transient.py's ctypes binding. They differ only where the field's
+pythonfmu FMU through thin_layer_field.py's ctypes binding. They differ only where the field's
 geometry is laid: numpy computes the strips' y = a2 sin(phi), l(y)^3 and the pressure
 scale sum(dy (4/3) p0 l^3/a1^2) with its own power and BLAS dot, the native FMU with the C
 library's pow and a running sum; these agree to an ulp or two, a relative 1e-16 that the

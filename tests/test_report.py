@@ -13,14 +13,15 @@ import pytest
 
 from contact_fmu import cli
 from contact_fmu import examples as ex
-from contact_fmu.dynamics import Loads
-from contact_fmu.integrator import RollingBody
+from contact_fmu.dynamics.body import Loads
+from contact_fmu.dynamics.integrator import RollingBody
+from contact_fmu.dynamics.simulate import load_history, simulate
+from contact_fmu.fmu.factory import make_body, thin_layer_law
 from contact_fmu.report import output, reference, sweep
 from contact_fmu.report.metrics import norms, observed_order, pairwise_orders
 from contact_fmu.report.workprecision import run_scene
 from contact_fmu.scenario import load
 from contact_fmu.scenario.signals import parse
-from contact_fmu.simulate import load_history, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -75,9 +76,9 @@ def test_radau_reference_agrees_with_the_refined_stepper():
         My_ex=lambda tt: float(sig["My_ex"](np.array([tt]))[0]),
     )
     p = case.parameters
-    body = reference.body(p)
+    body = make_body(p)
     runs = [
-        simulate(reference.law(p, 1000.0), body, loads, T_end, h, Vx0=p["Vx0"], substeps=k)
+        simulate(thin_layer_law(p, 1000.0), body, loads, T_end, h, Vx0=p["Vx0"], substeps=k)
         for k in (1, 2)
     ]
     for var, scale in (("Tx", ex.mu * ex.P), ("vx", 0.0099 * p["Vx0"])):
@@ -96,7 +97,7 @@ def test_quasistationary_closed_form_is_what_the_stepper_solves():
     grid = s.grid[:101]
     ref = reference.quasistationary_held(s, case, grid)
     p = case.parameters
-    rb = RollingBody(reference.law(p, 1000.0), reference.body(p), method="quasistationary",
+    rb = RollingBody(thin_layer_law(p, 1000.0), make_body(p), method="quasistationary",
                      Vx0=p["Vx0"], Omega_y0=p["Vx0"] / p["Rx"])  # vx0 = 0  # fmt: skip
     My = case.inputs["My_ex"](grid)
     v_s = rb.law.creep_full_slip * p["Vx0"]

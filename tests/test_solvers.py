@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from contact_fmu.solvers import StageSolveError, bracketed_newton
+from contact_fmu.dynamics.solvers import StageSolveError, bracketed_newton
 
 
 def test_newton_converges_to_the_root_of_an_increasing_cubic():

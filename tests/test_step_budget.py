@@ -27,6 +27,8 @@ from fmpy.fmi1 import FMICallException
 
 import fmu_build
 from contact_fmu import native
+from contact_fmu.dynamics.integrator import EvalBudget, RollingBody
+from contact_fmu.dynamics.thin_layer_field import TransientRollingBody
 from contact_fmu.fmu import body_model
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.body_model import (
@@ -40,11 +42,9 @@ from contact_fmu.fmu.body_model import (
 )
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.fmu.slave import CELL_VR, ContactSlave
-from contact_fmu.integrator import EvalBudget, RollingBody
 from contact_fmu.native import field as native_field
 from contact_fmu.scenario import load
 from contact_fmu.scenario.instance import DISCARD, OK, Instance
-from contact_fmu.transient import TransientRollingBody
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"

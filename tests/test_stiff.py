@@ -74,7 +74,7 @@ def test_case_list_covers_the_issue():
 @pytest.mark.parametrize("eps", [1e-1, 1e-3, 1e-5])
 def test_epsilon_is_set_through_the_layers(eps):
     """a1/Rx = epsilon (Eq. 34) and the full-slip creepage 0.64 mu epsilon, to rounding."""
-    from contact_fmu.layer import LayerContact
+    from contact_fmu.laws.thin_layer import LayerContact
 
     p = params(epsilon=eps)
     c = LayerContact(1000.0, p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"], p["mu"])

@@ -33,8 +33,8 @@ from libcosimpy.CosimObserver import CosimObserver
 import fmu_build
 from contact_fmu import cli
 from contact_fmu import examples as ex
-from contact_fmu.coupling import creep_slope, relaxation_time
-from contact_fmu.dynamics import Body
+from contact_fmu.dynamics.body import Body
+from contact_fmu.dynamics.coupling import creep_slope, relaxation_time
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load
 from fmu_build import system

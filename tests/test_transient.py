@@ -1,5 +1,5 @@
 """Transient thin-layer field (Eq. 15 with its time derivative) and its coupling to
-the body (Eqs. 8-11): contact_fmu.transient.
+the body (Eqs. 8-11): contact_fmu.dynamics.thin_layer_field.
 
 References used as expected values (none computed by the code under test):
 - LayerContact.traction / .forces: the core's steady strip march and closed form
@@ -22,10 +22,10 @@ from scipy.optimize import brentq
 
 from contact_fmu import InputError
 from contact_fmu import examples as ex
-from contact_fmu.dynamics import Body, Lateral, Loads
-from contact_fmu.integrator import RollingBody
-from contact_fmu.layer import LayerContact
-from contact_fmu.transient import LayerField, TransientRollingBody
+from contact_fmu.dynamics.body import Body, Lateral, Loads
+from contact_fmu.dynamics.integrator import RollingBody
+from contact_fmu.dynamics.thin_layer_field import LayerField, TransientRollingBody
+from contact_fmu.laws.thin_layer import LayerContact
 
 C = ex.contact()
 V = ex.speed_unit()

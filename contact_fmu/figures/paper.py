@@ -13,8 +13,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .. import examples as ex
-from ..dynamics import Lateral, load_utilisation
-from ..simulate import load_history, simulate
+from ..dynamics.body import Lateral, load_utilisation
+from ..dynamics.simulate import load_history, simulate
 from . import save
 
 ETA_STYLE = {10.9: "-", 2.92: "--", 1.7: ":", 1.5: ":", 3.0: "--", 10.0: "-"}

@@ -1,7 +1,7 @@
 """The transient phase resolved (thin layers): Fig. 12 with the transient, Figs. 7-8
 and 10-11 as snapshots of the traction field, and the duration of the transient.
 
-Model: contact_fmu.transient (the traction field as a state, Eq. 15 with its time
+Model: contact_fmu.dynamics.thin_layer_field (the traction field as a state, Eq. 15 with its time
 derivative, coupled to Eqs. 8-11). Parameters: contact_fmu.examples, with the load
 of the core's figures, Fx_ex = FX_FIG6_12_UNITS mu p0 a1 a2 (docs/model.md); the
 durations are also measured at one force unit. Numbers quoted in docs/transient.md
@@ -21,10 +21,10 @@ from scipy.integrate import quad
 from scipy.optimize import brentq, fsolve
 
 from .. import examples as ex
-from ..dynamics import Lateral, Loads
-from ..integrator import RollingBody
-from ..layer import LayerContact, TractionField
-from ..transient import TransientRollingBody
+from ..dynamics.body import Lateral, Loads
+from ..dynamics.integrator import RollingBody
+from ..dynamics.thin_layer_field import TransientRollingBody
+from ..laws.thin_layer import LayerContact, TractionField
 from . import save
 
 # Grid of the figures: 64 cells along 2 a1; an odd number of strips puts one on y = 0

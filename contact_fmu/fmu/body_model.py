@@ -17,11 +17,11 @@ from typing import Any
 
 from .. import native
 from .._validate import InputError
-from ..dynamics import Body, Lateral, Loads
-from ..integrator import RollingBody, WorkBudgetError
-from ..kinematics import V_CREEP_FLOOR, spin_for_slip
+from ..dynamics.body import Loads
+from ..dynamics.integrator import RollingBody, WorkBudgetError
+from ..dynamics.kinematics import V_CREEP_FLOOR
 from .config import ModelConfig
-from .laws import make_law
+from .factory import initial_state, make_body, make_lateral, make_law
 from .ranges import within_range
 
 # The work of one doStep is bounded by the parameter max_work (variables.py), counted in
@@ -69,22 +69,15 @@ def make_stepper(
     cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float, data_dir: Path | None = None
 ) -> Any:
     """The stepper of the configured phase, law and method at the initial state; the
-    law's generated data (a creep-force table) is read under ``data_dir`` (laws.py)."""
+    law's generated data (a creep-force table) is read under ``data_dir`` (factory.py)."""
     if cfg.phase != "steady":  # ModelConfig admits only implemented phases
         raise InputError("phase", cfg.phase, '"steady"')
-    law = make_law(cfg, p, P, data_dir)
-    body = Body(M=p["M"], Rx=p["Rx"], Iy=p["Iy"], Iz=p.get("Iz"))
-    vy_ratio = {"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy]
-    spin_ratio = {"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin]
     return RollingBody(
-        law,
-        body,
-        Lateral(vy_ratio=vy_ratio, spin_ratio=spin_ratio),
+        make_law(cfg, p, P, data_dir),
+        make_body(p),
+        make_lateral(cfg, p),
         method=p.get("method", cfg.methods[0]),
-        Vx0=p["Vx0"],
-        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]),
-        Vy0=p.get("Vy0", 0.0),
-        Omega_z0=p.get("Omega_z0", 0.0),
+        **initial_state(p),
         t0=t0,
         scheme=p.get("scheme", cfg.schemes[0]),
     )

@@ -1,6 +1,6 @@
 """Body mode, phase "transient": the body on the thin-layer traction field.
 
-The stepper is ``transient.TransientRollingBody``: the traction field of Eq. (15) with
+The stepper is ``thin_layer_field.TransientRollingBody``: the traction field of Eq. (15) with
 its time-derivative term on a material grid of nx cells along the contact and ny
 strips across it, advanced together with Eqs. (8)-(11) by an L-stable SDIRK2 step
 (docs/transient.md). The field is part of the state (FMU get/set state restores it).
@@ -37,12 +37,10 @@ from typing import Any
 import numpy as np
 
 from .._validate import InputError
-from ..dynamics import Body, Lateral
-from ..kinematics import spin_for_slip
-from ..transient import TransientRollingBody
+from ..dynamics.thin_layer_field import TransientRollingBody
 from .body_model import MAX_WORK, WORK_PER_CELL, WORK_PER_CELL_EVAL, BodyModel, substeps
 from .config import ModelConfig
-from .laws import make_law
+from .factory import initial_state, make_body, make_lateral, make_law
 from .ranges import within_range
 
 # CSV columns of the field file, in order.
@@ -207,18 +205,11 @@ def make_stepper(
     cfg: ModelConfig, p: Mapping[str, Any], P: float, t0: float, data_dir: Path | None = None
 ) -> TransientRollingBody:
     """The transient stepper at the initial state: field at rest (tau = 0)."""
-    law = make_law(cfg, p, P, data_dir)
-    body = Body(M=p["M"], Rx=p["Rx"], Iy=p["Iy"], Iz=p.get("Iz"))
-    vy_ratio = {"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy]
-    spin_ratio = {"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin]
     return TransientRollingBody(
-        law,
-        body,
-        Lateral(vy_ratio=vy_ratio, spin_ratio=spin_ratio),
-        Vx0=p["Vx0"],
-        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]),
-        Vy0=p.get("Vy0", 0.0),
-        Omega_z0=p.get("Omega_z0", 0.0),
+        make_law(cfg, p, P, data_dir),
+        make_body(p),
+        make_lateral(cfg, p),
+        **initial_state(p),
         t0=t0,
         nx=int(p["nx"]),
         ny=int(p["ny"]),

@@ -6,7 +6,7 @@ later issues add to the scene schema are listed in ``PLANNED`` and refused here 
 clear error until implemented.
 
 ``phase = "transient"``: the body-mode FMU carries the traction field of the
-thin-layer law as its state (``transient.TransientRollingBody``) instead of the steady
+thin-layer law as its state (``thin_layer_field.TransientRollingBody``) instead of the steady
 creep law; its grid and step are parameters (nx, ny, cells_per_step), and it can write
 the field to a file at chosen times (field_file, field_times). The steady methods and
 schemes do not apply to it, and the transient half-space field is not offered in an
@@ -38,7 +38,7 @@ MODEL_MODULES = {
 }
 # The body model of phase "transient" (body mode, thin-layer field).
 TRANSIENT_MODULE = "fmu.body_transient"
-LAW_MODULES = {"layer": "layer", "halfspace": "halfspace.spec"}
+LAW_MODULES = {"layer": "laws.thin_layer", "halfspace": "halfspace.spec"}
 # Data files a law reads at run time (paths relative to the package, e.g. a table .npz):
 # the build copies them next to the law's module in the FMU's resources.
 LAW_DATA: dict[str, tuple[str, ...]] = {"layer": (), "halfspace": ()}

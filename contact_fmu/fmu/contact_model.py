@@ -12,9 +12,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..kinematics import ROLLING, SLIDING, contact_quantities, rigid_slip
+from ..dynamics.kinematics import ROLLING, SLIDING, contact_quantities, rigid_slip
 from .config import ModelConfig
-from .laws import make_law
+from .factory import make_law
 
 
 class ContactElement:

@@ -1,7 +1,7 @@
 """The rigid body of Eqs. (8)-(9) alone, driven by the contact force Tx of another FMU.
 
     M  dVx/dt      = Fx_ex - Tx
-    Iy dOmega_y/dt = My_ex + Rx Tx      (the + sign of Eq. 9, see dynamics.py)
+    Iy dOmega_y/dt = My_ex + Rx Tx      (the + sign of Eq. 9, see dynamics/body.py)
 
 With the inputs held over a communication step the right-hand sides are constant, so
 the update Vx += h (Fx_ex - Tx)/M, Omega_y += h (My_ex + Rx Tx)/Iy is exact. Coupled
@@ -19,8 +19,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from .._validate import finite, positive
-from ..kinematics import spin_for_slip
 from .config import ModelConfig
+from .factory import initial_state
 from .ranges import within_range
 
 
@@ -64,5 +64,5 @@ def build(
     data_dir: Any = None,  # no contact law, no data
 ) -> RigidBody:
     p = params
-    Omega_y0 = spin_for_slip(p["Vx0"], p["vx0"], p["Rx"])
-    return RigidBody(p["M"], p["Rx"], p["Iy"], p["Vx0"], Omega_y0)
+    start = initial_state(p)
+    return RigidBody(p["M"], p["Rx"], p["Iy"], start["Vx0"], start["Omega_y0"])

@@ -1,7 +1,7 @@
 """The half-space contact law by direct solves: Hertz pressure plus steady rolling.
 
 HalfSpaceContact has the attributes and methods of the ContactLaw protocol of
-contact_fmu.integrator (P, mu, a1, a2, p0, creep_full_slip; forces, adhesion_fraction,
+contact_fmu.laws.protocol (P, mu, a1, a2, p0, creep_full_slip; forces, adhesion_fraction,
 with_load), but every call solves the tangential problem (rolling.solve_rolling), a
 few tens of milliseconds on a 32 x 32 grid: it is the reference from which
 table.CreepTable is built, not a law for time stepping.

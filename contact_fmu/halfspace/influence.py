@@ -29,7 +29,7 @@ Appendix of Spector & Batra 1995 with Kalker's combined constants, see docs/half
   kappa = (G/4) ((1 - 2 nu_s)/G_s - (1 - 2 nu_b)/G_b).
 
 Grids are cell-centred, arrays are indexed [j, i] with x along axis 1 (shape (ny, nx)),
-as in contact_fmu.layer.TractionField.
+as in contact_fmu.laws.thin_layer.TractionField.
 """
 
 from __future__ import annotations

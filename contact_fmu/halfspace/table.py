@@ -230,7 +230,7 @@ def saturate(m: FloatArray, width: float = SATURATION_WIDTH) -> FloatArray:
 @dataclass(frozen=True)
 class CreepTable:
     """Table-based half-space contact law at the normal load P (N): the ContactLaw
-    protocol of contact_fmu.integrator.
+    protocol of contact_fmu.laws.protocol.
 
     forces(vx, vy, phi, Vx) -> (Tx, Ty, Mz) (N, N, N m) for rigid slip (vx, vy) (m/s),
     spin phi = Omega_z (rad/s) and rolling speed Vx (m/s), vectorised over broadcast

@@ -78,12 +78,12 @@ from numpy.typing import NDArray
 from scipy.optimize import root
 
 from .._validate import InputError, count, finite, positive
-from ..body_state import ContactOutputs
-from ..dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
-from ..integrator import V_SCALE_FLOOR, LoadInput
-from ..layer import LayerContact, TractionField
-from ..solvers import StageSolveError, bracketed_newton
-from ..transient_body import TransientBody
+from ..dynamics.body import ROLLING_STRAIGHT, Body, Lateral, Loads
+from ..dynamics.body_state import ContactOutputs
+from ..dynamics.integrator import V_SCALE_FLOOR, LoadInput
+from ..dynamics.solvers import StageSolveError, bracketed_newton
+from ..dynamics.transient_body import TransientBody
+from ..laws.thin_layer import LayerContact, TractionField
 from .contact import HalfSpaceContact
 from .influence import BlockConvolution, Grid, tangential_operator
 from .krylov import gmres

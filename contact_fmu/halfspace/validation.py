@@ -319,7 +319,7 @@ mu P/(G c^2)).
 
 {table(head5, transient_rows())}
 
-## The layer limit (Eqs. 40-43, corrected: `contact_fmu.layer.LayerContact`)
+## The layer limit (Eqs. 40-43, corrected: `contact_fmu.laws.thin_layer.LayerContact`)
 
 Half-spaces 1e4 times stiffer than the layers (G = 1e4 a1/(kb + ks)), the thin-layer
 example's parabolic pressure; force in mu P.

@@ -76,9 +76,10 @@ LENGTHS = {"N_OUT": len(OUTPUTS)}
 STRUCTS: dict[str, tuple[str, list[tuple]]] = {
     "cf_params": (
         "The parameters of a step (stepper.c): the body, the law at its load, the path and "
-        "the constants of integrator.py, solvers.py and layer.py, passed so that they live "
-        "once (the ctypes Kernel from the Python values, the native FMU from the CF_* above: "
-        "model.c's cf_model_constants). native.Params.",
+        "the constants of the Python numerics (dynamics/integrator.py, dynamics/solvers.py, "
+        "laws/thin_layer.py), passed so that they live once (the ctypes Kernel from the "
+        "Python values, the native FMU from the CF_* above: model.c's cf_model_constants). "
+        "native.Params.",
         [
             ("M", "double", "kg: the body's mass"),
             ("Rx", "double", "m: its rolling radius"),
@@ -88,18 +89,18 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("mu", "double", "the law: coefficient of friction"),
             ("P", "double", "N: the normal load"),
             ("a1", "double", "m: the contact's half-length"),
-            ("creep_full_slip", "double", "the creepage of full slip (layer.py)"),
-            ("beta_per_creep", "double", "beta per unit creepage (layer.py)"),
+            ("creep_full_slip", "double", "the creepage of full slip (laws/thin_layer.py)"),
+            ("beta_per_creep", "double", "beta per unit creepage (laws/thin_layer.py)"),
             ("ry", "double", "held ratio vy/Vx (Lateral.vy_ratio; the spin ratio: rz)"),
-            ("v_standstill", "double", "integrator.V_STANDSTILL (m/s)"),
-            ("v_scale_floor", "double", "integrator.V_SCALE_FLOOR (m/s)"),
-            ("z_algebraic", "double", "integrator.Z_ALGEBRAIC"),
-            ("capacity_margin", "double", "integrator.CAPACITY_MARGIN"),
-            ("solve_rtol", "double", "solvers.SOLVE_RTOL"),
-            ("expand", "double", "solvers.EXPAND"),
-            ("beta_full_slip", "double", "layer.BETA_FULL_SLIP"),
-            ("beta_series", "double", "layer.BETA_SERIES"),
-            ("max_newton", "int", "solvers.MAX_NEWTON"),
+            ("v_standstill", "double", "dynamics.integrator.V_STANDSTILL (m/s)"),
+            ("v_scale_floor", "double", "dynamics.integrator.V_SCALE_FLOOR (m/s)"),
+            ("z_algebraic", "double", "dynamics.integrator.Z_ALGEBRAIC"),
+            ("capacity_margin", "double", "dynamics.integrator.CAPACITY_MARGIN"),
+            ("solve_rtol", "double", "dynamics.solvers.SOLVE_RTOL"),
+            ("expand", "double", "dynamics.solvers.EXPAND"),
+            ("beta_full_slip", "double", "laws.thin_layer.BETA_FULL_SLIP"),
+            ("beta_series", "double", "laws.thin_layer.BETA_SERIES"),
+            ("max_newton", "int", "dynamics.solvers.MAX_NEWTON"),
             ("quasistationary", "int", 'method: 1 "quasistationary", 0 "full"'),
             ("law", "int", "LAW_LAYER or LAW_TABLE (stepper.h)"),
             (
@@ -130,15 +131,16 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
                 "const void *",
                 "the thin-layer law's spin grid (a cf_strips; NULL for the table)",
             ),  # fmt: skip
-            ("fd_step", "double", "solvers.FD_STEP: the forward-difference step"),
-            ("line_search_min", "double", "solvers.LINE_SEARCH_MIN"),
-            ("contraction_max", "double", "solvers.CONTRACTION_MAX: keep a Jacobian ..."),
-            ("contraction_fast", "double", "solvers.CONTRACTION_FAST: ... or renew it"),
-            ("newton_iterations", "int", "solvers.NEWTON_ITERATIONS"),
+            ("fd_step", "double", "dynamics.solvers.FD_STEP: the forward-difference step"),
+            ("line_search_min", "double", "dynamics.solvers.LINE_SEARCH_MIN"),
+            ("contraction_max", "double", "dynamics.solvers.CONTRACTION_MAX: keep a Jacobian ..."),
+            ("contraction_fast", "double", "dynamics.solvers.CONTRACTION_FAST: ... or renew it"),
+            ("newton_iterations", "int", "dynamics.solvers.NEWTON_ITERATIONS"),
             (
                 "algebraic_key",
                 "double",
-                "integrator.ALGEBRAIC: the key of a kept Newton matrix of the algebraic stage",
+                "dynamics.integrator.ALGEBRAIC: the key of a kept Newton matrix of the "
+                "algebraic stage",
             ),  # fmt: skip
             (
                 "bracket",
@@ -147,8 +149,8 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
                 "is solved here by solvers.increasing_root (its bracket search, then brentq), "
                 "as the Python path does; 0: CF_FALLBACK, the Python path solves it",
             ),  # fmt: skip
-            ("max_expansions", "int", "solvers.MAX_EXPANSIONS"),
-            ("gamma", "double", "integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2)"),
+            ("max_expansions", "int", "dynamics.solvers.MAX_EXPANSIONS"),
+            ("gamma", "double", "dynamics.integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2)"),
             ("sdirk", "int", "the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES)"),
             ("Iy", "double", "kg m^2: the body's inertia, for the free step at P = 0"),
         ],
@@ -179,14 +181,14 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("h_max", "double", "s: parameter, the largest internal step"),
             ("a2", "double", "m: the law's, reported"),
             ("p0", "double", "Pa: the law's, reported"),
-            ("v_creep_floor", "double", "kinematics.V_CREEP_FLOOR (m/s)"),
+            ("v_creep_floor", "double", "dynamics.kinematics.V_CREEP_FLOOR (m/s)"),
             ("substep_slack", "double", "body_model.SUBSTEP_SLACK"),
             ("max_substeps", "int", "body_model.MAX_SUBSTEPS"),
             ("out", "double", "N_OUT", "the outputs, indexed by O_*"),
         ],
     ),
     "cf_strips": (
-        "layer._Grid.march: the strip march of the spin law on its grid. native.Strips.",
+        "laws.thin_layer._Grid.march: the strip march of the spin law on its grid. native.Strips.",
         [
             ("ny", "int", "nodes across ..."),
             ("nx", "int", "... and along"),
@@ -197,7 +199,7 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("cap", "const double *", "... and mu p"),
             ("w", "const double *", "(ny x nx): resultant weights"),
             ("k", "double", "m/Pa: kb + ks"),
-            ("tiny", "double", "layer.TINY"),
+            ("tiny", "double", "laws.thin_layer.TINY"),
         ],
     ),
     "cf_vstate": (
@@ -221,8 +223,9 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
         ],
     ),
     "cf_field": (
-        "The thin-layer transient field's grid and law (field.c; transient.LayerField: nx cells "
-        "of dx over the lattice's half-extent X, ny strips at y; law a1, p0, mu, k = kb + ks). "
+        "The thin-layer transient field's grid and law (field.c; "
+        "dynamics.thin_layer_field.LayerField: nx cells of dx over the lattice's half-extent "
+        "X, ny strips at y; law a1, p0, mu, k = kb + ks). "
         "Per strip: ell = l(y) (Eq. 37), p_strip = p0 (1 - y^2/a2^2) (p at x = 0), dy_w the "
         "scaled strip width (LayerField._update_contact). c0 = mu p0/a1^2 (mu p = c0 (l^2 - "
         "x^2), Eq. 33). field.Field.",
@@ -236,7 +239,7 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("mu", "double", "its coefficient of friction"),
             ("k", "double", "m/Pa: kb + ks"),
             ("c0", "double", "Pa/m^2: mu p0/a1^2"),
-            ("min_speed_fraction", "double", "transient.MIN_SPEED_FRACTION"),
+            ("min_speed_fraction", "double", "dynamics.thin_layer_field.MIN_SPEED_FRACTION"),
             ("y", "const double *", "(ny): the strips' y (m) ..."),
             ("ell", "const double *", "... l(y) (m) ..."),
             ("p_strip", "const double *", "... p at x = 0 (Pa) ..."),
@@ -331,36 +334,37 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
 
 # ---- the constants: (C name, C type, Python home, comment) ------------------------------
 CONSTANTS: tuple[tuple[str, str, str, str], ...] = (
-    ("CF_LOAD_LIMIT", "double", "integrator.LOAD_LIMIT", "|Fx_ex|, |My_ex|/Rx <= this mu P"),
+    ("CF_LOAD_LIMIT", "double", "dynamics.integrator.LOAD_LIMIT",
+     "|Fx_ex|, |My_ex|/Rx <= this mu P"),
     ("CF_SPEED_MAX", "double", "fmu.variables.SPEED_MAX", "(m/s; ranges.within_range)"),
     ("CF_RATE_MAX", "double", "fmu.variables.RATE_MAX", "(rad/s)"),
     ("CF_TIME_RTOL", "double", "fmu.call_state.TIME_RTOL", "(doStep's time check, cf_time_ok)"),
-    ("CF_V_STANDSTILL", "double", "integrator.V_STANDSTILL", "(m/s)"),
-    ("CF_V_SCALE_FLOOR", "double", "integrator.V_SCALE_FLOOR", "(m/s)"),
-    ("CF_Z_ALGEBRAIC", "double", "integrator.Z_ALGEBRAIC", ""),
-    ("CF_CAPACITY_MARGIN", "double", "integrator.CAPACITY_MARGIN", ""),
-    ("CF_ALGEBRAIC_KEY", "double", "integrator.ALGEBRAIC", ""),
-    ("CF_GAMMA", "double", "integrator.GAMMA", "(SDIRK2's 1 - 1/sqrt(2))"),
-    ("CF_SOLVE_RTOL", "double", "solvers.SOLVE_RTOL", ""),
-    ("CF_EXPAND", "double", "solvers.EXPAND", ""),
-    ("CF_MAX_EXPANSIONS", "int", "solvers.MAX_EXPANSIONS", ""),
-    ("CF_MAX_NEWTON", "int", "solvers.MAX_NEWTON", ""),
-    ("CF_FD_STEP", "double", "solvers.FD_STEP", ""),
-    ("CF_LINE_SEARCH_MIN", "double", "solvers.LINE_SEARCH_MIN", ""),
-    ("CF_CONTRACTION_MAX", "double", "solvers.CONTRACTION_MAX", ""),
-    ("CF_CONTRACTION_FAST", "double", "solvers.CONTRACTION_FAST", ""),
-    ("CF_NEWTON_ITERATIONS", "int", "solvers.NEWTON_ITERATIONS", ""),
-    ("CF_BETA_FULL_SLIP", "double", "layer.BETA_FULL_SLIP", ""),
-    ("CF_BETA_SERIES", "double", "layer.BETA_SERIES", ""),
-    ("CF_V_CREEP_FLOOR", "double", "kinematics.V_CREEP_FLOOR", "(m/s)"),
+    ("CF_V_STANDSTILL", "double", "dynamics.integrator.V_STANDSTILL", "(m/s)"),
+    ("CF_V_SCALE_FLOOR", "double", "dynamics.integrator.V_SCALE_FLOOR", "(m/s)"),
+    ("CF_Z_ALGEBRAIC", "double", "dynamics.integrator.Z_ALGEBRAIC", ""),
+    ("CF_CAPACITY_MARGIN", "double", "dynamics.integrator.CAPACITY_MARGIN", ""),
+    ("CF_ALGEBRAIC_KEY", "double", "dynamics.integrator.ALGEBRAIC", ""),
+    ("CF_GAMMA", "double", "dynamics.integrator.GAMMA", "(SDIRK2's 1 - 1/sqrt(2))"),
+    ("CF_SOLVE_RTOL", "double", "dynamics.solvers.SOLVE_RTOL", ""),
+    ("CF_EXPAND", "double", "dynamics.solvers.EXPAND", ""),
+    ("CF_MAX_EXPANSIONS", "int", "dynamics.solvers.MAX_EXPANSIONS", ""),
+    ("CF_MAX_NEWTON", "int", "dynamics.solvers.MAX_NEWTON", ""),
+    ("CF_FD_STEP", "double", "dynamics.solvers.FD_STEP", ""),
+    ("CF_LINE_SEARCH_MIN", "double", "dynamics.solvers.LINE_SEARCH_MIN", ""),
+    ("CF_CONTRACTION_MAX", "double", "dynamics.solvers.CONTRACTION_MAX", ""),
+    ("CF_CONTRACTION_FAST", "double", "dynamics.solvers.CONTRACTION_FAST", ""),
+    ("CF_NEWTON_ITERATIONS", "int", "dynamics.solvers.NEWTON_ITERATIONS", ""),
+    ("CF_BETA_FULL_SLIP", "double", "laws.thin_layer.BETA_FULL_SLIP", ""),
+    ("CF_BETA_SERIES", "double", "laws.thin_layer.BETA_SERIES", ""),
+    ("CF_V_CREEP_FLOOR", "double", "dynamics.kinematics.V_CREEP_FLOOR", "(m/s)"),
     ("CF_SUBSTEP_SLACK", "double", "fmu.body_model.SUBSTEP_SLACK", ""),
     ("CF_MAX_SUBSTEPS", "int", "fmu.body_model.MAX_SUBSTEPS", ""),
     ("CF_WORK_SCALAR", "int", "fmu.body_model.WORK_SCALAR", "(work units per internal step)"),
     ("CF_WORK_VECTOR", "int", "fmu.body_model.WORK_VECTOR", "(Eqs. 10-11: per internal step)"),
     ("CF_WORK_PER_CELL", "int", "fmu.body_model.WORK_PER_CELL", "(the field's step, per cell)"),
-    ("CF_FIELD_A21", "double", "transient.A21", ""),
-    ("CF_FIELD_MIN_SPEED_FRACTION", "double", "transient.MIN_SPEED_FRACTION", ""),
-    ("CF_FIELD_MAX_ITERATIONS", "int", "transient.MAX_STAGE_ITERATIONS", ""),
+    ("CF_FIELD_A21", "double", "dynamics.thin_layer_field.A21", ""),
+    ("CF_FIELD_MIN_SPEED_FRACTION", "double", "dynamics.thin_layer_field.MIN_SPEED_FRACTION", ""),
+    ("CF_FIELD_MAX_ITERATIONS", "int", "dynamics.thin_layer_field.MAX_STAGE_ITERATIONS", ""),
 )  # fmt: skip
 
 

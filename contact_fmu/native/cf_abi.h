@@ -9,37 +9,38 @@
 
 /* The constants of the Python numerics, each its home's double (or int) written as the
  * literal that reads back to it. */
-#define CF_LOAD_LIMIT 1000000000.0 /* integrator.LOAD_LIMIT: |Fx_ex|, |My_ex|/Rx <= this mu P */
+/* dynamics.integrator.LOAD_LIMIT: |Fx_ex|, |My_ex|/Rx <= this mu P */
+#define CF_LOAD_LIMIT 1000000000.0
 #define CF_SPEED_MAX 10000.0 /* fmu.variables.SPEED_MAX (m/s; ranges.within_range) */
 #define CF_RATE_MAX 10000000.0               /* fmu.variables.RATE_MAX (rad/s) */
 /* fmu.call_state.TIME_RTOL (doStep's time check, cf_time_ok) */
 #define CF_TIME_RTOL 1.4210854715202004e-14
-#define CF_V_STANDSTILL 1e-09                /* integrator.V_STANDSTILL (m/s) */
-#define CF_V_SCALE_FLOOR 1e-09               /* integrator.V_SCALE_FLOOR (m/s) */
-#define CF_Z_ALGEBRAIC 10000000000000.0      /* integrator.Z_ALGEBRAIC */
-#define CF_CAPACITY_MARGIN 1e-09             /* integrator.CAPACITY_MARGIN */
-#define CF_ALGEBRAIC_KEY (-1.0)              /* integrator.ALGEBRAIC */
-#define CF_GAMMA 0.2928932188134524          /* integrator.GAMMA (SDIRK2's 1 - 1/sqrt(2)) */
-#define CF_SOLVE_RTOL 1e-13                  /* solvers.SOLVE_RTOL */
-#define CF_EXPAND 4.0                        /* solvers.EXPAND */
-#define CF_MAX_EXPANSIONS 60                 /* solvers.MAX_EXPANSIONS */
-#define CF_MAX_NEWTON 30                     /* solvers.MAX_NEWTON */
-#define CF_FD_STEP 1e-07                     /* solvers.FD_STEP */
-#define CF_LINE_SEARCH_MIN 0.0001            /* solvers.LINE_SEARCH_MIN */
-#define CF_CONTRACTION_MAX 0.25              /* solvers.CONTRACTION_MAX */
-#define CF_CONTRACTION_FAST 0.01             /* solvers.CONTRACTION_FAST */
-#define CF_NEWTON_ITERATIONS 50              /* solvers.NEWTON_ITERATIONS */
-#define CF_BETA_FULL_SLIP 2.0                /* layer.BETA_FULL_SLIP */
-#define CF_BETA_SERIES 0.0001                /* layer.BETA_SERIES */
-#define CF_V_CREEP_FLOOR 1e-06               /* kinematics.V_CREEP_FLOOR (m/s) */
+#define CF_V_STANDSTILL 1e-09                /* dynamics.integrator.V_STANDSTILL (m/s) */
+#define CF_V_SCALE_FLOOR 1e-09               /* dynamics.integrator.V_SCALE_FLOOR (m/s) */
+#define CF_Z_ALGEBRAIC 10000000000000.0      /* dynamics.integrator.Z_ALGEBRAIC */
+#define CF_CAPACITY_MARGIN 1e-09             /* dynamics.integrator.CAPACITY_MARGIN */
+#define CF_ALGEBRAIC_KEY (-1.0)              /* dynamics.integrator.ALGEBRAIC */
+#define CF_GAMMA 0.2928932188134524 /* dynamics.integrator.GAMMA (SDIRK2's 1 - 1/sqrt(2)) */
+#define CF_SOLVE_RTOL 1e-13                  /* dynamics.solvers.SOLVE_RTOL */
+#define CF_EXPAND 4.0                        /* dynamics.solvers.EXPAND */
+#define CF_MAX_EXPANSIONS 60                 /* dynamics.solvers.MAX_EXPANSIONS */
+#define CF_MAX_NEWTON 30                     /* dynamics.solvers.MAX_NEWTON */
+#define CF_FD_STEP 1e-07                     /* dynamics.solvers.FD_STEP */
+#define CF_LINE_SEARCH_MIN 0.0001            /* dynamics.solvers.LINE_SEARCH_MIN */
+#define CF_CONTRACTION_MAX 0.25              /* dynamics.solvers.CONTRACTION_MAX */
+#define CF_CONTRACTION_FAST 0.01             /* dynamics.solvers.CONTRACTION_FAST */
+#define CF_NEWTON_ITERATIONS 50              /* dynamics.solvers.NEWTON_ITERATIONS */
+#define CF_BETA_FULL_SLIP 2.0                /* laws.thin_layer.BETA_FULL_SLIP */
+#define CF_BETA_SERIES 0.0001                /* laws.thin_layer.BETA_SERIES */
+#define CF_V_CREEP_FLOOR 1e-06               /* dynamics.kinematics.V_CREEP_FLOOR (m/s) */
 #define CF_SUBSTEP_SLACK 1e-09               /* fmu.body_model.SUBSTEP_SLACK */
 #define CF_MAX_SUBSTEPS 10000                /* fmu.body_model.MAX_SUBSTEPS */
 #define CF_WORK_SCALAR 1 /* fmu.body_model.WORK_SCALAR (work units per internal step) */
 #define CF_WORK_VECTOR 200 /* fmu.body_model.WORK_VECTOR (Eqs. 10-11: per internal step) */
 #define CF_WORK_PER_CELL 2 /* fmu.body_model.WORK_PER_CELL (the field's step, per cell) */
-#define CF_FIELD_A21 0.7071067811865476      /* transient.A21 */
-#define CF_FIELD_MIN_SPEED_FRACTION 0.1      /* transient.MIN_SPEED_FRACTION */
-#define CF_FIELD_MAX_ITERATIONS 200          /* transient.MAX_STAGE_ITERATIONS */
+#define CF_FIELD_A21 0.7071067811865476      /* dynamics.thin_layer_field.A21 */
+#define CF_FIELD_MIN_SPEED_FRACTION 0.1      /* dynamics.thin_layer_field.MIN_SPEED_FRACTION */
+#define CF_FIELD_MAX_ITERATIONS 200          /* dynamics.thin_layer_field.MAX_STAGE_ITERATIONS */
 
 /* The outputs of RollingBody.outputs() in the order of cf_body.out. */
 enum {
@@ -64,9 +65,10 @@ enum {
 };
 
 /* The parameters of a step (stepper.c): the body, the law at its load, the path and the
- * constants of integrator.py, solvers.py and layer.py, passed so that they live once (the
- * ctypes Kernel from the Python values, the native FMU from the CF_* above: model.c's
- * cf_model_constants). native.Params. */
+ * constants of the Python numerics (dynamics/integrator.py, dynamics/solvers.py,
+ * laws/thin_layer.py), passed so that they live once (the ctypes Kernel from the Python
+ * values, the native FMU from the CF_* above: model.c's cf_model_constants).
+ * native.Params. */
 typedef struct {
     double M;                 /* kg: the body's mass */
     double Rx;                /* m: its rolling radius */
@@ -76,18 +78,18 @@ typedef struct {
     double mu;                /* the law: coefficient of friction */
     double P;                 /* N: the normal load */
     double a1;                /* m: the contact's half-length */
-    double creep_full_slip;   /* the creepage of full slip (layer.py) */
-    double beta_per_creep;    /* beta per unit creepage (layer.py) */
+    double creep_full_slip;   /* the creepage of full slip (laws/thin_layer.py) */
+    double beta_per_creep;    /* beta per unit creepage (laws/thin_layer.py) */
     double ry;                /* held ratio vy/Vx (Lateral.vy_ratio; the spin ratio: rz) */
-    double v_standstill;      /* integrator.V_STANDSTILL (m/s) */
-    double v_scale_floor;     /* integrator.V_SCALE_FLOOR (m/s) */
-    double z_algebraic;       /* integrator.Z_ALGEBRAIC */
-    double capacity_margin;   /* integrator.CAPACITY_MARGIN */
-    double solve_rtol;        /* solvers.SOLVE_RTOL */
-    double expand;            /* solvers.EXPAND */
-    double beta_full_slip;    /* layer.BETA_FULL_SLIP */
-    double beta_series;       /* layer.BETA_SERIES */
-    int max_newton;           /* solvers.MAX_NEWTON */
+    double v_standstill;      /* dynamics.integrator.V_STANDSTILL (m/s) */
+    double v_scale_floor;     /* dynamics.integrator.V_SCALE_FLOOR (m/s) */
+    double z_algebraic;       /* dynamics.integrator.Z_ALGEBRAIC */
+    double capacity_margin;   /* dynamics.integrator.CAPACITY_MARGIN */
+    double solve_rtol;        /* dynamics.solvers.SOLVE_RTOL */
+    double expand;            /* dynamics.solvers.EXPAND */
+    double beta_full_slip;    /* laws.thin_layer.BETA_FULL_SLIP */
+    double beta_series;       /* laws.thin_layer.BETA_SERIES */
+    int max_newton;           /* dynamics.solvers.MAX_NEWTON */
     int quasistationary;      /* method: 1 "quasistationary", 0 "full" */
     int law;                  /* LAW_LAYER or LAW_TABLE (stepper.h) */
     /* LAW_TABLE (halfspace/table.py CreepTable at P): its Hermite patches (n1-1, n2-1,
@@ -111,19 +113,20 @@ typedef struct {
     int dyn_vy;               /* 1: Vy (Eq. 10) is a stage unknown */
     int dyn_spin;             /* 1: Omega_z (Eq. 11) is a stage unknown */
     const void *strips;       /* the thin-layer law's spin grid (a cf_strips; NULL for the table) */
-    double fd_step;           /* solvers.FD_STEP: the forward-difference step */
-    double line_search_min;   /* solvers.LINE_SEARCH_MIN */
-    double contraction_max;   /* solvers.CONTRACTION_MAX: keep a Jacobian ... */
-    double contraction_fast;  /* solvers.CONTRACTION_FAST: ... or renew it */
-    int newton_iterations;    /* solvers.NEWTON_ITERATIONS */
-    /* integrator.ALGEBRAIC: the key of a kept Newton matrix of the algebraic stage */
+    double fd_step;           /* dynamics.solvers.FD_STEP: the forward-difference step */
+    double line_search_min;   /* dynamics.solvers.LINE_SEARCH_MIN */
+    double contraction_max;   /* dynamics.solvers.CONTRACTION_MAX: keep a Jacobian ... */
+    double contraction_fast;  /* dynamics.solvers.CONTRACTION_FAST: ... or renew it */
+    int newton_iterations;    /* dynamics.solvers.NEWTON_ITERATIONS */
+    /* dynamics.integrator.ALGEBRAIC: the key of a kept Newton matrix of the algebraic
+     * stage */
     double algebraic_key;
     /* 1: a scalar stage whose Newton iteration does not converge is solved here by
      * solvers.increasing_root (its bracket search, then brentq), as the Python path does;
      * 0: CF_FALLBACK, the Python path solves it */
     int bracket;
-    int max_expansions;       /* solvers.MAX_EXPANSIONS */
-    double gamma;             /* integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2) */
+    int max_expansions;       /* dynamics.solvers.MAX_EXPANSIONS */
+    double gamma;             /* dynamics.integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2) */
     int sdirk;                /* the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES) */
     double Iy;                /* kg m^2: the body's inertia, for the free step at P = 0 */
 } cf_params;
@@ -151,13 +154,13 @@ typedef struct {
     double h_max;          /* s: parameter, the largest internal step */
     double a2;             /* m: the law's, reported */
     double p0;             /* Pa: the law's, reported */
-    double v_creep_floor;  /* kinematics.V_CREEP_FLOOR (m/s) */
+    double v_creep_floor;  /* dynamics.kinematics.V_CREEP_FLOOR (m/s) */
     double substep_slack;  /* body_model.SUBSTEP_SLACK */
     int max_substeps;      /* body_model.MAX_SUBSTEPS */
     double out[N_OUT];     /* the outputs, indexed by O_* */
 } cf_body;
 
-/* layer._Grid.march: the strip march of the spin law on its grid. native.Strips. */
+/* laws.thin_layer._Grid.march: the strip march of the spin law on its grid. native.Strips. */
 typedef struct {
     int ny;              /* nodes across ... */
     int nx;              /* ... and along */
@@ -168,7 +171,7 @@ typedef struct {
     const double *cap;   /* ... and mu p */
     const double *w;     /* (ny x nx): resultant weights */
     double k;            /* m/Pa: kb + ks */
-    double tiny;         /* layer.TINY */
+    double tiny;         /* laws.thin_layer.TINY */
 } cf_strips;
 
 /* The state of the vector path (cf_advance_vector: Vy and/or Omega_z as stage unknowns).
@@ -190,11 +193,12 @@ typedef struct {
     int sliding;      /* RollingBody.sliding (quasistationary gross sliding) */
 } cf_vstate;
 
-/* The thin-layer transient field's grid and law (field.c; transient.LayerField: nx cells
- * of dx over the lattice's half-extent X, ny strips at y; law a1, p0, mu, k = kb + ks).
- * Per strip: ell = l(y) (Eq. 37), p_strip = p0 (1 - y^2/a2^2) (p at x = 0), dy_w the
- * scaled strip width (LayerField._update_contact). c0 = mu p0/a1^2 (mu p = c0 (l^2 - x^2),
- * Eq. 33). field.Field. */
+/* The thin-layer transient field's grid and law (field.c;
+ * dynamics.thin_layer_field.LayerField: nx cells of dx over the lattice's half-extent X,
+ * ny strips at y; law a1, p0, mu, k = kb + ks). Per strip: ell = l(y) (Eq. 37), p_strip =
+ * p0 (1 - y^2/a2^2) (p at x = 0), dy_w the scaled strip width
+ * (LayerField._update_contact). c0 = mu p0/a1^2 (mu p = c0 (l^2 - x^2), Eq. 33).
+ * field.Field. */
 typedef struct {
     int ny;                     /* strips across 2 a2 ... */
     int nx;                     /* ... and cells along the lattice */
@@ -205,7 +209,7 @@ typedef struct {
     double mu;                  /* its coefficient of friction */
     double k;                   /* m/Pa: kb + ks */
     double c0;                  /* Pa/m^2: mu p0/a1^2 */
-    double min_speed_fraction;  /* transient.MIN_SPEED_FRACTION */
+    double min_speed_fraction;  /* dynamics.thin_layer_field.MIN_SPEED_FRACTION */
     const double *y;            /* (ny): the strips' y (m) ... */
     const double *ell;          /* ... l(y) (m) ... */
     const double *p_strip;      /* ... p at x = 0 (Pa) ... */

@@ -25,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..dynamics import Body, Lateral
-from ..integrator import forces_at_rest
-from ..layer import LayerContact
+from ..dynamics.body import Body, Lateral
+from ..dynamics.integrator import forces_at_rest
+from ..laws.thin_layer import LayerContact
 
 FloatArray = NDArray[np.float64]
 # Loads(t) -> (P, Fx_ex, Fy_ex, My_ex, Mz_ex) in N and N m

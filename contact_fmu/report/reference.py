@@ -17,7 +17,7 @@ Sources, by model:
   Vx(t) = Vx(0) + (A1/M) int (Fx_ex + My_ex/Rx) dt and vx = |Vx| T_x^-1(Tx) of
   Eq. (28) (the integral by scipy's ``quad``, exact sums for held inputs);
 - body mode, phase "transient": the thin-layer field of Eq. (15) with its time
-  derivative, coupled with Eqs. (8)-(11) (``transient.TransientRollingBody``, outside
+  derivative, coupled with Eqs. (8)-(11) (``thin_layer_field.TransientRollingBody``, outside
   the FMU) on TRANSIENT_REFINE and 2 TRANSIENT_REFINE times the scene's grid (nx, ny)
   at its cells_per_step (the internal step refined with the cell), combined by
   Richardson's extrapolation for a second-order method, R = R_f + (R_f - R_c)/3
@@ -47,9 +47,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import integrate
 
-from ..dynamics import Body, Lateral, Loads
-from ..kinematics import rigid_slip, spin_for_slip
-from ..layer import LayerContact
+from ..dynamics.body import Loads
+from ..dynamics.kinematics import rigid_slip
+from ..fmu.factory import initial_state, make_body, make_lateral, make_law, thin_layer_law
+from ..laws.thin_layer import LayerContact
 from ..scenario.schema import Case, Scene
 from .equations import RollingEquations, quasistationary_force, quasistationary_slip
 
@@ -91,39 +92,25 @@ class Solution:
 
 
 # ---- case data ------------------------------------------------------------------------
-def law(p: dict, P: float) -> LayerContact:
-    """The thin-layer law of the case parameters p under the load P (N)."""
-    return LayerContact(P, p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"], p["mu"])
-
-
-def _halfspace_law(scene: Scene, p: dict, P: float) -> Any:
-    """The half-space law as its FMU evaluates it: the creep-force table the build
-    generates for the scene's [halfspace] declaration (fmu_build.tables, cached), so the
-    reference integrates the same equations (the table's own accuracy is measured apart:
-    docs/halfspace.md)."""
-    try:
-        from fmu_build import tables
-
-        path = tables.ensure(scene.config)
-        return scene.config.table_spec.load_law(path).with_load(P).with_mu(p["mu"])
-    except (ImportError, AttributeError) as e:  # the law's interface is not (yet) there
-        raise NoReferenceError(f"{scene.name}: no half-space table outside the FMU: {e}") from e
-
-
-# The contact law of a scene's ``contact_law`` from the case parameters and the load P:
-# the equations the references integrate. A law without an entry has no reference yet.
-LAWS: dict[str, Callable[[Scene, dict, float], Any]] = {
-    "layer": lambda s, p, P: law(p, P),
-    "halfspace": _halfspace_law,
-}
-
-
+# The law, the body, its lateral motion and its initial state are the FMU's (fmu.factory):
+# the references integrate the model the FMU runs. What stays independent of the FMU on
+# purpose is how they integrate it: equations.py writes Eqs. (8)-(11) and the closed forms
+# of Eqs. (26), (28) from the paper for scipy, and traction_resultant integrates the
+# traction of Eq. (36) by quadrature instead of the law's closed form H(beta).
 def scene_law(scene: Scene, p: dict, P: float) -> Any:
-    """The scene's contact law (a ContactLaw) under the load P (N)."""
-    name = scene.config.contact_law
-    if name not in LAWS:
-        raise NoReferenceError(f"{scene.name}: no reference for contact_law = {name!r}")
-    return LAWS[name](scene, p, P)
+    """The scene's contact law (a ContactLaw) under the load P (N); the half-space law as
+    its FMU evaluates it: the creep-force table the build generates for the scene's
+    [halfspace] declaration (fmu_build.tables, cached; the table's own accuracy is
+    measured apart: docs/halfspace.md)."""
+    table = None
+    if scene.config.has_table:
+        try:
+            from fmu_build import tables
+
+            table = tables.ensure(scene.config)
+        except ImportError as e:
+            raise NoReferenceError(f"{scene.name}: no half-space table outside the FMU: {e}") from e
+    return make_law(scene.config, p, P, table=table)
 
 
 def _require_steady(scene: Scene) -> None:
@@ -132,18 +119,6 @@ def _require_steady(scene: Scene) -> None:
             f"{scene.name}: no reference for phase = {scene.config.phase!r} (the references "
             "integrate the steady law)"
         )
-
-
-def body(p: dict) -> Body:
-    return Body(p["M"], p["Rx"], p["Iy"], p.get("Iz"))
-
-
-def lateral(scene: Scene, p: dict) -> Lateral:
-    cfg = scene.config
-    return Lateral(
-        vy_ratio={"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy],
-        spin_ratio={"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin],
-    )
 
 
 def signal_values(case: Case, names: tuple[str, ...], t: FloatArray) -> dict[str, FloatArray]:
@@ -189,9 +164,9 @@ def _integrate(
     each segment (the left limit at b), and the initial state at t = 0."""
     p = case.parameters
     P0 = segments[0][2](0.0)[0]
-    base = RollingEquations(scene_law(scene, p, P0), body(p), lateral(scene, p), segments[0][2])
-    Omega_y0 = spin_for_slip(p["Vx0"], p["vx0"], p["Rx"])
-    y = base.initial(p["Vx0"], Omega_y0, p.get("Vy0", 0.0), p.get("Omega_z0", 0.0))
+    lateral = make_lateral(scene.config, p)
+    base = RollingEquations(scene_law(scene, p, P0), make_body(p), lateral, segments[0][2])
+    y = base.initial(**initial_state(p))
     v_scale = base.law.creep_full_slip * max(abs(p["Vx0"]), 1e-3)
     atol = np.full(base.size, ATOL_FRACTION * v_scale)
     atol[0] = ATOL_FRACTION * max(abs(p["Vx0"]), 1e-3)
@@ -266,7 +241,7 @@ def _require_transient(scene: Scene) -> None:
 def transient_grids(case: Case) -> tuple[tuple[int, int], tuple[int, int]]:
     """The (nx, ny) of the two reference fields: TRANSIENT_REFINE and twice that times
     the case's grid."""
-    from ..transient import DEFAULT_NX, DEFAULT_NY
+    from ..dynamics.thin_layer_field import DEFAULT_NX, DEFAULT_NY
 
     p = case.parameters
     nx, ny = int(p.get("nx", DEFAULT_NX)), int(p.get("ny", DEFAULT_NY))
@@ -284,8 +259,8 @@ def _transient_run(
     them: max(ceil(h/h_max), steps of cells_per_step cells) internal steps, the load P
     of the step's start. The other loads held over each step, or (``continuous``) the
     signals sampled at the stage times."""
+    from ..dynamics.thin_layer_field import TransientRollingBody
     from ..fmu.body_model import substeps
-    from ..transient import TransientRollingBody
 
     p = case.parameters
     u = signal_values(case, LOAD_NAMES, times)
@@ -294,9 +269,8 @@ def _transient_run(
             f"{scene.name}/{case.name}: the transient field takes P per step (no continuous P)"
         )
     tb = TransientRollingBody(
-        law(p, float(u["P"][0])), body(p), lateral(scene, p), Vx0=p["Vx0"],
-        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]), Vy0=p.get("Vy0", 0.0),
-        Omega_z0=p.get("Omega_z0", 0.0), nx=nx, ny=ny,
+        scene_law(scene, p, float(u["P"][0])), make_body(p), make_lateral(scene.config, p),
+        **initial_state(p), nx=nx, ny=ny,
     )  # fmt: skip
     cells = float(p.get("cells_per_step", 0.5))
     out = np.empty((times.size, 4))  # Tx, Ty, vx, Vx
@@ -367,7 +341,7 @@ def quasistationary_allowed(scene: Scene, case: Case, times: FloatArray) -> str 
     p = case.parameters
     t = np.union1d(times, breakpoints(case, float(times[-1])))
     u = signal_values(case, LOAD_NAMES, t)
-    b = body(p)
+    b = make_body(p)
     Tx = quasistationary_force(b, u["Fx_ex"], u["My_ex"])
     utilisation = np.abs(Tx) / (p["mu"] * u["P"])
     if np.any(utilisation >= 1.0):
@@ -381,7 +355,7 @@ def quasistationary_allowed(scene: Scene, case: Case, times: FloatArray) -> str 
 def _quasistationary(scene: Scene, case: Case, times: FloatArray, Tx, P, Vx) -> Solution:
     p = case.parameters
     ratio = p.get("vy_ratio", 0.0) if scene.config.vy == "ratio" else 0.0
-    base = law(p, float(P[0]))
+    base = thin_layer_law(p, float(P[0]))
     vx = np.empty(times.size)
     for k in range(times.size):
         lk = base if P[k] == base.P else base.with_load(float(P[k]))
@@ -396,7 +370,7 @@ def quasistationary_continuous(scene: Scene, case: Case, times: FloatArray) -> S
     if why:
         raise NoReferenceError(f"{scene.name}/{case.name}: {why}")
     p = case.parameters
-    b = body(p)
+    b = make_body(p)
     left = np.array([np.nextafter(t, -np.inf) if t > 0 else t for t in times])
     u = signal_values(case, LOAD_NAMES, left)
     Tx = quasistationary_force(b, u["Fx_ex"], u["My_ex"])
@@ -431,7 +405,7 @@ def quasistationary_held(scene: Scene, case: Case, grid: FloatArray) -> Solution
     if why:
         raise NoReferenceError(f"{scene.name}/{case.name}: {why}")
     p = case.parameters
-    b = body(p)
+    b = make_body(p)
     u = signal_values(case, LOAD_NAMES, grid)
     A1 = b.M * b.Rx**2 / (b.M * b.Rx**2 + b.Iy)
     h = np.diff(grid)
@@ -505,7 +479,7 @@ def _contact(scene: Scene, case: Case, times: FloatArray, u: dict[str, FloatArra
         if u["Omega_z"][k] != 0.0:
             raise NoReferenceError(f"{scene.name}/{case.name}: no quadrature reference with spin")
         vx[k] = u["Vx"][k] - u["Omega_y"][k] * p["Rx"]
-        c = law(p, float(u["P"][k]))
+        c = thin_layer_law(p, float(u["P"][k]))
         Tx[k], Ty[k] = traction_resultant(c, vx[k], u["Vy"][k], u["Vx"][k])
     return Solution(times.copy(), Tx, vx, u["Vx"].copy(), Ty)
 

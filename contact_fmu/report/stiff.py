@@ -38,12 +38,12 @@ from numpy.typing import NDArray
 
 import fmu_build
 
+from ..dynamics.integrator import V_STANDSTILL, standstill_weight
+from ..dynamics.solvers import SOLVE_RTOL
 from ..fmu.config import METHODS, SCHEMES, ModelConfig
-from ..integrator import V_STANDSTILL, standstill_weight
-from ..layer import SPIN_GRID, LayerContact
+from ..laws.thin_layer import SPIN_GRID, LayerContact
 from ..scenario.instance import OK, Instance
 from ..scenario.signals import parse
-from ..solvers import SOLVE_RTOL
 from ..study.engine import Engine, once, release
 from .metrics import oscillation
 from .stiff_cases import StiffCase, cases
@@ -92,7 +92,7 @@ MEM_BLOCKS = 200
 MEM_RSS_BYTES = 4 << 20
 # The spin law's grid error is measured against a grid this many times finer each way
 # (``spin_grid_roughness``): 128 x 96 against 64 x 48. The march is first order in the
-# cell size (layer.py), so the difference is about half the 64 x 48 grid's own error:
+# cell size (laws/thin_layer.py), so the difference is about half the 64 x 48 grid's own error:
 # the floor errs on the strict side.
 ROUGHNESS_REFINE = 2
 ROUGHNESS_CHUNK = 64  # states per march: 2 x 64 fields of 128 x 96 complex, 25 MB

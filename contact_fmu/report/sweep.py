@@ -24,7 +24,7 @@ returns the FMU configuration of the family, its ``start`` the parameters. A set
 whose refinement the report follows (a grid, a table's resolution) is a ``Ladder``:
 its ``configure`` returns the FMU of a rung (one per rung when it changes the model).
 Either way ``workprecision.REFERENCES`` (by mode, phase and method) or
-``reference.LAWS`` (by contact law) needs a reference for it.
+``fmu.factory.FACTORIES`` (by contact law) needs a reference for it.
 """
 
 from __future__ import annotations
@@ -39,9 +39,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..dynamics.thin_layer_field import DEFAULT_NX, DEFAULT_NY, MIN_NX, MIN_NY
 from ..fmu.config import SCHEMES, ModelConfig
 from ..scenario.schema import Case, Scene
-from ..transient import DEFAULT_NX, DEFAULT_NY, MIN_NX, MIN_NY
 from .reference import quasistationary_allowed
 
 FloatArray = NDArray[np.float64]

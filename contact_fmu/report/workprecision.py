@@ -70,7 +70,7 @@ def _body_reference(continuous, held):
 
 # Reference sources by (mode, phase, method): functions (scene, case, grid) -> Solution
 # under the continuous and the held inputs. A new phase adds its own entries (a law is
-# added in reference.LAWS); a setting without one is listed as not compared.
+# added in fmu.factory.FACTORIES); a setting without one is listed as not compared.
 REFERENCES: dict[tuple[str, str, str], dict[str, Callable]] = {
     ("body", "steady", "full"): _body_reference(ref.full_continuous, ref.full_held),
     ("body", "steady", "quasistationary"): _body_reference(

@@ -154,7 +154,7 @@ def findings(scene: Scene) -> list[tuple[str, str]]:
 
 def _semi_axes(P: float, p: dict[str, Any]) -> tuple[float, float]:
     """a1, a2 (m) of the layer law, Eq. (34): delta = sqrt(P (k1 + k2)/pi) (Rx Ry)^(-1/4),
-    a1 = sqrt(2 Rx delta), a2 = sqrt(2 Ry delta) (layer.LayerContact)."""
+    a1 = sqrt(2 Rx delta), a2 = sqrt(2 Ry delta) (thin_layer.LayerContact)."""
     delta = math.sqrt(P * (p["k1"] + p["k2"]) / math.pi) * (p["Rx"] * p["Ry"]) ** -0.25
     return math.sqrt(2.0 * p["Rx"] * delta), math.sqrt(2.0 * p["Ry"] * delta)
 

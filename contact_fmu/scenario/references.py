@@ -4,14 +4,14 @@ Each ``[[reference]]`` of a scene names its ``source``; this module reproduces i
 the scene's data on a path that does not go through the FMU, its adapter or fmpy:
 
 - ``quasistationary``: the closed form Tx = A2 Fx_ex - A1 My_ex / Rx of Eq. (26)
-  (dimensional; ``dynamics.Body.tx_quasistationary``), valid in rolling after the slip
+  (dimensional; ``dynamics.body.Body.tx_quasistationary``), valid in rolling after the slip
   transient, with regime = 0; where Vy follows Eq. (10), also Ty = Fy_ex (Eq. 29);
 - ``full_slip``: Coulomb's law in gross sliding, Tx = sign mu P and regime = 1, over a
   window the scene asserts to be sliding;
 - ``sliding_motion``: Eqs. (8)-(9) with that force (Tx = 0 at P = 0, lift-off) over
   the held inputs: Vx and Omega_y summed step by step, over a run the scene asserts to
   slide throughout;
-- ``simulate``: the pure-numerics stepper of ``simulate.simulate`` (RollingBody) with
+- ``simulate``: the pure-numerics stepper of ``dynamics.simulate`` (RollingBody) with
   ``refine`` times more internal steps than the FMU takes (h_max / refine);
 - ``traction``: contact mode; the resultant of the traction field marched strip by
   strip (``LayerContact.traction``) on an ``nx`` x ``ny`` grid, integrated numerically:
@@ -25,11 +25,16 @@ the scene's data on a path that does not go through the FMU, its adapter or fmpy
   Eq. (26): Tx = A2 Fx_ex - A1 My_ex/Rx, and the creepage xi_x and adhesion fraction at
   which direct solves give that Tx (bracketed root finding on the solver, no table).
 - ``transient``: body mode, phase "transient"; the numerics' transient stepper
-  (``transient.TransientRollingBody``) on a finer field grid ``grid = [nx, ny]`` with
-  internal steps of at most ``cells`` cells, driven step by step with the held loads.
+  (``dynamics.thin_layer_field.TransientRollingBody``) on a finer field grid
+  ``grid = [nx, ny]`` with internal steps of at most ``cells`` cells, driven step by step
+  with the held loads.
 
 Samples: every ``every``-th grid point within ``t_from`` <= t <= ``t_to``, or within
 each ``[from, to]`` of ``windows``, or the grid points nearest to the listed ``times``.
+
+The law, the body, its lateral motion and its initial state come from the FMU's own
+factory (``fmu.factory``: make_law, make_body, make_lateral, initial_state), so a
+reference runs the model the FMU runs, on another path.
 
 All of them see the inputs as the FMU does: sampled on the communication grid and held
 over each step (``signals.held``), so that the value at t_k uses the inputs of the step
@@ -45,23 +50,15 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..dynamics import Body, Lateral, Loads
-from ..integrator import RollingBody
-from ..kinematics import rigid_slip, spin_for_slip
-from ..layer import LayerContact
+from ..dynamics.body import Loads
+from ..dynamics.integrator import RollingBody
+from ..dynamics.kinematics import rigid_slip
+from ..fmu.factory import initial_state, make_body, make_lateral, make_law, thin_layer_law
 from .runner import write_reference
 from .schema import Case, Reference, Scene
 from .signals import held
 
 FloatArray = NDArray[np.float64]
-
-
-def _law(p: dict, P: float) -> LayerContact:
-    return LayerContact(P, p["Rx"], p["Ry"], p["k1"], p["k2"], p["kb"], p["ks"], p["mu"])
-
-
-def _body(p: dict) -> Body:
-    return Body(p["M"], p["Rx"], p["Iy"], p.get("Iz"))
 
 
 def _samples(scene: Scene, ref: Reference) -> NDArray[np.int_]:
@@ -94,7 +91,7 @@ def _held_inputs(scene: Scene, case: Case) -> dict[str, FloatArray]:
 def quasistationary(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArray]:
     k = _samples(scene, ref)
     u = _held_inputs(scene, case)
-    Tx = _body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
+    Tx = make_body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
     out = {"time": scene.grid[k], "Tx": Tx, "regime": np.zeros(k.size)}
     if scene.config.vy == "eq10":  # Eq. (29): the lateral force balances the load
         out["Ty"] = u["Fy_ex"][k]
@@ -124,16 +121,11 @@ def by_simulation(
     P = case.inputs["P"](t)
     if np.ptp(P) != 0.0:
         raise ValueError(f"{scene.name}: source 'simulate' needs a constant P")
-    lateral = Lateral(
-        vy_ratio={"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy],
-        spin_ratio={"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin],
-    )
     refine = int(ref.options["refine"]) if refine is None else refine
     substeps = refine * max(1, math.ceil(scene.step / p["h_max"] - 1e-9))
     rb = RollingBody(
-        _law(p, float(P[0])), _body(p), lateral, case.method, Vx0=p["Vx0"],
-        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]), Vy0=p.get("Vy0", 0.0),
-        Omega_z0=p.get("Omega_z0", 0.0), scheme=case.scheme,
+        make_law(cfg, p, float(P[0])), make_body(p), make_lateral(cfg, p), case.method,
+        **initial_state(p), scheme=case.scheme,
     )  # fmt: skip
     loads = np.array([case.inputs[n](t) if n in case.inputs else np.zeros(t.size)
                       for n in Loads._fields])  # fmt: skip
@@ -158,21 +150,16 @@ def by_transient(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatArr
     """The transient thin-layer stepper outside the FMU, at the reference's resolution:
     field grid ``grid`` = [nx, ny] and internal steps of at most ``cells`` cells rolled
     (and at most the scene's h_max), the loads of each communication step held."""
-    from ..transient import TransientRollingBody
+    from ..dynamics.thin_layer_field import TransientRollingBody
 
     cfg, p, o = scene.config, case.parameters, ref.options
     t = scene.grid
     P = held(case.inputs["P"](t))
-    lateral = Lateral(
-        vy_ratio={"zero": 0.0, "ratio": p.get("vy_ratio"), "eq10": None}[cfg.vy],
-        spin_ratio={"zero": 0.0, "ratio": p.get("spin_ratio"), "eq11": None}[cfg.spin],
-    )
     nx, ny = (int(n) for n in o["grid"])
     cells = float(o["cells"])
     tb = TransientRollingBody(
-        _law(p, float(P[0])), _body(p), lateral, Vx0=p["Vx0"],
-        Omega_y0=spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]),
-        Vy0=p.get("Vy0", 0.0), Omega_z0=p.get("Omega_z0", 0.0), nx=nx, ny=ny,
+        make_law(cfg, p, float(P[0])), make_body(p), make_lateral(cfg, p),
+        **initial_state(p), nx=nx, ny=ny,
     )  # fmt: skip
     loads = np.array([case.inputs[n](t) if n in case.inputs else np.zeros(t.size)
                       for n in Loads._fields])  # fmt: skip
@@ -208,7 +195,8 @@ def by_traction(scene: Scene, ref: Reference, case: Case, refine: int = 1) -> di
         if u["P"][i] == 0.0:  # lift-off: no contact, no field
             resultant = (0.0, 0.0, 0.0)
         else:
-            resultant = _law(p, u["P"][i]).traction(vx, vy, u["Vx"][i], nx, ny).resultant()
+            field = thin_layer_law(p, u["P"][i]).traction(vx, vy, u["Vx"][i], nx, ny)
+            resultant = field.resultant()
         for name, value in zip(("Tx", "Ty", "Mz"), resultant, strict=True):
             rows[name].append(value)
         rows["xi_x"].append(vx / abs(u["Vx"][i]))  # for plots; not compared
@@ -264,7 +252,7 @@ def by_halfspace_creepage(scene: Scene, ref: Reference, case: Case) -> dict[str,
     u = _held_inputs(scene, case)
     if np.any(u["Fy_ex"] != 0.0) or np.any(u["Mz_ex"] != 0.0):
         raise ValueError(f"{scene.name}: source 'halfspace_creepage' is longitudinal only")
-    Tx = _body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
+    Tx = make_body(case.parameters).tx_quasistationary(u["Fx_ex"][k], u["My_ex"][k])
     contact = _contacts(scene, case)
     spec = scene.config.table_spec
     mu = case.parameters.get("mu", spec.mu)
@@ -308,7 +296,7 @@ def sliding_motion(scene: Scene, ref: Reference, case: Case) -> dict[str, FloatA
     h = np.diff(scene.grid)
     Vx = p["Vx0"] + np.concatenate([[0.0], np.cumsum(h * (u["Fx_ex"] - Tx)[1:] / p["M"])])
     dO = h * (u["My_ex"] + p["Rx"] * Tx)[1:] / p["Iy"]
-    Omega_y = spin_for_slip(p["Vx0"], p["vx0"], p["Rx"]) + np.concatenate([[0.0], np.cumsum(dO)])
+    Omega_y = initial_state(p)["Omega_y0"] + np.concatenate([[0.0], np.cumsum(dO)])
     k = _samples(scene, ref)
     return {"time": scene.grid[k], "Tx": Tx[k], "Vx": Vx[k], "Omega_y": Omega_y[k],
             "regime": np.ones(k.size)}  # fmt: skip

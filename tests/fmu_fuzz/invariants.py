@@ -24,7 +24,7 @@ index. The rules:
   with OK while an input is inadmissible (it cannot belong to the current inputs);
 - momentum balance, Eqs. (8)-(10), over every doStep answered OK/Warning: with the
   loads held over the step and |T| <= mu P, M dVx/dt = Fx_ex - Tx and Iy dOmega_y/dt =
-  My_ex + Rx Tx (contact_fmu/dynamics.py's sign of Eq. 9) give
+  My_ex + Rx Tx (contact_fmu/dynamics/body.py's sign of Eq. 9) give
   |dVx - h Fx_ex/M| <= h mu P/M, |dOmega_y - h My_ex/Iy| <= h Rx mu P/Iy and
   |dVy - h Fy_ex/M| <= h mu P/M (Eq. 10); the rigid-body FMU takes Tx as input, so its
   changes are h (Fx_ex - Tx)/M and h (My_ex + Rx Tx)/Iy exactly. Rounding term: an

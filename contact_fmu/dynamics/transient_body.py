@@ -1,5 +1,5 @@
 """What the two transient rolling bodies share: a body whose contact is a traction
-field carried as state (transient.py: thin layers; halfspace/transient.py: the
+field carried as state (thin_layer_field.py: thin layers; halfspace/transient.py: the
 half-space).
 
 A subclass holds ``field`` (its ``dx``, ``set_shift``, ``summary``, ``traction_field``
@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import positive
+from .._validate import positive
+from ..laws.thin_layer import FloatArray, TractionField
 from .body_state import BodyState, ContactOutputs
 from .kinematics import ROLLING, SLIDING, creepage
-from .layer import FloatArray, TractionField
 
 
 class TransientBody(BodyState):

@@ -22,7 +22,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validate import InputError, finite, nonnegative, positive
+from .._validate import InputError, finite, nonnegative, positive
 
 
 class Loads(NamedTuple):

@@ -60,12 +60,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import root
 
-from ._validate import InputError, count, finite, positive
+from .._validate import InputError, count, finite, positive
+from ..laws.thin_layer import LayerContact, TractionField
+from ..native import field as native_field
+from .body import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .body_state import ContactOutputs
-from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import GAMMA, V_SCALE_FLOOR, EvalBudget, LoadInput, StageSolveError
-from .layer import LayerContact, TractionField
-from .native import field as native_field
 from .solvers import SOLVE_RTOL, bracketed_newton
 from .transient_body import TransientBody
 

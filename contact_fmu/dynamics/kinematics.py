@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from .law import ContactLaw
+from ..laws.protocol import ContactLaw
 
 # |Vx| floor (m/s) of the reported creepages v/|Vx|: below it the body is at rest in
 # practice and the creepage would be meaningless; the contact law itself has no floor.

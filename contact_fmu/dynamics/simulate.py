@@ -8,10 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validate import InputError, finite, positive
-from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
+from .._validate import InputError, finite, positive
+from ..laws.protocol import ContactLaw
+from .body import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .integrator import LoadInput, RollingBody
-from .law import ContactLaw
 
 FloatArray = NDArray[np.float64]
 Signal = float | Callable[[float], float]

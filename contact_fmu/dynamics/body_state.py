@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validate import InputError, finite
-from .dynamics import Body, Lateral
+from .._validate import InputError, finite
+from .body import Body, Lateral
 
 FloatArray = NDArray[np.float64]
 

@@ -28,8 +28,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
-from . import native
-from ._validate import InputError, finite, nonnegative, positive
+from .. import native
+from .._validate import InputError, finite, nonnegative, positive
 
 FloatArray = NDArray[np.float64]
 

@@ -1,6 +1,6 @@
 """The contact-law protocol: what the steppers, the FMU and the outputs need of a law.
 
-Implemented by ``layer.LayerContact`` (thin layers, Section 4) and
+Implemented by ``thin_layer.LayerContact`` (thin layers, Section 4) and
 ``halfspace.table.CreepTable`` (the exact half-space theory, tabulated).
 """
 

@@ -45,12 +45,13 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from . import native, solvers
-from ._validate import InputError, finite, positive
+from .. import native
+from .._validate import InputError, finite, positive
+from ..laws.protocol import ContactLaw
+from . import solvers
+from .body import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .body_state import BodyState, ContactOutputs
-from .dynamics import ROLLING_STRAIGHT, Body, Lateral, Loads
 from .kinematics import contact_quantities, is_full_slip
-from .law import ContactLaw
 from .solvers import FD_STEP, StageSolveError, newton, newton_increasing
 
 FloatArray = NDArray[np.float64]

@@ -14,8 +14,8 @@ in a (tests/test_cosim_libcosim.py).
 
 from __future__ import annotations
 
-from .dynamics import Body
-from .law import ContactLaw
+from ..laws.protocol import ContactLaw
+from .body import Body
 
 # creepage of the central difference where a law gives no closed-form slope
 FD_CREEP = 1e-10
