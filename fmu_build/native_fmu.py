@@ -21,8 +21,10 @@ build time and not carried in this repository.
 
 What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC and SDIRK2
 (the String parameter ``scheme`` where the FMU offers both), methods "full" and
-"quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or from
-Eq. (11) (the scenes fig13, brake, fig12, railway, cornering; ``--full body``); the
+"quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero, held at a
+ratio (vx the only stage unknown: CF_HELD_SPIN, the scalar step on the vector path's
+state and spin grid) or from Eq. (11) (the scenes fig13, brake, fig12, railway,
+cornering; ``--full body``); the
 half-space creep-force table of one load node without layers, body and contact mode (rail_traction,
 rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
 law, with a spin input Omega_z too (sweep, ``--full contact``: the strip march on the
@@ -120,12 +122,13 @@ def unsupported(cfg: ModelConfig) -> str | None:
                 f"in its FMU state, copied whole: at most {FIELD_CELLS_MAX} cells)"
             )
         return None
-    if cfg.spin == "ratio" and cfg.vy != "eq10":
-        return (
-            'spin = "ratio" without vy = "eq10" (a held spin ratio with vx the only unknown '
-            "runs in Python only, not in the C kernel)"
-        )
     return None
+
+
+def held_spin(cfg: ModelConfig) -> bool:
+    """The body mode with a held spin ratio and vx the only stage unknown (vy zero or held):
+    RollingBody's scalar path with spin, on the native FMU's vector path (CF_HELD_SPIN)."""
+    return cfg.mode == "body" and cfg.spin == "ratio" and cfg.vy != "eq10"
 
 
 # The largest field (nx ny cells) the native FMU carries: its state holds the field and
@@ -241,7 +244,10 @@ def header(cfg: ModelConfig, guid: str) -> str:
         # the vector path (stepper.c, cf_advance_vector): Vy and/or Omega_z as unknowns
         f"#define CF_DYN_VY {int(cfg.mode == 'body' and cfg.vy == 'eq10')}",
         f"#define CF_DYN_SPIN {int(cfg.mode == 'body' and cfg.spin == 'eq11')}",
-        "#define CF_VECTOR (CF_DYN_VY || CF_DYN_SPIN)",
+        # a held spin ratio with vx the only unknown: the scalar step on the vector
+        # path's state, grid and outputs (stepper.c's advance_held)
+        f"#define CF_HELD_SPIN {int(held_spin(cfg))}",
+        "#define CF_VECTOR (CF_DYN_VY || CF_DYN_SPIN || CF_HELD_SPIN)",
         # the contact mode's spin input on the thin-layer law: the march on its grid
         "#define CF_CONTACT_SPIN "
         f"{int(cfg.mode == 'contact' and 'Omega_z' in cfg.inputs and not cfg.has_table)}",

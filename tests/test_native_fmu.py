@@ -262,7 +262,6 @@ def test_rigid_body_step_beyond_the_physical_range_is_discarded_naming_it(full_r
 @pytest.mark.parametrize(
     ("scene", "feature"),
     [
-        ("spin_ratio", 'spin = "ratio" without vy = "eq10"'),
         ("two_loads", "loads = [50000.0, 100000.0]"),
         ("transient_eq10", 'phase = "transient" with Vy or Omega_z as stage unknowns'),
         ("transient_big", 'phase = "transient" on a 128 x 64 field'),
@@ -275,9 +274,6 @@ def test_models_the_c_kernel_does_not_cover_are_refused_naming_the_feature(scene
         d = load(ROOT / "scenarios" / "rail_creep.toml").config.to_dict()
         spec = d["law_spec"] | {"loads": [50.0e3, 100.0e3]}
         cfg = ModelConfig.from_dict(d | {"law_spec": spec})
-    elif scene == "spin_ratio":
-        d = load(ROOT / "scenarios" / "fig13.toml").config.to_dict()
-        cfg = ModelConfig.from_dict(d | {"spin": "ratio"})
     elif scene.startswith("transient_"):  # fig12_transient itself is native (its own tests)
         d = load(ROOT / "scenarios" / "fig12_transient.toml").config.to_dict()
         starts = {k: v for k, v in d["starts"].items() if k != "vy_ratio"}

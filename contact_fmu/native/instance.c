@@ -10,8 +10,9 @@
  * law (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
  * parameters and the load P: cf_layer_law), Lobatto IIIC or SDIRK2 (the String parameter
  * scheme where the FMU offers both), methods "full" and "quasistationary"; vx the only
- * stage unknown (vy zero or held at a ratio, no spin:
- * cf_advance) or Vy and/or Omega_z as unknowns too (Eqs. 10-11: cf_advance_vector, the
+ * stage unknown (vy zero or held at a ratio, no spin: cf_advance; a held spin ratio:
+ * the same step on the vector path's state, cf_advance_vector) or Vy and/or Omega_z as
+ * unknowns too (Eqs. 10-11: cf_advance_vector, the
  * law's spin by the strip march on its grid, built here for each load: cf_grid_build).
  * The build refuses every other model (fmu_build/native_fmu.py). The variables, their
  * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
@@ -901,7 +902,7 @@ static cf_status fmu_step(Inst *I, double t, double h) {
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
     /* the budget max_work in internal steps of this path (body_model.step_cap): at
      * least 1 (max_work <= 1e9: the cap fits an int) */
-    const double work = CF_VECTOR ? CF_WORK_VECTOR : CF_WORK_SCALAR;
+    const double work = CF_DYN_VY || CF_DYN_SPIN ? CF_WORK_VECTOR : CF_WORK_SCALAR;
     const double steps = floor(c->val[R_MAX_WORK] / work);
     b.max_substeps = steps >= 1.0 ? (int)fmin(steps, (double)INT_MAX) : 1;
     cf_vpath vector = {&vw, c->val[R_FY_EX], c->val[R_MZ_EX], NULL, NULL, NULL};

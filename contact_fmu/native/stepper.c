@@ -2,9 +2,9 @@
  * (cf_params.sdirk picks the scheme: integrator.SCHEMES).
  *
  * The path: the thin-layer law (layer.LayerContact, Eqs. 40-43 corrected) or the
- * half-space creep-force table (halfspace/table.py) without spin, with lateral slip
- * held at a ratio to Vx or zero, the body of Eqs. (8)-(9) and (20) with vx the
- * only stage unknown, loads held over the interval, methods "full" and
+ * half-space creep-force table (halfspace/table.py), with lateral slip and spin held
+ * at ratios to Vx or zero, the body of Eqs. (8)-(9) and (20) with vx the only stage
+ * unknown (with a spin: the stage slope by the forward difference of RollingBody._law_x), loads held over the interval, methods "full" and
  * "quasistationary". Every expression is that of the Python code, in the same order,
  * and the build forbids contraction to fused multiply-adds, so a step of the thin-layer
  * law without lateral slip gives the same doubles as the Python path; with lateral slip
@@ -289,10 +289,24 @@ static void slope_at(const cf_params *p, double vx, double vy, double V, double 
     else tx_slope(p, vx, vy, V, r);
 }
 
+static void law(const cf_params *p, double vx, double Vx, double T[3]);
+
 /* RollingBody._law_x: Tx and dTx/dvx along a stage path (slope, k); below
- * v_standstill the blend of integrator.forces_at_rest and its slope */
-static void law_x(const cf_params *p, double vx, double Vx, double k, double out[2]) {
+ * v_standstill the blend of integrator.forces_at_rest and its slope; with a held spin
+ * (rz != 0: the laws' slopes have no spin) the forward difference of step fd_step (|vx|
+ * + scale) */
+static void law_x(const cf_params *p, double vx, double Vx, double k, double scale,
+                  double out[2]) {
     const double vs = p->v_standstill, vy = p->ry * Vx;
+    if (p->rz != 0.0) {
+        double T[3], Td[3];
+        law(p, vx, Vx, T);
+        const double dv = p->fd_step * (fabs(vx) + scale);
+        law(p, vx + dv, Vx + k * dv, Td);
+        out[0] = T[0];
+        out[1] = (Td[0] - T[0]) / dv;
+        return;
+    }
     if (fabs(Vx) >= vs) {
         double r[4];
         slope_at(p, vx, vy, Vx, r);
@@ -308,11 +322,11 @@ static void law_x(const cf_params *p, double vx, double Vx, double k, double out
     out[1] = w * sp + (1.0 - w) * sm + k * (rp[0] - rm[0]) / (2.0 * vs);
 }
 
-/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx, lateral slip ry Vx, no spin:
- * the vector path's forces_at (the blend of integrator.forces_at_rest below
+/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx, lateral slip ry Vx, spin rz
+ * Vx: the vector path's forces_at (the blend of integrator.forces_at_rest below
  * v_standstill) at that state; without spin it marches nothing */
 static void law(const cf_params *p, double vx, double Vx, double T[3]) {
-    const double y[4] = {Vx, vx, p->ry * Vx, 0.0 * Vx};
+    const double y[4] = {Vx, vx, p->ry * Vx, p->rz * Vx};
     march_cache unused = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
     forces_at(p, y, T, &unused);
 }
@@ -325,17 +339,17 @@ typedef struct {
 
 static void residual_algebraic(const stage *s, double v, double f[2]) {
     double o[2];
-    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, o);
+    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, s->scale, o);
     f[0] = o[0] - s->Fe2;
     f[1] = o[1];
 }
 
 static void residual_lobatto(const stage *s, double v2, double f[2]) {
     double o2[2], o1[2];
-    law_x(s->p, v2, s->V2b + s->k * (v2 - s->vn), s->k, o2);
+    law_x(s->p, v2, s->V2b + s->k * (v2 - s->vn), s->k, s->scale, o2);
     double v1 = v2 - s->h * (s->Fe2 - o2[0]) / s->m;
     double dv1 = 1.0 + s->h * o2[1] / s->m;
-    law_x(s->p, v1, s->V1b + s->k * (v1 - s->vn), s->k, o1);
+    law_x(s->p, v1, s->V1b + s->k * (v1 - s->vn), s->k, s->scale, o1);
     f[0] = o1[0] - s->Fe1 + s->m * (v1 + v2 - 2.0 * s->vn) / s->h;
     f[1] = o1[1] * dv1 + s->m * (dv1 + 1.0) / s->h;
 }
@@ -524,7 +538,7 @@ static int lobatto_scalar(const cf_params *p, cf_state *y, double h, double Fx, 
  * in h */
 static void residual_sdirk(const stage *s, double v, double f[2]) {
     double o[2];
-    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, o);
+    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, s->scale, o);
     f[0] = s->m * (v - s->vn) / s->h + o[0] - s->Fe2;
     f[1] = s->m / s->h + o[1];
 }
@@ -763,7 +777,7 @@ static void kinematic_outputs(const cf_params *p, cf_body *b, double Vx, double 
 
 void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
     double Vx = y->Vx, vx = y->vx;
-    double Vy = p->ry * Vx, Omega_z = 0.0 * Vx; /* _apply_ratios, spin ratio 0 */
+    double Vy = p->ry * Vx, Omega_z = p->rz * Vx; /* _apply_ratios */
     double *o = b->out;
     kinematic_outputs(p, b, Vx, vx, Vy, Omega_z, y->Tx, y->Ty, y->Mz);
     if (p->law == LAW_TABLE) {
@@ -1574,12 +1588,28 @@ static int vstate_finite(const cf_vstate *y) {
     return finite_all(v, 9);
 }
 
+/* Vy and Omega_z both held at their ratios, vx the only unknown (a held spin: the native
+ * FMU's CF_HELD_SPIN): RollingBody's scalar path, cf_advance, on the vector path's state;
+ * Vy and Omega_z follow Vx (_apply_ratios). *y unchanged on CF_FALLBACK. */
+static int advance_held(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
+    cf_state s = {.Vx = y->Vx, .vx = y->vx, .t = y->t, .dv = y->dv, .Tx = y->Tx, .Ty = y->Ty,
+                  .Mz = y->Mz, .out_sliding = y->out_sliding, .sliding = y->sliding};
+    if (cf_advance(p, &s, h, L[0], L[2], n) != CF_OK) return CF_FALLBACK;
+    y->Vx = s.Vx, y->vx = s.vx, y->t = s.t, y->dv = s.dv;
+    y->Vy = p->ry * s.Vx, y->Oz = p->rz * s.Vx;
+    y->Tx = s.Tx, y->Ty = s.Ty, y->Mz = s.Mz;
+    y->out_sliding = s.out_sliding, y->sliding = s.sliding;
+    y->jac_valid = 0;
+    return CF_OK;
+}
+
 int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
     if (p->law == LAW_LAYER && p->strips == NULL && !lifted(p))
         return CF_FALLBACK; /* no spin grid (none needed without contact) */
     if (!(h > 0.0 && h <= DBL_MAX) || n < 1 || !(h / n > 0.0) || !finite_all(L, 4) ||
         !vstate_finite(y))
         return CF_FALLBACK;
+    if (!p->dyn_vy && !p->dyn_spin) return advance_held(p, y, h, L, n);
     cf_vstate w = *y;
     if (p->quasistationary && n > 1 && !w.sliding && vadmissible(p, L)) {
         /* RollingBody.advance: rolling under held, admissible loads in one step, unless
