@@ -25,8 +25,11 @@ What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC and 
 ratio (vx the only stage unknown: CF_HELD_SPIN, the scalar step on the vector path's
 state and spin grid) or from Eq. (11) (the scenes fig13, brake, fig12, railway,
 cornering; ``--full body``); the
-half-space creep-force table of one load node without layers, body and contact mode (rail_traction,
-rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
+half-space creep-force table, body and contact mode (rail_traction, rail_creep; the table
+travels as resources/table.bin: each load node's patches and, with several nodes, the
+spline of their weights in log P, blended in C at the load as CreepTable._coefficients_at
+does; with layers a load outside the nodes refused in TableLaw's words; at most
+LOADS_MAX nodes); the contact mode on the thin-layer
 law, with a spin input Omega_z too (sweep, ``--full contact``: the strip march on the
 law's spin grid, built in C for each load, with its forward-mode derivative for the
 directional derivatives); the rigid_body mode (``--full rigid_body``); the body on the
@@ -76,6 +79,10 @@ HEADER = "cf_model.h"
 # no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
 CFLAGS = (*native.CFLAGS, "-std=c11", "-D_DEFAULT_SOURCE")
 PLATFORM = "linux64"
+# the most load nodes of a creep-force table the C code blends (stepper.h, CF_LOADS_MAX)
+LOADS_MAX = int(
+    re.search(r"#define CF_LOADS_MAX (\d+)", (NATIVE_DIR / "stepper.h").read_text()).group(1)
+)
 
 
 class NativeUnsupportedError(ValueError):
@@ -100,15 +107,11 @@ def unsupported(cfg: ModelConfig) -> str | None:
     """Why the native FMU cannot carry ``cfg``'s model, or None."""
     if cfg.mode == "rigid_body":
         return None  # Eqs. (8)-(9) alone: no law
-    if cfg.has_table:
-        spec = cfg.table_spec
-        if len(spec.loads) != 1:
-            return (
-                f"[halfspace] loads = {list(spec.loads)} (a table of several load nodes is "
-                "interpolated in P by a spline the native FMU does not carry)"
-            )
-        if spec.kb + spec.ks > 0.0:
-            return "[halfspace] kb + ks > 0 (a table with layers has a load range to check)"
+    if cfg.has_table and len(cfg.table_spec.loads) > LOADS_MAX:
+        return (
+            f"[halfspace] loads = {list(cfg.table_spec.loads)} (more than {LOADS_MAX} load "
+            "nodes: stepper.h's CF_LOADS_MAX)"
+        )
     if cfg.transient:
         if cfg.vy == "eq10" or cfg.spin == "eq11":
             return (
@@ -288,17 +291,28 @@ def _table_law(cfg: ModelConfig):
 
 
 def _table_header(cfg: ModelConfig) -> list[str]:
-    """The table's constants: sizes, the Hertz ellipse's geometry (eccentricity
-    parameter m, kfac = (K - E)/m, hertz.Hertz._axes), the elastic constants, the onset
-    of full slip; CF_TABLE 0 without a table."""
+    """The table's constants: sizes (the doubles after the axes: CF_T_NCOEF; each load
+    node's patches: CF_T_STRIDE), the load nodes and their spline's degree, the Hertz
+    ellipse's geometry (eccentricity parameter m, kfac = (K - E)/m, hertz.Hertz._axes),
+    the elastic constants, the onset of full slip of one node, the load range a table
+    with layers admits (TableLaw.load_range, spec.LOAD_RTOL); CF_TABLE 0 without a
+    table."""
+    from contact_fmu.halfspace.spec import LOAD_RTOL
     from contact_fmu.halfspace.table import SATURATION_WIDTH
 
     lines = [f"#define CF_SAT_WIDTH {_c(SATURATION_WIDTH)}"]
     if not cfg.has_table:
         return (
             [*lines, "#define CF_TABLE 0"]
-            + [f"#define CF_T_{n} 1" for n in ("N1", "N2", "N3", "NCOEF", "A_LE_B")]
-            + [f"#define CF_T_{n} 1.0" for n in ("KFAC", "M", "AMIN", "ESTAR", "G", "ONSET")]
+            + [
+                f"#define CF_T_{n} 1"
+                for n in ("N1", "N2", "N3", "NCOEF", "A_LE_B", "NLOADS", "STRIDE")
+            ]  # fmt: skip
+            + ["#define CF_T_SPLINE_K 0", "#define CF_T_LAYERED 0"]
+            + [
+                f"#define CF_T_{n} 1.0"
+                for n in ("KFAC", "M", "AMIN", "ESTAR", "G", "ONSET", "P_LO", "P_HI", "LOAD_RTOL")
+            ]  # fmt: skip
         )
     from scipy.special import ellipe, ellipk
 
@@ -307,28 +321,58 @@ def _table_header(cfg: ModelConfig) -> list[str]:
     m = h.m
     kfac = math.pi / 4.0 if m == 0.0 else (ellipk(m) - ellipe(m)) / m  # hertz.Hertz._axes
     n1, n2, n3 = (len(a) for a in d.axes)
+    lo, hi = law.load_range
     return [*lines, "#define CF_TABLE 1"] + [
         f"#define CF_T_N1 {n1}", f"#define CF_T_N2 {n2}", f"#define CF_T_N3 {n3}",
-        f"#define CF_T_NCOEF {law._coef_flat.size}",
+        f"#define CF_T_NCOEF {_table_data(law)[1].size}",
+        f"#define CF_T_NLOADS {len(d.P)}", f"#define CF_T_STRIDE {d.patches[0].size}",
+        f"#define CF_T_SPLINE_K {min(3, len(d.P) - 1)}",
         f"#define CF_T_KFAC {_c(float(kfac))}", f"#define CF_T_M {_c(m)}",
         f"#define CF_T_AMIN {_c(min(d.A, d.B))}", f"#define CF_T_A_LE_B {int(d.A <= d.B)}",
         f"#define CF_T_ESTAR {_c(d.Estar)}", f"#define CF_T_G {_c(d.G)}",
         f"#define CF_T_ONSET {_c(float(d.onset[0]))}",
+        # TableLaw.__post_init__: with layers, P within [lo, hi] to LOAD_RTOL (or P = 0)
+        f"#define CF_T_LAYERED {int(d.k > 0.0)}",
+        f"#define CF_T_P_LO {_c(lo)}", f"#define CF_T_P_HI {_c(hi)}",
+        f"#define CF_T_LOAD_RTOL {_c(LOAD_RTOL)}",
     ]  # fmt: skip
+
+
+def _table_data(law):
+    """The table's axes and the doubles after them (numpy arrays): each load node's
+    patch coefficients in turn ((N1-1, N2-1, N3-1, 64, 4) each: CreepTable._coef_flat's
+    layout), then with several nodes the spline of their weights (CreepTable._weights:
+    log P of the first and last node, the knots and the n x n coefficients of
+    make_interp_spline(log P_j, eye(n), min(3, n - 1))) and their onsets of full slip."""
+    import numpy as np
+    from scipy.interpolate import make_interp_spline
+
+    d = law.data
+    axes = [np.ascontiguousarray(a, float) for a in d.axes]
+    parts = [np.ascontiguousarray(p, float).ravel() for p in d.patches]
+    n = len(d.P)
+    if n > 1:
+        nodes = np.log(d.P)  # as CreepTable._weights
+        spl = make_interp_spline(nodes, np.eye(n), k=min(3, n - 1))
+        c = np.ascontiguousarray(spl.c, float)
+        if c.shape != (n, n) or len(spl.t) != n + spl.k + 1:
+            raise NativeUnsupportedError(f"a spline of {c.shape} coefficients for {n} nodes")
+        parts += [np.array([nodes[0], nodes[-1]], float), np.asarray(spl.t, float), c.ravel(),
+                  np.asarray(d.onset, float)]  # fmt: skip
+    return axes, np.concatenate(parts)
 
 
 def table_bytes(cfg: ModelConfig) -> bytes:
     """The table resource read by instance.c (load_table): magic, sizes, the axes and the
-    patch coefficients as doubles, a CRC-32 (zlib's) of all before it (host byte
-    order)."""
+    doubles after them (_table_data: the nodes' patch coefficients, their spline), a
+    CRC-32 (zlib's) of all before it (host byte order)."""
     import struct
     import zlib
 
     import numpy as np
 
     law = _table_law(cfg)
-    axes = [np.ascontiguousarray(a, float) for a in law.data.axes]
-    coef = np.ascontiguousarray(law._coef_flat, float).ravel()
+    axes, coef = _table_data(law)
     data = np.concatenate([*axes, coef])
     head = b"cfmuTBL1" + struct.pack("=3IQ", *(len(a) for a in axes), data.size)
     body = head + data.tobytes()

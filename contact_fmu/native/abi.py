@@ -151,6 +151,22 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("gamma", "double", "integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2)"),
             ("sdirk", "int", "the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES)"),
             ("Iy", "double", "kg m^2: the body's inertia, for the free step at P = 0"),
+            # ---- a creep-force table of several load nodes (the native FMU's) ----
+            (
+                "n_loads",
+                "int",
+                "LAW_TABLE: its load nodes; 0 or 1: coef is the table at P (one node, or "
+                "blended by Python: CreepTable._coefficients_at), else coef holds each "
+                "node's patches in turn, blended at P by the weights of the spline below",
+            ),  # fmt: skip
+            ("spline_k", "int", "the spline's degree (CreepTable._weights: min(3, n - 1))"),
+            (
+                "spline",
+                "const double *",
+                "log P of the first and last node, the knots (n + k + 1), the coefficients "
+                "(n x n, row major) of make_interp_spline(log P_j, eye(n), k), the onsets "
+                "of full slip (n)",
+            ),  # fmt: skip
         ],
     ),
     "cf_state": (

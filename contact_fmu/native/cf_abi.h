@@ -126,6 +126,14 @@ typedef struct {
     double gamma;             /* integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2) */
     int sdirk;                /* the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES) */
     double Iy;                /* kg m^2: the body's inertia, for the free step at P = 0 */
+    /* LAW_TABLE: its load nodes; 0 or 1: coef is the table at P (one node, or blended by
+     * Python: CreepTable._coefficients_at), else coef holds each node's patches in turn,
+     * blended at P by the weights of the spline below */
+    int n_loads;
+    int spline_k;             /* the spline's degree (CreepTable._weights: min(3, n - 1)) */
+    /* log P of the first and last node, the knots (n + k + 1), the coefficients (n x n,
+     * row major) of make_interp_spline(log P_j, eye(n), k), the onsets of full slip (n) */
+    const double *spline;
 } cf_params;
 
 /* The state of the scalar path (cf_advance): RollingBody's y, t and _dv, its last

@@ -74,7 +74,7 @@ struct cf_inst {
     spin_grid *grid;              /* CF_GRID only */
     field_scratch *field;         /* CF_TRANSIENT only */
     char field_out[2][FIELD_TEXT]; /* what getString hands out: field_file, field_times */
-    double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
+    double *table;                /* CF_TABLE: axes, each node's patches, spline (resource) */
     unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
     cf_core **states;             /* the live FMU states handed out: an open-addressing */
     size_t n_states, cap_states;  /* set of pointers (NULL: empty slot), cap a power of 2 */
@@ -407,6 +407,22 @@ static int build_rigid(Inst *I) {
     return 1;
 }
 
+/* TableLaw.__post_init__: a creep-force table with layers (kb + ks > 0) admits P = 0
+ * (lift-off) or a load within its nodes' range (to spec.LOAD_RTOL), not one beyond,
+ * where the load similarity it would extrapolate by does not hold: 1 with the refusal
+ * in TableLaw's words in why, else 0 */
+static int load_refused(double P, char *why, size_t n) {
+    if (!CF_TABLE || !CF_T_LAYERED || P == 0.0 ||
+        (CF_T_P_LO * (1.0 - CF_T_LOAD_RTOL) <= P && P <= CF_T_P_HI * (1.0 + CF_T_LOAD_RTOL)))
+        return 0;
+    char r[40];
+    py_repr(P, r, sizeof r);
+    snprintf(why, n, "P = %s is invalid: must be within the load range [%g, %g] N of the FMU's "
+             "creep-force table (its layers, kb + ks > 0, break the load similarity)", r,
+             CF_T_P_LO, CF_T_P_HI);
+    return 1;
+}
+
 /* the spin grid at the law's load into p->strips */
 static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_params *p) {
     if (I->grid == NULL) return;
@@ -548,6 +564,11 @@ static int build(Inst *I) {
     memset(&s, 0, sizeof s);
     cf_model_constants(&p, &b);
     cf_model_attach_table(I->table, &p);
+    char why[512];
+    if (load_refused(v[R_P], why, sizeof why)) { /* the law first, as make_law */
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", why);
+        return 0;
+    }
     if (CF_MODE == MODE_CONTACT) {
         cf_model_law_at_load(c, v[R_P], &p, &b);
         double out[N_OUT];
@@ -662,11 +683,12 @@ static cf_status other_step(Inst *I, double t, double h) {
         cf_params p = c->p;
         cf_body b = c->b;
         double out[N_OUT];
-        const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
+        const int refused = load_refused(c->val[R_P], why_text, sizeof why_text);
+        const char *bad = refused ? NULL : contact_outputs(I, c, &p, &b, out, r, sizeof r);
         if (bad) {
             snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
                      "finite", bad, r);
-        } else {
+        } else if (!refused) {
             c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
             memcpy(c->b.out, out, sizeof out);
         }
@@ -711,7 +733,11 @@ static cf_status refresh(Inst *I) {
     cf_params p = c->p;
     cf_body b = c->b;
     double out[N_OUT];
-    char r[40];
+    char r[40], why[512];
+    if (load_refused(c->val[R_P], why, sizeof why)) {
+        say(I, CF_STATUS_ERROR, "no outputs for the current inputs: %s", why);
+        return CF_STATUS_ERROR;
+    }
     const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
     if (bad) {
         say(I, CF_STATUS_ERROR, "no outputs for the current inputs: FloatingPointError: output "
@@ -897,6 +923,13 @@ static cf_status fmu_step(Inst *I, double t, double h) {
     cf_state w = c->s;
     cf_vstate vw = c->vs;
     const double P = c->val[R_P];
+    char refusal[512];
+    if (P != c->P_law && load_refused(P, refusal, sizeof refusal)) { /* set_load's */
+        REPRS();
+        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s",
+            rt, rh, refusal);
+        return CF_STATUS_DISCARD;
+    }
     /* set_load: Eq. (34) at the new P; set_mu: the law at a tuned mu */
     if (P != c->P_law || c->val[R_MU] != p.mu) cf_model_law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
@@ -1008,7 +1041,8 @@ static size_t uri_to_path(const char *uri, char *path, size_t n) {
 }
 
 /* the table resource (fmu_build/native_fmu.py, table_bytes): "cfmuTBL1", n1, n2, n3
- * (u32), the count of doubles (u64), the axes and the patch coefficients (doubles), the
+ * (u32), the count of doubles (u64), the axes and the load nodes' patch coefficients and
+ * spline (doubles: model.c's cf_model_attach_table), the
  * CRC-32 (zlib's) of all before it (u64); read from the resources folder (a file URI) at
  * instantiation into memory of the front end's; 0 with a logged reason */
 static int load_table(Inst *I, const char *uri, const Inst *probe) {

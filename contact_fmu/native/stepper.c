@@ -147,8 +147,61 @@ static int cell(const double *ax, int n, double x) { /* min(max(bisect_right - 1
     return i < 0 ? 0 : (i > n - 2 ? n - 2 : i);
 }
 
-static const double *patch(const cf_params *p, int i1, int i2, int i3) {
-    return p->coef + ((size_t)((i1 * (p->n2 - 1) + i2) * (p->n3 - 1) + i3)) * 256;
+/* CreepTable._weights: the load nodes' weights at P (n_loads > 1): the interpolating
+ * spline of degree k in log P through the unit vectors (make_interp_spline(log P_j,
+ * eye(n), k): its knots t and coefficients c in p->spline), at log P clamped to the
+ * nodes (the first node's at P = 0), evaluated as scipy's BSpline: the interval t[l] <=
+ * x < t[l + 1] (l < n), de Boor's recursion for the k + 1 B-splines there (_deBoor_D),
+ * then for each weight the sum over their coefficients in order; the same operations. */
+static void load_weights(const cf_params *p, double P, double w[CF_LOADS_MAX]) {
+    const int n = p->n_loads, k = p->spline_k;
+    const double lo = p->spline[0], hi = p->spline[1];
+    const double *t = p->spline + 2, *c = t + n + k + 1;
+    double x = lo;
+    if (P > 0.0) { /* np.clip(math.log(P), lo, hi) */
+        x = log(P);
+        x = x < lo ? lo : (x > hi ? hi : x);
+    }
+    int l = k;
+    while (l + 1 < n && x >= t[l + 1]) l++;
+    double h[4] = {1.0, 0.0, 0.0, 0.0}, hh[4];
+    for (int j = 1; j <= k; j++) {
+        for (int i = 0; i < j; i++) hh[i] = h[i];
+        h[0] = 0.0;
+        for (int m = 1; m <= j; m++) {
+            const double xb = t[l + m], xa = t[l + m - j];
+            if (xb == xa) {
+                h[m] = 0.0;
+                continue;
+            }
+            const double f = hh[m - 1] / (xb - xa);
+            h[m - 1] += f * (xb - x);
+            h[m] = f * (x - xa);
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        double sum = 0.0;
+        for (int a = 0; a <= k; a++) sum = sum + c[(size_t)(l + a - k) * n + j] * h[a];
+        w[j] = sum;
+    }
+}
+
+/* the Hermite patch of cell (i1, i2, i3) at the law's load: the table's own (one node),
+ * or (n_loads > 1) CreepTable._coefficients_at's weighted sum of the nodes' patches,
+ * sum(w_j C_j) from 0 in the nodes' order (the same operations as numpy's elementwise
+ * sum), for this cell only, into blend */
+static const double *patch(const cf_params *p, int i1, int i2, int i3, double blend[256]) {
+    const size_t at = ((size_t)((i1 * (p->n2 - 1) + i2) * (p->n3 - 1) + i3)) * 256;
+    if (p->n_loads <= 1) return p->coef + at;
+    const size_t stride = (size_t)(p->n1 - 1) * (size_t)(p->n2 - 1) * (size_t)(p->n3 - 1) * 256;
+    double w[CF_LOADS_MAX];
+    load_weights(p, p->P, w);
+    for (int e = 0; e < 256; e++) blend[e] = 0.0;
+    for (int j = 0; j < p->n_loads; j++) {
+        const double *C = p->coef + (size_t)j * stride + at;
+        for (int e = 0; e < 256; e++) blend[e] = blend[e] + w[j] * C[e];
+    }
+    return blend;
 }
 
 /* sum over the 64 Hermite terms of w[a b c] = T1[a] T2[b] T3[c] times output o */
@@ -198,7 +251,8 @@ static void table_scalar(const cf_params *p, double vx, double vy, double phi, d
     double t3 = (x3 - p->ax3[i3]) / (p->ax3[i3 + 1] - p->ax3[i3]);
     double T1[4] = {1.0, t1, t1 * t1, t1 * t1 * t1}, T2[4] = {1.0, t2, t2 * t2, t2 * t2 * t2};
     double T3[4] = {1.0, t3, t3 * t3, t3 * t3 * t3};
-    const double *C = patch(p, i1, i2, i3);
+    double blend[256];
+    const double *C = patch(p, i1, i2, i3, blend);
     double fx = sg * patch_sum(C, T1, T2, T3, 0), fy = sg * patch_sum(C, T1, T2, T3, 1);
     double mz = sg * patch_sum(C, T1, T2, T3, 2), adh = patch_sum(C, T1, T2, T3, 3);
     double m = hypot(fx, fy);
@@ -257,7 +311,8 @@ static void table_tx_slope(const cf_params *p, double vx, double vy, double Vx, 
     double T1[4] = {1.0, t1, t1 * t1, pow(t1, 3.0)}, dT1[4] = {0.0, 1.0, 2.0 * t1, 3.0 * t1 * t1};
     double T2[4] = {1.0, t2, t2 * t2, pow(t2, 3.0)}, dT2[4] = {0.0, 1.0, 2.0 * t2, 3.0 * t2 * t2};
     double T3[4] = {1.0, t3, t3 * t3, pow(t3, 3.0)};
-    const double *C = patch(p, i1, i2, i3);
+    double blend[256];
+    const double *C = patch(p, i1, i2, i3, blend);
     double fx = sg * patch_sum(C, T1, T2, T3, 0), fy = sg * patch_sum(C, T1, T2, T3, 1);
     double dfx[2] = {patch_sum(C, dT1, T2, T3, 0) / h1, patch_sum(C, T1, dT2, T3, 0) / h2};
     double dfy[2] = {patch_sum(C, dT1, T2, T3, 1) / h1, patch_sum(C, T1, dT2, T3, 1) / h2};
@@ -694,12 +749,14 @@ void cf_layer_law(cf_params *p, double P, double Rx, double Ry, double k1, doubl
 }
 
 /* The half-space creep-force table (halfspace/table.py, TableLaw) at load P and friction
- * mu, for a table of one load node (its patches independent of P) into p, with a2, p0:
+ * mu into p (the patches of a table of several load nodes are blended at P where they
+ * are read: patch, load_weights), with a2, p0:
  * the Hertz ellipse (halfspace/hertz.py: major = (3 P kfac/(2 pi Amin E*))^(1/3), minor =
  * major (1 - m)^(1/2), the eccentricity parameter m and kfac = (K - E)/m fixed by the
  * geometry, computed by the build), p0 = 3 P/(2 pi a1 a2), c = (a1 a2)^(1/2), xi_ref =
- * mu P/(G c^2), phi_ref = xi_ref/c, creep_full_slip = onset xi_ref; the operations of
- * hertz.py and table.py: the same doubles. */
+ * mu P/(G c^2), phi_ref = xi_ref/c, creep_full_slip = onset xi_ref (several nodes: the
+ * nodes' onsets weighted at P, np.dot(w, onset)); the operations of hertz.py and table.py:
+ * the same doubles. */
 void cf_table_law(cf_params *p, double P, double mu, double kfac, double m, double Amin,
                   int a_le_b, double Estar, double G, double onset, double *a2, double *p0) {
     const double major = pow(3.0 * P * kfac / (2.0 * M_PI * Amin * Estar), 1.0 / 3.0);
@@ -715,7 +772,16 @@ void cf_table_law(cf_params *p, double P, double mu, double kfac, double m, doub
     p->c = c;
     p->xi_ref = xi_ref;
     p->phi_ref = P == 0.0 ? 0.0 : xi_ref / c;
-    p->creep_full_slip = 1.0 * onset * xi_ref; /* np.dot([1.0], onset) * xi_ref */
+    double on = 1.0 * onset; /* np.dot(w, onset): w = [1.0] for one node ... */
+    if (p->n_loads > 1) {    /* ... else the nodes' weights at P */
+        double w[CF_LOADS_MAX];
+        const double *onsets = p->spline + 2 + (p->n_loads + p->spline_k + 1) +
+                               (size_t)p->n_loads * p->n_loads;
+        load_weights(p, P, w);
+        on = 0.0;
+        for (int j = 0; j < p->n_loads; j++) on += w[j] * onsets[j];
+    }
+    p->creep_full_slip = on * xi_ref;
 }
 
 /* dynamics.Body: A1 = M Rx^2/(M Rx^2 + Iy) (1 for Iy = 0), A2 = Iy/(M Rx^2 + Iy),

@@ -56,6 +56,8 @@ __asm__(".symver pow,pow@GLIBC_2.17");
 
 /* cf_params.law */
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
+/* the most load nodes of a creep-force table (cf_params.n_loads; the build refuses more) */
+#define CF_LOADS_MAX 16
 
 /* ---- fmu/body_model.py: a communication step of the body (cf_body) ---------------- */
 /* Why a communication step of the body is not served (else CF_OK): the checks of
