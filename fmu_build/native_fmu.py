@@ -33,9 +33,11 @@ LOADS_MAX nodes); the contact mode on the thin-layer
 law, with a spin input Omega_z too (sweep, ``--full contact``: the strip march on the
 law's spin grid, built in C for each load, with its forward-mode derivative for the
 directional derivatives); the rigid_body mode (``--full rigid_body``); the body on the
-transient traction field (phase "transient", vx the only stage unknown: fig12_transient;
-field.c's cf_field_advance, the field of the scene's nx x ny in the instance's core, at
-most FIELD_CELLS_MAX cells; the field file written in C). Everything
+transient traction field (phase "transient": fig12_transient; vx the stage unknown, Vy
+and Omega_z held at ratios or unknowns too by Eqs. 10-11, field.c's Newton iteration
+with the field's Jacobian, its evaluations counted against max_work as the pythonfmu
+FMU counts them; field.c's cf_field_advance, the field of the scene's nx x ny in the
+instance's core, at most FIELD_CELLS_MAX cells; the field file written in C). Everything
 else is refused here with a message that names the scene's feature
 (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
@@ -59,6 +61,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from contact_fmu import integrator, layer, native
+from contact_fmu.fmu import body_model
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 from fmu_build import model_description3
@@ -113,11 +116,6 @@ def unsupported(cfg: ModelConfig) -> str | None:
             "nodes: stepper.h's CF_LOADS_MAX)"
         )
     if cfg.transient:
-        if cfg.vy == "eq10" or cfg.spin == "eq11":
-            return (
-                'phase = "transient" with Vy or Omega_z as stage unknowns (Eqs. 10-11 on the '
-                "traction field run in Python only; field.c's body has vx its only unknown)"
-            )
         nx, ny = field_grid(cfg)
         if nx * ny > FIELD_CELLS_MAX:
             return (
@@ -260,6 +258,8 @@ def header(cfg: ModelConfig, guid: str) -> str:
         f"#define CF_LINE_N {model_description3.LINE_N}",
         # phase "transient": the body on the traction field (field.c), its grid
         f"#define CF_TRANSIENT {int(cfg.transient)}",
+        # the field's evaluations in the stage solves with Vy or Omega_z as unknowns
+        f"#define CF_WORK_PER_CELL_EVAL {_c(body_model.WORK_PER_CELL_EVAL)}",
         *(
             f"#define CF_FIELD_{k} {n}"
             for k, n in zip(("NX", "NY"), field_grid(cfg) if cfg.transient else (1, 1), strict=True)

@@ -263,7 +263,6 @@ def test_rigid_body_step_beyond_the_physical_range_is_discarded_naming_it(full_r
     ("scene", "feature"),
     [
         ("many_loads", "(more than 16 load nodes"),
-        ("transient_eq10", 'phase = "transient" with Vy or Omega_z as stage unknowns'),
         ("transient_big", 'phase = "transient" on a 128 x 64 field'),
     ],
 )
@@ -276,10 +275,7 @@ def test_models_the_c_kernel_does_not_cover_are_refused_naming_the_feature(scene
         cfg = ModelConfig.from_dict(d | {"law_spec": spec})
     elif scene.startswith("transient_"):  # fig12_transient itself is native (its own tests)
         d = load(ROOT / "scenarios" / "fig12_transient.toml").config.to_dict()
-        starts = {k: v for k, v in d["starts"].items() if k != "vy_ratio"}
-        change = {"vy": "eq10", "starts": starts} if scene == "transient_eq10" else {}
-        if scene == "transient_big":
-            change = {"starts": d["starts"] | {"nx": 128, "ny": 64}}
+        change = {"starts": d["starts"] | {"nx": 128, "ny": 64}}
         cfg = ModelConfig.from_dict(d | change)
     else:
         cfg = load(ROOT / "scenarios" / f"{scene}.toml").config

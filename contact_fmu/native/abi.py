@@ -302,10 +302,10 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
         ],
     ),
     "cf_field_body": (
-        "The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and "
-        "Omega_z held at the ratios ry, rz to Vx (Lateral); the law's creep_full_slip; SDIRK2's "
-        "gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s), "
-        "MAX_STAGE_ITERATIONS. field.Body.",
+        "The body (Eqs. 8-11) of a TransientRollingBody: vx a stage unknown, Vy and Omega_z "
+        "held at the ratios ry, rz to Vx (Lateral) or unknowns too; the law's "
+        "creep_full_slip; SDIRK2's gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, "
+        "integrator.V_SCALE_FLOOR (m/s), MAX_STAGE_ITERATIONS. field.Body.",
         [
             ("M", "double", "kg"),
             ("Rx", "double", "m"),
@@ -320,6 +320,17 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("solve_rtol", "double", ""),
             ("v_scale_floor", "double", "m/s"),
             ("max_iterations", "int", "of a stage solve"),
+            # ---- Vy and/or Omega_z as stage unknowns too (the native FMU's) ----
+            ("dyn_vy", "int", "1: Vy is a stage unknown (Eq. 10; ry unused), 0: held"),
+            ("dyn_spin", "int", "1: Omega_z is one (Eq. 11; rz unused), 0: held"),
+            ("Iz", "double", "kg m^2: with dyn_spin"),
+            ("a1", "double", "m: the law's half-length (the spin's scale)"),
+            (
+                "eval_limit",
+                "int",
+                "with a stage unknown besides vx: the field's evaluations one advance may "
+                "take (EvalBudget.eval_limit; beyond: CF_FIELD_BUDGET), 0: none",
+            ),  # fmt: skip
         ],
     ),
     "cf_field_body_state": (

@@ -259,9 +259,9 @@ typedef struct {
     double J[9];            /* with jacobian: 3 x 3, row major */
 } cf_field_stage_out;
 
-/* The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and
- * Omega_z held at the ratios ry, rz to Vx (Lateral); the law's creep_full_slip; SDIRK2's
- * gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s),
+/* The body (Eqs. 8-11) of a TransientRollingBody: vx a stage unknown, Vy and Omega_z held
+ * at the ratios ry, rz to Vx (Lateral) or unknowns too; the law's creep_full_slip;
+ * SDIRK2's gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s),
  * MAX_STAGE_ITERATIONS. field.Body. */
 typedef struct {
     double M;                /* kg */
@@ -277,6 +277,13 @@ typedef struct {
     double solve_rtol;
     double v_scale_floor;    /* m/s */
     int max_iterations;      /* of a stage solve */
+    int dyn_vy;              /* 1: Vy is a stage unknown (Eq. 10; ry unused), 0: held */
+    int dyn_spin;            /* 1: Omega_z is one (Eq. 11; rz unused), 0: held */
+    double Iz;               /* kg m^2: with dyn_spin */
+    double a1;               /* m: the law's half-length (the spin's scale) */
+    /* with a stage unknown besides vx: the field's evaluations one advance may take
+     * (EvalBudget.eval_limit; beyond: CF_FIELD_BUDGET), 0: none */
+    int eval_limit;
 } cf_field_body;
 
 /* The state of cf_field_advance: y = (Vx, vx, Vy, Omega_z), t (s), the contact impulse (N

@@ -487,8 +487,9 @@ static int build_transient(Inst *I, cf_params *p, cf_body *b) {
     const double Vx0 = v[R_VX0], Omega_y0 = (Vx0 - v[R_SLIP0]) / p->Rx;
     fs->y[0] = Vx0;
     fs->y[1] = Vx0 - Omega_y0 * p->Rx;
-    fs->y[2] = v[R_VY_RATIO] * Vx0; /* Lateral's held ratios (0 where none) */
-    fs->y[3] = v[R_SPIN_RATIO] * Vx0;
+    /* Lateral's held ratios (0 where none), or Vy0, Omega_z0 where an unknown */
+    fs->y[2] = CF_DYN_VY ? v[R_VY0] : v[R_VY_RATIO] * Vx0;
+    fs->y[3] = CF_DYN_SPIN ? v[R_OMEGA_Z0] : v[R_SPIN_RATIO] * Vx0;
     fs->t = c->time;
     cf_field f;
     cf_model_field(p, b, v[R_KB] + v[R_KS], fs, I->field, &f);
@@ -750,6 +751,15 @@ static cf_status refresh(Inst *I) {
     return CF_STATUS_OK;
 }
 
+/* Python's a // b for doubles a >= 0, b > 0 (float_floor_div: the quotient of a - fmod(a,
+ * b), floored, rounded up where it falls short by more than one half) */
+static double py_floordiv(double a, double b) {
+    const double mod = fmod(a, b), div = (a - mod) / b;
+    double q = floor(div);
+    if (div - q > 0.5) q += 1.0;
+    return q;
+}
+
 /* TransientBodyModel.step + the outputs, committed only when all is well: the load
  * (set_load: the ellipse follows P, Eq. 34, the field is kept; the lattice and strips
  * laid at the set-up load stay while the contact fits them, and a load whose contact
@@ -803,10 +813,16 @@ static cf_status transient_step(Inst *I, double t, double h) {
         *tr = c->fs;
         cf_field f;
         cf_model_field(&p, &b, v[R_KB] + v[R_KS], tr, sc, &f);
+        /* with Vy or Omega_z as unknowns the field's evaluations count against
+         * max_work (EvalBudget: max(1, max_work // (nx ny WORK_PER_CELL_EVAL))) */
+        const double eval_work = (double)CF_FIELD_NX * CF_FIELD_NY * CF_WORK_PER_CELL_EVAL;
+        const double evals = fmin(fmax(py_floordiv(v[R_MAX_WORK], eval_work), 1.0), INT_MAX);
         const cf_field_body fb = {p.M, p.Rx, p.A1, p.A2, p.m_slip, v[R_VY_RATIO],
                                   v[R_SPIN_RATIO], p.creep_full_slip, CF_GAMMA,
                                   CF_FIELD_A21, CF_SOLVE_RTOL, CF_V_SCALE_FLOOR,
-                                  CF_FIELD_MAX_ITERATIONS};
+                                  CF_FIELD_MAX_ITERATIONS, CF_DYN_VY, CF_DYN_SPIN,
+                                  CF_DYN_SPIN ? v[R_IZ] : 0.0, p.a1,
+                                  CF_DYN_VY || CF_DYN_SPIN ? (int)evals : 0};
         cf_field_body_state st;
         memcpy(st.y, tr->y, sizeof st.y);
         st.t = tr->t;
@@ -830,7 +846,11 @@ static cf_status transient_step(Inst *I, double t, double h) {
         int which = 0, k = -1;
         const int check = rc == CF_FIELD_OK ? cf_body_out_check(out, I->served, &which) : CF_OK;
         if (rc == CF_FIELD_OK && check == CF_OK) k = field_nonfinite(I, out);
-        if (rc == CF_FIELD_NO_ROOT) { /* TransientRollingBody._solve_scalar's words */
+        if (rc == CF_FIELD_BUDGET) { /* WorkBudgetError, as BodyModel.step words it */
+            snprintf(why, sizeof why, "WorkBudgetError: the stage solves need more than %d "
+                     "evaluations of the law, beyond max_work = %g (each costs %g)",
+                     fb.eval_limit, v[R_MAX_WORK], eval_work);
+        } else if (rc == CF_FIELD_NO_ROOT) { /* TransientRollingBody._solve_scalar's words */
             snprintf(why, sizeof why, "StageSolveError: no slip velocity satisfies the stage "
                      "equation (target force %.6g N against mu P = %.6g N)",
                      p.A2 * v[R_FX_EX] - p.A1 * v[R_MY_EX] / p.Rx, p.mu * p.P);
