@@ -238,6 +238,39 @@ def test_contact_on_tables_of_several_loads_gives_the_pythonfmu_outputs(fmus, na
         assert abs(a["adhesion"] - r["adhesion"]) <= 1e-12 and a["regime"] == r["regime"]
 
 
+def test_fmu_state_of_the_blended_table_repeats_bit_for_bit(fmus):
+    """The layered body FMU: a state got between nodes (P = 90 kN), four steps at other
+    loads, the state set and the same four steps again: the same doubles; through bytes
+    into a fresh instance too (the table's arrays attached anew, the blend at the
+    state's load)."""
+    path = fmus["body"]["native"]
+
+    def step(b, k: int) -> None:
+        b.set("P", 85e3 + 7e3 * k)
+        b.set("My_ex", 6000.0 - 2500.0 * k)
+        assert b.step(5e-3) == OK, b.messages[-1:]
+
+    with Instance(path, "state", {"P": 90e3}) as b:
+        for k in range(3):
+            b.set("My_ex", 3000.0 * k)
+            assert b.step(5e-3) == OK
+        state = b.get_state()
+        for k in range(4):
+            step(b, k)
+        first = b.outputs()
+        b.set_state(state)
+        for k in range(4):
+            step(b, k)
+        assert b.outputs() == first
+        data, t = b.serialize_state(state), state[1]
+        b.free_state(state)
+    with Instance(path, "restored") as b:
+        b.set_state(b.deserialize_state(data, t))
+        for k in range(4):
+            step(b, k)
+        assert b.outputs() == first
+
+
 def _answers(b, calls: list) -> tuple[list[int], list[tuple[int, str]]]:
     """The statuses of ``calls`` on b and the messages logged meanwhile."""
     start, statuses = len(b.messages), []
