@@ -21,16 +21,23 @@ build time and not carried in this repository.
 
 What the C kernel covers: the body mode on the thin-layer law, Lobatto IIIC and SDIRK2
 (the String parameter ``scheme`` where the FMU offers both), methods "full" and
-"quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero or from
-Eq. (11) (the scenes fig13, brake, fig12, railway, cornering; ``--full body``); the
-half-space creep-force table of one load node without layers, body and contact mode (rail_traction,
-rail_creep; the table travels as resources/table.bin); the contact mode on the thin-layer
+"quasistationary", vy zero, held at a ratio or from Eq. (10), Omega_z zero, held at a
+ratio (vx the only stage unknown: CF_HELD_SPIN, the scalar step on the vector path's
+state and spin grid) or from Eq. (11) (the scenes fig13, brake, fig12, railway,
+cornering; ``--full body``); the
+half-space creep-force table, body and contact mode (rail_traction, rail_creep; the table
+travels as resources/table.bin: each load node's patches and, with several nodes, the
+spline of their weights in log P, blended in C at the load as CreepTable._coefficients_at
+does; with layers a load outside the nodes refused in TableLaw's words; at most
+LOADS_MAX nodes); the contact mode on the thin-layer
 law, with a spin input Omega_z too (sweep, ``--full contact``: the strip march on the
 law's spin grid, built in C for each load, with its forward-mode derivative for the
 directional derivatives); the rigid_body mode (``--full rigid_body``); the body on the
-transient traction field (phase "transient", vx the only stage unknown: fig12_transient;
-field.c's cf_field_advance, the field of the scene's nx x ny in the instance's core, at
-most FIELD_CELLS_MAX cells; the field file written in C). Everything
+transient traction field (phase "transient": fig12_transient; vx the stage unknown, Vy
+and Omega_z held at ratios or unknowns too by Eqs. 10-11, field.c's Newton iteration
+with the field's Jacobian, its evaluations counted against max_work as the pythonfmu
+FMU counts them; field.c's cf_field_advance, the field of the scene's nx x ny in the
+instance's core, at most FIELD_CELLS_MAX cells; the field file written in C). Everything
 else is refused here with a message that names the scene's feature
 (``NativeUnsupportedError``); there is no silent fallback to the pythonfmu FMU.
 """
@@ -55,6 +62,7 @@ from pathlib import Path
 
 from contact_fmu import native
 from contact_fmu.dynamics import integrator
+from contact_fmu.fmu import body_model
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.laws import thin_layer as layer
@@ -76,6 +84,10 @@ HEADER = "cf_model.h"
 # no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)
 CFLAGS = (*native.CFLAGS, "-std=c11", "-D_DEFAULT_SOURCE")
 PLATFORM = "linux64"
+# the most load nodes of a creep-force table the C code blends (stepper.h, CF_LOADS_MAX)
+LOADS_MAX = int(
+    re.search(r"#define CF_LOADS_MAX (\d+)", (NATIVE_DIR / "stepper.h").read_text()).group(1)
+)
 
 
 class NativeUnsupportedError(ValueError):
@@ -100,21 +112,12 @@ def unsupported(cfg: ModelConfig) -> str | None:
     """Why the native FMU cannot carry ``cfg``'s model, or None."""
     if cfg.mode == "rigid_body":
         return None  # Eqs. (8)-(9) alone: no law
-    if cfg.has_table:
-        spec = cfg.table_spec
-        if len(spec.loads) != 1:
-            return (
-                f"[halfspace] loads = {list(spec.loads)} (a table of several load nodes is "
-                "interpolated in P by a spline the native FMU does not carry)"
-            )
-        if spec.kb + spec.ks > 0.0:
-            return "[halfspace] kb + ks > 0 (a table with layers has a load range to check)"
+    if cfg.has_table and len(cfg.table_spec.loads) > LOADS_MAX:
+        return (
+            f"[halfspace] loads = {list(cfg.table_spec.loads)} (more than {LOADS_MAX} load "
+            "nodes: stepper.h's CF_LOADS_MAX)"
+        )
     if cfg.transient:
-        if cfg.vy == "eq10" or cfg.spin == "eq11":
-            return (
-                'phase = "transient" with Vy or Omega_z as stage unknowns (Eqs. 10-11 on the '
-                "traction field run in Python only; field.c's body has vx its only unknown)"
-            )
         nx, ny = field_grid(cfg)
         if nx * ny > FIELD_CELLS_MAX:
             return (
@@ -122,12 +125,13 @@ def unsupported(cfg: ModelConfig) -> str | None:
                 f"in its FMU state, copied whole: at most {FIELD_CELLS_MAX} cells)"
             )
         return None
-    if cfg.spin == "ratio" and cfg.vy != "eq10":
-        return (
-            'spin = "ratio" without vy = "eq10" (a held spin ratio with vx the only unknown '
-            "runs in Python only, not in the C kernel)"
-        )
     return None
+
+
+def held_spin(cfg: ModelConfig) -> bool:
+    """The body mode with a held spin ratio and vx the only stage unknown (vy zero or held):
+    RollingBody's scalar path with spin, on the native FMU's vector path (CF_HELD_SPIN)."""
+    return cfg.mode == "body" and cfg.spin == "ratio" and cfg.vy != "eq10"
 
 
 # The largest field (nx ny cells) the native FMU carries: its state holds the field and
@@ -243,7 +247,10 @@ def header(cfg: ModelConfig, guid: str) -> str:
         # the vector path (stepper.c, cf_advance_vector): Vy and/or Omega_z as unknowns
         f"#define CF_DYN_VY {int(cfg.mode == 'body' and cfg.vy == 'eq10')}",
         f"#define CF_DYN_SPIN {int(cfg.mode == 'body' and cfg.spin == 'eq11')}",
-        "#define CF_VECTOR (CF_DYN_VY || CF_DYN_SPIN)",
+        # a held spin ratio with vx the only unknown: the scalar step on the vector
+        # path's state, grid and outputs (stepper.c's advance_held)
+        f"#define CF_HELD_SPIN {int(held_spin(cfg))}",
+        "#define CF_VECTOR (CF_DYN_VY || CF_DYN_SPIN || CF_HELD_SPIN)",
         # the contact mode's spin input on the thin-layer law: the march on its grid
         "#define CF_CONTACT_SPIN "
         f"{int(cfg.mode == 'contact' and 'Omega_z' in cfg.inputs and not cfg.has_table)}",
@@ -253,6 +260,8 @@ def header(cfg: ModelConfig, guid: str) -> str:
         f"#define CF_LINE_N {model_description3.LINE_N}",
         # phase "transient": the body on the traction field (field.c), its grid
         f"#define CF_TRANSIENT {int(cfg.transient)}",
+        # the field's evaluations in the stage solves with Vy or Omega_z as unknowns
+        f"#define CF_WORK_PER_CELL_EVAL {_c(body_model.WORK_PER_CELL_EVAL)}",
         *(
             f"#define CF_FIELD_{k} {n}"
             for k, n in zip(("NX", "NY"), field_grid(cfg) if cfg.transient else (1, 1), strict=True)
@@ -284,17 +293,28 @@ def _table_law(cfg: ModelConfig):
 
 
 def _table_header(cfg: ModelConfig) -> list[str]:
-    """The table's constants: sizes, the Hertz ellipse's geometry (eccentricity
-    parameter m, kfac = (K - E)/m, hertz.Hertz._axes), the elastic constants, the onset
-    of full slip; CF_TABLE 0 without a table."""
+    """The table's constants: sizes (the doubles after the axes: CF_T_NCOEF; each load
+    node's patches: CF_T_STRIDE), the load nodes and their spline's degree, the Hertz
+    ellipse's geometry (eccentricity parameter m, kfac = (K - E)/m, hertz.Hertz._axes),
+    the elastic constants, the onset of full slip of one node, the load range a table
+    with layers admits (TableLaw.load_range, spec.LOAD_RTOL); CF_TABLE 0 without a
+    table."""
+    from contact_fmu.halfspace.spec import LOAD_RTOL
     from contact_fmu.halfspace.table import SATURATION_WIDTH
 
     lines = [f"#define CF_SAT_WIDTH {_c(SATURATION_WIDTH)}"]
     if not cfg.has_table:
         return (
             [*lines, "#define CF_TABLE 0"]
-            + [f"#define CF_T_{n} 1" for n in ("N1", "N2", "N3", "NCOEF", "A_LE_B")]
-            + [f"#define CF_T_{n} 1.0" for n in ("KFAC", "M", "AMIN", "ESTAR", "G", "ONSET")]
+            + [
+                f"#define CF_T_{n} 1"
+                for n in ("N1", "N2", "N3", "NCOEF", "A_LE_B", "NLOADS", "STRIDE")
+            ]  # fmt: skip
+            + ["#define CF_T_SPLINE_K 0", "#define CF_T_LAYERED 0"]
+            + [
+                f"#define CF_T_{n} 1.0"
+                for n in ("KFAC", "M", "AMIN", "ESTAR", "G", "ONSET", "P_LO", "P_HI", "LOAD_RTOL")
+            ]  # fmt: skip
         )
     from scipy.special import ellipe, ellipk
 
@@ -303,28 +323,58 @@ def _table_header(cfg: ModelConfig) -> list[str]:
     m = h.m
     kfac = math.pi / 4.0 if m == 0.0 else (ellipk(m) - ellipe(m)) / m  # hertz.Hertz._axes
     n1, n2, n3 = (len(a) for a in d.axes)
+    lo, hi = law.load_range
     return [*lines, "#define CF_TABLE 1"] + [
         f"#define CF_T_N1 {n1}", f"#define CF_T_N2 {n2}", f"#define CF_T_N3 {n3}",
-        f"#define CF_T_NCOEF {law._coef_flat.size}",
+        f"#define CF_T_NCOEF {_table_data(law)[1].size}",
+        f"#define CF_T_NLOADS {len(d.P)}", f"#define CF_T_STRIDE {d.patches[0].size}",
+        f"#define CF_T_SPLINE_K {min(3, len(d.P) - 1)}",
         f"#define CF_T_KFAC {_c(float(kfac))}", f"#define CF_T_M {_c(m)}",
         f"#define CF_T_AMIN {_c(min(d.A, d.B))}", f"#define CF_T_A_LE_B {int(d.A <= d.B)}",
         f"#define CF_T_ESTAR {_c(d.Estar)}", f"#define CF_T_G {_c(d.G)}",
         f"#define CF_T_ONSET {_c(float(d.onset[0]))}",
+        # TableLaw.__post_init__: with layers, P within [lo, hi] to LOAD_RTOL (or P = 0)
+        f"#define CF_T_LAYERED {int(d.k > 0.0)}",
+        f"#define CF_T_P_LO {_c(lo)}", f"#define CF_T_P_HI {_c(hi)}",
+        f"#define CF_T_LOAD_RTOL {_c(LOAD_RTOL)}",
     ]  # fmt: skip
+
+
+def _table_data(law):
+    """The table's axes and the doubles after them (numpy arrays): each load node's
+    patch coefficients in turn ((N1-1, N2-1, N3-1, 64, 4) each: CreepTable._coef_flat's
+    layout), then with several nodes the spline of their weights (CreepTable._weights:
+    log P of the first and last node, the knots and the n x n coefficients of
+    make_interp_spline(log P_j, eye(n), min(3, n - 1))) and their onsets of full slip."""
+    import numpy as np
+    from scipy.interpolate import make_interp_spline
+
+    d = law.data
+    axes = [np.ascontiguousarray(a, float) for a in d.axes]
+    parts = [np.ascontiguousarray(p, float).ravel() for p in d.patches]
+    n = len(d.P)
+    if n > 1:
+        nodes = np.log(d.P)  # as CreepTable._weights
+        spl = make_interp_spline(nodes, np.eye(n), k=min(3, n - 1))
+        c = np.ascontiguousarray(spl.c, float)
+        if c.shape != (n, n) or len(spl.t) != n + spl.k + 1:
+            raise NativeUnsupportedError(f"a spline of {c.shape} coefficients for {n} nodes")
+        parts += [np.array([nodes[0], nodes[-1]], float), np.asarray(spl.t, float), c.ravel(),
+                  np.asarray(d.onset, float)]  # fmt: skip
+    return axes, np.concatenate(parts)
 
 
 def table_bytes(cfg: ModelConfig) -> bytes:
     """The table resource read by instance.c (load_table): magic, sizes, the axes and the
-    patch coefficients as doubles, a CRC-32 (zlib's) of all before it (host byte
-    order)."""
+    doubles after them (_table_data: the nodes' patch coefficients, their spline), a
+    CRC-32 (zlib's) of all before it (host byte order)."""
     import struct
     import zlib
 
     import numpy as np
 
     law = _table_law(cfg)
-    axes = [np.ascontiguousarray(a, float) for a in law.data.axes]
-    coef = np.ascontiguousarray(law._coef_flat, float).ravel()
+    axes, coef = _table_data(law)
     data = np.concatenate([*axes, coef])
     head = b"cfmuTBL1" + struct.pack("=3IQ", *(len(a) for a in axes), data.size)
     body = head + data.tobytes()

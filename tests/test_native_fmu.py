@@ -262,28 +262,20 @@ def test_rigid_body_step_beyond_the_physical_range_is_discarded_naming_it(full_r
 @pytest.mark.parametrize(
     ("scene", "feature"),
     [
-        ("spin_ratio", 'spin = "ratio" without vy = "eq10"'),
-        ("two_loads", "loads = [50000.0, 100000.0]"),
-        ("transient_eq10", 'phase = "transient" with Vy or Omega_z as stage unknowns'),
+        ("many_loads", "(more than 16 load nodes"),
         ("transient_big", 'phase = "transient" on a 128 x 64 field'),
     ],
 )
 def test_models_the_c_kernel_does_not_cover_are_refused_naming_the_feature(scene, feature):
     if scene.startswith("full_"):
         cfg = ModelConfig.full(scene[5:])
-    elif scene == "two_loads":
+    elif scene == "many_loads":  # refused before its table is built
         d = load(ROOT / "scenarios" / "rail_creep.toml").config.to_dict()
-        spec = d["law_spec"] | {"loads": [50.0e3, 100.0e3]}
+        spec = d["law_spec"] | {"loads": [50.0e3 + 5e3 * k for k in range(17)]}
         cfg = ModelConfig.from_dict(d | {"law_spec": spec})
-    elif scene == "spin_ratio":
-        d = load(ROOT / "scenarios" / "fig13.toml").config.to_dict()
-        cfg = ModelConfig.from_dict(d | {"spin": "ratio"})
     elif scene.startswith("transient_"):  # fig12_transient itself is native (its own tests)
         d = load(ROOT / "scenarios" / "fig12_transient.toml").config.to_dict()
-        starts = {k: v for k, v in d["starts"].items() if k != "vy_ratio"}
-        change = {"vy": "eq10", "starts": starts} if scene == "transient_eq10" else {}
-        if scene == "transient_big":
-            change = {"starts": d["starts"] | {"nx": 128, "ny": 64}}
+        change = {"starts": d["starts"] | {"nx": 128, "ny": 64}}
         cfg = ModelConfig.from_dict(d | change)
     else:
         cfg = load(ROOT / "scenarios" / f"{scene}.toml").config

@@ -153,6 +153,22 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("gamma", "double", "dynamics.integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2)"),
             ("sdirk", "int", "the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES)"),
             ("Iy", "double", "kg m^2: the body's inertia, for the free step at P = 0"),
+            # ---- a creep-force table of several load nodes (the native FMU's) ----
+            (
+                "n_loads",
+                "int",
+                "LAW_TABLE: its load nodes; 0 or 1: coef is the table at P (one node, or "
+                "blended by Python: CreepTable._coefficients_at), else coef holds each "
+                "node's patches in turn, blended at P by the weights of the spline below",
+            ),  # fmt: skip
+            ("spline_k", "int", "the spline's degree (CreepTable._weights: min(3, n - 1))"),
+            (
+                "spline",
+                "const double *",
+                "log P of the first and last node, the knots (n + k + 1), the coefficients "
+                "(n x n, row major) of make_interp_spline(log P_j, eye(n), k), the onsets "
+                "of full slip (n)",
+            ),  # fmt: skip
         ],
     ),
     "cf_state": (
@@ -289,10 +305,10 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
         ],
     ),
     "cf_field_body": (
-        "The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and "
-        "Omega_z held at the ratios ry, rz to Vx (Lateral); the law's creep_full_slip; SDIRK2's "
-        "gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s), "
-        "MAX_STAGE_ITERATIONS. field.Body.",
+        "The body (Eqs. 8-11) of a TransientRollingBody: vx a stage unknown, Vy and Omega_z "
+        "held at the ratios ry, rz to Vx (Lateral) or unknowns too; the law's "
+        "creep_full_slip; SDIRK2's gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, "
+        "integrator.V_SCALE_FLOOR (m/s), MAX_STAGE_ITERATIONS. field.Body.",
         [
             ("M", "double", "kg"),
             ("Rx", "double", "m"),
@@ -307,6 +323,17 @@ STRUCTS: dict[str, tuple[str, list[tuple]]] = {
             ("solve_rtol", "double", ""),
             ("v_scale_floor", "double", "m/s"),
             ("max_iterations", "int", "of a stage solve"),
+            # ---- Vy and/or Omega_z as stage unknowns too (the native FMU's) ----
+            ("dyn_vy", "int", "1: Vy is a stage unknown (Eq. 10; ry unused), 0: held"),
+            ("dyn_spin", "int", "1: Omega_z is one (Eq. 11; rz unused), 0: held"),
+            ("Iz", "double", "kg m^2: with dyn_spin"),
+            ("a1", "double", "m: the law's half-length (the spin's scale)"),
+            (
+                "eval_limit",
+                "int",
+                "with a stage unknown besides vx: the field's evaluations one advance may "
+                "take (EvalBudget.eval_limit; beyond: CF_FIELD_BUDGET), 0: none",
+            ),  # fmt: skip
         ],
     ),
     "cf_field_body_state": (

@@ -129,6 +129,14 @@ typedef struct {
     double gamma;             /* dynamics.integrator.GAMMA: SDIRK2's 1 - 1/sqrt(2) */
     int sdirk;                /* the scheme: 0 Lobatto IIIC, 1 SDIRK2 (integrator.SCHEMES) */
     double Iy;                /* kg m^2: the body's inertia, for the free step at P = 0 */
+    /* LAW_TABLE: its load nodes; 0 or 1: coef is the table at P (one node, or blended by
+     * Python: CreepTable._coefficients_at), else coef holds each node's patches in turn,
+     * blended at P by the weights of the spline below */
+    int n_loads;
+    int spline_k;             /* the spline's degree (CreepTable._weights: min(3, n - 1)) */
+    /* log P of the first and last node, the knots (n + k + 1), the coefficients (n x n,
+     * row major) of make_interp_spline(log P_j, eye(n), k), the onsets of full slip (n) */
+    const double *spline;
 } cf_params;
 
 /* The state of the scalar path (cf_advance): RollingBody's y, t and _dv, its last
@@ -255,9 +263,9 @@ typedef struct {
     double J[9];            /* with jacobian: 3 x 3, row major */
 } cf_field_stage_out;
 
-/* The body (Eqs. 8-11) of a TransientRollingBody whose only stage unknown is vx: Vy and
- * Omega_z held at the ratios ry, rz to Vx (Lateral); the law's creep_full_slip; SDIRK2's
- * gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s),
+/* The body (Eqs. 8-11) of a TransientRollingBody: vx a stage unknown, Vy and Omega_z held
+ * at the ratios ry, rz to Vx (Lateral) or unknowns too; the law's creep_full_slip;
+ * SDIRK2's gamma and a21 = 1 - gamma; solvers.SOLVE_RTOL, integrator.V_SCALE_FLOOR (m/s),
  * MAX_STAGE_ITERATIONS. field.Body. */
 typedef struct {
     double M;                /* kg */
@@ -273,6 +281,13 @@ typedef struct {
     double solve_rtol;
     double v_scale_floor;    /* m/s */
     int max_iterations;      /* of a stage solve */
+    int dyn_vy;              /* 1: Vy is a stage unknown (Eq. 10; ry unused), 0: held */
+    int dyn_spin;            /* 1: Omega_z is one (Eq. 11; rz unused), 0: held */
+    double Iz;               /* kg m^2: with dyn_spin */
+    double a1;               /* m: the law's half-length (the spin's scale) */
+    /* with a stage unknown besides vx: the field's evaluations one advance may take
+     * (EvalBudget.eval_limit; beyond: CF_FIELD_BUDGET), 0: none */
+    int eval_limit;
 } cf_field_body;
 
 /* The state of cf_field_advance: y = (Vx, vx, Vy, Omega_z), t (s), the contact impulse (N

@@ -369,7 +369,7 @@ int cf_field_stage(const cf_field *f, const cf_field_stage_in *in, cf_field_stag
     return CF_FIELD_OK;
 }
 
-/* ---- TransientRollingBody.advance, scalar path ---------------------------------------- */
+/* ---- TransientRollingBody.advance: vx, and Vy and/or Omega_z where they are unknowns ---- */
 
 /* One SDIRK2 stage's problem (TransientRollingBody._stage for the unknown vx): the
  * stage's field inputs and the body's numbers around them. */
@@ -381,6 +381,12 @@ typedef struct {
     cf_field_stage_in in;
     cf_field_stage_out *out;
     double yy[4]; /* the state at the last evaluation */
+    /* Vy and/or Omega_z as unknowns too: u = (vx[, Vy][, Omega_z]), n of them, the
+     * state's index of each, the resultant's (act), their masses and targets, and the
+     * field's evaluations of this advance (evals, against b->eval_limit) */
+    int n, idx[3], act[3];
+    double m[3], targets[3], uh[3];
+    int *evals;
 } stage_problem;
 
 /* state(u) and evaluate(u): the stage's field at vx = u; r, d: the residual and its
@@ -430,7 +436,113 @@ static int solve_scalar(stage_problem *sp, double scale) {
     return CF_FIELD_NO_ROOT;
 }
 
-/* TransientRollingBody._stage for the scalar path: the stage problem from y_hat */
+/* _stage's vector(u), Vy and/or Omega_z unknowns too: the state (state(u): y_hat with
+ * the unknowns, Vx from vx, the held ratios), the field's stage with its Jacobian, the
+ * residuals r = m (u - u_hat)/h gamma + T[act] - target and their Jacobian J = diag(m/h
+ * gamma) + dT[act]/d(vx, vy, phi)[cols] (n x n, row major), each an evaluation spent
+ * (EvalBudget.spend: beyond b->eval_limit, CF_FIELD_BUDGET) */
+static int evaluate_vector(stage_problem *sp, const double *u, double *r, double *J) {
+    const cf_field_body *b = sp->b;
+    if (b->eval_limit > 0 && ++*sp->evals > b->eval_limit) return CF_FIELD_BUDGET;
+    double *yy = sp->yy;
+    for (int i = 0; i < 4; i++) yy[i] = sp->y_hat[i];
+    for (int i = 0; i < sp->n; i++) yy[sp->idx[i]] = u[i];
+    yy[0] = sp->Vx_base + (b->m_slip / b->M) * (u[0] - sp->uh[0]);
+    if (!b->dyn_vy) yy[2] = b->ry * yy[0]; /* BodyState._apply_ratios */
+    if (!b->dyn_spin) yy[3] = b->rz * yy[0];
+    sp->in.ds = sp->ds0 + sp->hg * yy[0];
+    sp->in.vx = yy[1];
+    sp->in.vy = yy[2];
+    sp->in.phi = yy[3];
+    sp->in.Vx = yy[0];
+    const int rc = cf_field_stage(sp->f, &sp->in, sp->out);
+    if (rc != CF_FIELD_OK) return rc;
+    for (int i = 0; i < sp->n; i++) {
+        r[i] = sp->m[i] * (u[i] - sp->uh[i]) / sp->hg + sp->out->T[sp->act[i]] - sp->targets[i];
+        for (int j = 0; j < sp->n; j++)
+            J[i * sp->n + j] = (i == j ? sp->m[i] / sp->hg : 0.0) +
+                               sp->out->J[3 * sp->act[i] + sp->act[j]];
+    }
+    return all_finite(r, (size_t)sp->n) && all_finite(J, (size_t)(sp->n * sp->n))
+               ? CF_FIELD_OK : CF_FIELD_NONFINITE;
+}
+
+/* J x = -r for n <= 3 by Gaussian elimination with partial pivoting (numpy's LAPACK runs
+ * its operations in another order: the iterates agree to rounding); 0, or -1 singular */
+static int solve_negated(int n, const double *J0, const double *r, double *x) {
+    double A[9], b[3];
+    for (int i = 0; i < n * n; i++) A[i] = J0[i];
+    for (int i = 0; i < n; i++) b[i] = -r[i];
+    for (int k = 0; k < n; k++) {
+        int p = k;
+        for (int i = k + 1; i < n; i++)
+            if (fabs(A[i * n + k]) > fabs(A[p * n + k])) p = i;
+        if (A[p * n + k] == 0.0 || !isfinite(A[p * n + k])) return -1;
+        if (p != k) {
+            for (int j = 0; j < n; j++) {
+                const double t = A[k * n + j];
+                A[k * n + j] = A[p * n + j];
+                A[p * n + j] = t;
+            }
+            const double t = b[k];
+            b[k] = b[p];
+            b[p] = t;
+        }
+        for (int i = k + 1; i < n; i++) {
+            const double l = A[i * n + k] / A[k * n + k];
+            for (int j = k; j < n; j++) A[i * n + j] -= l * A[k * n + j];
+            b[i] -= l * b[k];
+        }
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        double t = b[i];
+        for (int j = i + 1; j < n; j++) t -= A[i * n + j] * x[j];
+        x[i] = t / A[i * n + i];
+    }
+    return all_finite(x, (size_t)n) ? 0 : -1;
+}
+
+static double norm_of(const double *r, int n) {
+    double s = 0.0;
+    for (int i = 0; i < n; i++) s += r[i] * r[i];
+    return sqrt(s);
+}
+
+/* TransientRollingBody._solve_vector: Newton's method with the field's Jacobian from
+ * u_hat, a backtracking line search (halving down to 1e-6) on |r|; converged when every
+ * correction is below solve_rtol (scale_i + |u_i|), the stage's field left at that
+ * evaluation. Where it stalls (a singular matrix, the line search at its floor, the
+ * iterations spent) Python calls scipy's hybrid method: CF_FIELD_NO_ROOT here. */
+static int solve_vector(stage_problem *sp, const double *scale) {
+    const int n = sp->n;
+    double u[3], r[3], J[9], step[3], un[3], rn[3], Jn[9];
+    for (int i = 0; i < n; i++) u[i] = sp->uh[i];
+    int rc = evaluate_vector(sp, u, r, J);
+    if (rc != CF_FIELD_OK) return rc;
+    for (int it = 0; it < sp->b->max_iterations; it++) {
+        if (solve_negated(n, J, r, step) != 0) return CF_FIELD_NO_ROOT;
+        int small = 1;
+        for (int i = 0; i < n; i++)
+            small = small && fabs(step[i]) <= sp->b->solve_rtol * (scale[i] + fabs(u[i]));
+        if (small) return CF_FIELD_OK;
+        const double norm0 = norm_of(r, n);
+        double lam = 1.0;
+        for (;;) {
+            for (int i = 0; i < n; i++) un[i] = u[i] + lam * step[i];
+            rc = evaluate_vector(sp, un, rn, Jn);
+            if (rc != CF_FIELD_OK) return rc;
+            if (norm_of(rn, n) < norm0 || lam < 1e-6) break;
+            lam *= 0.5;
+        }
+        if (lam < 1e-6) return CF_FIELD_NO_ROOT;
+        for (int i = 0; i < n; i++) u[i] = un[i], r[i] = rn[i];
+        for (int i = 0; i < n * n; i++) J[i] = Jn[i];
+    }
+    return CF_FIELD_NO_ROOT;
+}
+
+/* TransientRollingBody._stage: the stage problem from y_hat (L = Fx_ex, Fy_ex, My_ex,
+ * Mz_ex), solved for vx alone (_solve_scalar) or with Vy and/or Omega_z (_solve_vector) */
 static int stage_solve(stage_problem *sp, const double y_hat[4], const double *L, double hg,
                        double ds0, double elapsed) {
     const cf_field_body *b = sp->b;
@@ -444,12 +556,24 @@ static int stage_solve(stage_problem *sp, const double y_hat[4], const double *L
     sp->in.elapsed = elapsed;
     sp->in.h_own = hg;
     const double vscale = b->creep_full_slip * np_max(fabs(sp->Vx_base), b->v_scale_floor);
-    return solve_scalar(sp, vscale);
+    if (!b->dyn_vy && !b->dyn_spin) return solve_scalar(sp, vscale);
+    /* _targets, _masses, the unknowns' indices; the scales (vscale, vscale, vscale/a1)
+     * taken in order for the n unknowns, as Python slices them */
+    int n = 0;
+    const double all_scale[3] = {vscale, vscale, vscale / b->a1};
+    double scale[3];
+    sp->idx[n] = 1, sp->act[n] = 0, sp->m[n] = b->m_slip, sp->targets[n] = sp->target, n++;
+    if (b->dyn_vy) sp->idx[n] = 2, sp->act[n] = 1, sp->m[n] = b->M, sp->targets[n] = L[1], n++;
+    if (b->dyn_spin) sp->idx[n] = 3, sp->act[n] = 2, sp->m[n] = b->Iz, sp->targets[n] = L[3], n++;
+    sp->n = n;
+    for (int i = 0; i < n; i++) sp->uh[i] = y_hat[sp->idx[i]], scale[i] = all_scale[i];
+    sp->in.jacobian = 1;
+    return solve_vector(sp, scale);
 }
 
 /* TransientRollingBody._step: one SDIRK2 step of h (Alexander's: c = (gamma, 1)) */
 static int sdirk_step(const cf_field *f, const cf_field_body *b, cf_field_body_state *s,
-                      double h, const double *L) {
+                      double h, const double *L, int *evals) {
     const int nx = f->nx, ny = f->ny;
     const size_t n = (size_t)nx * (size_t)ny;
     double *hat_x = s->work, *hat_y = hat_x + n, *x = hat_y + n, *tx = x + nx, *ty = tx + n;
@@ -466,6 +590,7 @@ static int sdirk_step(const cf_field *f, const cf_field_body *b, cf_field_body_s
     sp.f = f;
     sp.b = b;
     sp.out = &out;
+    sp.evals = evals;
     sp.in.theta = s->theta;
     sp.in.inside = inside;
     sp.in.hat_x = s->tau_x;
@@ -537,10 +662,14 @@ int cf_field_advance(const cf_field *f, const cf_field_body *b, cf_field_body_st
     if (!(b->M > 0.0 && b->Rx > 0.0 && b->gamma > 0.0 && h > 0.0 && substeps >= 1 &&
           b->max_iterations >= 1))
         return CF_FIELD_BAD_INPUT;
+    if ((b->dyn_vy || b->dyn_spin) && !(b->a1 > 0.0 && isfinite(b->a1) && (!b->dyn_spin ||
+                                         (b->Iz > 0.0 && isfinite(b->Iz)))))
+        return CF_FIELD_BAD_INPUT;
     const double dt = h / substeps, t0 = s->t;
+    int evals = 0; /* the field's evaluations of this advance (EvalBudget: from 0) */
     for (int k = 0; k < substeps; k++) {
         const double t_n = t0 + k * dt;
-        const int rc = sdirk_step(f, b, s, dt, loads);
+        const int rc = sdirk_step(f, b, s, dt, loads, &evals);
         if (rc != CF_FIELD_OK) return rc;
         s->t = t_n + dt;
     }

@@ -1,8 +1,9 @@
 /* The thin-layer transient traction field (transient.py, LayerField) in C: a stage of
  * the field's step (LayerField.stage with LayerField._weights and StageField.resultant),
  * the quadrature weights, resultant and summary of a field at rest in its step
- * (LayerField.current, summary), and the body's advance on the field where vx is the
- * only stage unknown (TransientRollingBody.advance). field.c; used through ctypes by
+ * (LayerField.current, summary), and the body's advance on the field
+ * (TransientRollingBody.advance: vx the stage unknown, Vy and Omega_z held at ratios or
+ * unknowns too, Eqs. 10-11). field.c; used through ctypes by
  * contact_fmu/native/field.py, built into the kernel library with stepper.c (the same
  * flags: no contraction into fused multiply-adds, CF_HIDDEN but for CF_KERNEL_EXPORT). */
 #ifndef CF_FIELD_H
@@ -19,7 +20,8 @@ enum {
     CF_FIELD_RANGE = 2,     /* the stage moves the lattice by more than CF_FIELD_SHIFT_MAX
                                columns (its index would not fit): Python's integers do */
     CF_FIELD_NONFINITE = 3, /* a result overflowed (a huge finite input): not served */
-    CF_FIELD_NO_ROOT = 4    /* a stage equation without a root (StageSolveError) */
+    CF_FIELD_NO_ROOT = 4,   /* a stage equation without a root (StageSolveError) */
+    CF_FIELD_BUDGET = 5     /* the stage solves need more evaluations than eval_limit */
 };
 
 /* Largest |shift| (columns) a stage may move the lattice by: far beyond any grid (a
@@ -28,7 +30,7 @@ enum {
 
 /* The structs of these calls, cf_field (the grid and law), cf_field_stage_in and
  * cf_field_stage_out (a stage's inputs and results), cf_field_body and
- * cf_field_body_state (the body and its state on the scalar path), are declared once in
+ * cf_field_body_state (the body and its state), are declared once in
  * abi.py, with their fields' meanings, and come with cf_abi.h (through stepper.h): the
  * ctypes twins of field.py have the same fields from the same declarations. */
 
@@ -55,7 +57,7 @@ CF_HIDDEN int cf_field_summary(const cf_field *f, double theta, const double *ta
                                const double *tau_y, const unsigned char *slip, double out[4],
                                double *work, unsigned char *bytes);
 
-/* ---- the body on the field: TransientRollingBody.advance, scalar path ----------------- */
+/* ---- the body on the field: TransientRollingBody.advance ------------------------------ */
 /* Scratch of cf_field_advance: doubles and bytes for an ny x nx field. */
 #define CF_FIELD_ADVANCE_WORK(ny, nx) (10 * (size_t)(ny) * (size_t)(nx) + 4 * (size_t)(nx))
 #define CF_FIELD_ADVANCE_BYTES(ny, nx) (3 * (size_t)(ny) * (size_t)(nx))

@@ -210,7 +210,7 @@ class CompiledField:
         theta, tau_x, tau_y, slip = field
         if any(np.shape(a) != (ny, nx) for a in (tau_x, tau_y, slip)):
             return None
-        b = self.body
+        b = self.body = Body()  # the fields ``body`` leaves out at 0 (dyn_vy ...: the scalar path)
         for k, v in body.items():
             setattr(b, k, v)
         st = self.state

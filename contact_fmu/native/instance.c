@@ -10,8 +10,9 @@
  * law (layer.py; its contact ellipse and constants, Eqs. 33-34, derived here from the
  * parameters and the load P: cf_layer_law), Lobatto IIIC or SDIRK2 (the String parameter
  * scheme where the FMU offers both), methods "full" and "quasistationary"; vx the only
- * stage unknown (vy zero or held at a ratio, no spin:
- * cf_advance) or Vy and/or Omega_z as unknowns too (Eqs. 10-11: cf_advance_vector, the
+ * stage unknown (vy zero or held at a ratio, no spin: cf_advance; a held spin ratio:
+ * the same step on the vector path's state, cf_advance_vector) or Vy and/or Omega_z as
+ * unknowns too (Eqs. 10-11: cf_advance_vector, the
  * law's spin by the strip march on its grid, built here for each load: cf_grid_build).
  * The build refuses every other model (fmu_build/native_fmu.py). The variables, their
  * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
@@ -73,7 +74,7 @@ struct cf_inst {
     spin_grid *grid;              /* CF_GRID only */
     field_scratch *field;         /* CF_TRANSIENT only */
     char field_out[2][FIELD_TEXT]; /* what getString hands out: field_file, field_times */
-    double *table;                /* CF_TABLE: axes then patch coefficients (resource) */
+    double *table;                /* CF_TABLE: axes, each node's patches, spline (resource) */
     unsigned long served;         /* the FMU's outputs, a bit per index of cf_body.out */
     cf_core **states;             /* the live FMU states handed out: an open-addressing */
     size_t n_states, cap_states;  /* set of pointers (NULL: empty slot), cap a power of 2 */
@@ -406,6 +407,22 @@ static int build_rigid(Inst *I) {
     return 1;
 }
 
+/* TableLaw.__post_init__: a creep-force table with layers (kb + ks > 0) admits P = 0
+ * (lift-off) or a load within its nodes' range (to spec.LOAD_RTOL), not one beyond,
+ * where the load similarity it would extrapolate by does not hold: 1 with the refusal
+ * in TableLaw's words in why, else 0 */
+static int load_refused(double P, char *why, size_t n) {
+    if (!CF_TABLE || !CF_T_LAYERED || P == 0.0 ||
+        (CF_T_P_LO * (1.0 - CF_T_LOAD_RTOL) <= P && P <= CF_T_P_HI * (1.0 + CF_T_LOAD_RTOL)))
+        return 0;
+    char r[40];
+    py_repr(P, r, sizeof r);
+    snprintf(why, n, "P = %s is invalid: must be within the load range [%g, %g] N of the FMU's "
+             "creep-force table (its layers, kb + ks > 0, break the load similarity)", r,
+             CF_T_P_LO, CF_T_P_HI);
+    return 1;
+}
+
 /* the spin grid at the law's load into p->strips */
 static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_params *p) {
     if (I->grid == NULL) return;
@@ -470,8 +487,9 @@ static int build_transient(Inst *I, cf_params *p, cf_body *b) {
     const double Vx0 = v[R_VX0], Omega_y0 = (Vx0 - v[R_SLIP0]) / p->Rx;
     fs->y[0] = Vx0;
     fs->y[1] = Vx0 - Omega_y0 * p->Rx;
-    fs->y[2] = v[R_VY_RATIO] * Vx0; /* Lateral's held ratios (0 where none) */
-    fs->y[3] = v[R_SPIN_RATIO] * Vx0;
+    /* Lateral's held ratios (0 where none), or Vy0, Omega_z0 where an unknown */
+    fs->y[2] = CF_DYN_VY ? v[R_VY0] : v[R_VY_RATIO] * Vx0;
+    fs->y[3] = CF_DYN_SPIN ? v[R_OMEGA_Z0] : v[R_SPIN_RATIO] * Vx0;
     fs->t = c->time;
     cf_field f;
     cf_model_field(p, b, v[R_KB] + v[R_KS], fs, I->field, &f);
@@ -547,6 +565,11 @@ static int build(Inst *I) {
     memset(&s, 0, sizeof s);
     cf_model_constants(&p, &b);
     cf_model_attach_table(I->table, &p);
+    char why[512];
+    if (load_refused(v[R_P], why, sizeof why)) { /* the law first, as make_law */
+        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", why);
+        return 0;
+    }
     if (CF_MODE == MODE_CONTACT) {
         cf_model_law_at_load(c, v[R_P], &p, &b);
         double out[N_OUT];
@@ -661,11 +684,12 @@ static cf_status other_step(Inst *I, double t, double h) {
         cf_params p = c->p;
         cf_body b = c->b;
         double out[N_OUT];
-        const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
+        const int refused = load_refused(c->val[R_P], why_text, sizeof why_text);
+        const char *bad = refused ? NULL : contact_outputs(I, c, &p, &b, out, r, sizeof r);
         if (bad) {
             snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
                      "finite", bad, r);
-        } else {
+        } else if (!refused) {
             c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
             memcpy(c->b.out, out, sizeof out);
         }
@@ -710,7 +734,11 @@ static cf_status refresh(Inst *I) {
     cf_params p = c->p;
     cf_body b = c->b;
     double out[N_OUT];
-    char r[40];
+    char r[40], why[512];
+    if (load_refused(c->val[R_P], why, sizeof why)) {
+        say(I, CF_STATUS_ERROR, "no outputs for the current inputs: %s", why);
+        return CF_STATUS_ERROR;
+    }
     const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
     if (bad) {
         say(I, CF_STATUS_ERROR, "no outputs for the current inputs: FloatingPointError: output "
@@ -721,6 +749,15 @@ static cf_status refresh(Inst *I) {
     memcpy(c->b.out, out, sizeof out);
     publish(c);
     return CF_STATUS_OK;
+}
+
+/* Python's a // b for doubles a >= 0, b > 0 (float_floor_div: the quotient of a - fmod(a,
+ * b), floored, rounded up where it falls short by more than one half) */
+static double py_floordiv(double a, double b) {
+    const double mod = fmod(a, b), div = (a - mod) / b;
+    double q = floor(div);
+    if (div - q > 0.5) q += 1.0;
+    return q;
 }
 
 /* TransientBodyModel.step + the outputs, committed only when all is well: the load
@@ -776,10 +813,16 @@ static cf_status transient_step(Inst *I, double t, double h) {
         *tr = c->fs;
         cf_field f;
         cf_model_field(&p, &b, v[R_KB] + v[R_KS], tr, sc, &f);
+        /* with Vy or Omega_z as unknowns the field's evaluations count against
+         * max_work (EvalBudget: max(1, max_work // (nx ny WORK_PER_CELL_EVAL))) */
+        const double eval_work = (double)CF_FIELD_NX * CF_FIELD_NY * CF_WORK_PER_CELL_EVAL;
+        const double evals = fmin(fmax(py_floordiv(v[R_MAX_WORK], eval_work), 1.0), INT_MAX);
         const cf_field_body fb = {p.M, p.Rx, p.A1, p.A2, p.m_slip, v[R_VY_RATIO],
                                   v[R_SPIN_RATIO], p.creep_full_slip, CF_GAMMA,
                                   CF_FIELD_A21, CF_SOLVE_RTOL, CF_V_SCALE_FLOOR,
-                                  CF_FIELD_MAX_ITERATIONS};
+                                  CF_FIELD_MAX_ITERATIONS, CF_DYN_VY, CF_DYN_SPIN,
+                                  CF_DYN_SPIN ? v[R_IZ] : 0.0, p.a1,
+                                  CF_DYN_VY || CF_DYN_SPIN ? (int)evals : 0};
         cf_field_body_state st;
         memcpy(st.y, tr->y, sizeof st.y);
         st.t = tr->t;
@@ -803,7 +846,11 @@ static cf_status transient_step(Inst *I, double t, double h) {
         int which = 0, k = -1;
         const int check = rc == CF_FIELD_OK ? cf_body_out_check(out, I->served, &which) : CF_OK;
         if (rc == CF_FIELD_OK && check == CF_OK) k = field_nonfinite(I, out);
-        if (rc == CF_FIELD_NO_ROOT) { /* TransientRollingBody._solve_scalar's words */
+        if (rc == CF_FIELD_BUDGET) { /* WorkBudgetError, as BodyModel.step words it */
+            snprintf(why, sizeof why, "WorkBudgetError: the stage solves need more than %d "
+                     "evaluations of the law, beyond max_work = %g (each costs %g)",
+                     fb.eval_limit, v[R_MAX_WORK], eval_work);
+        } else if (rc == CF_FIELD_NO_ROOT) { /* TransientRollingBody._solve_scalar's words */
             snprintf(why, sizeof why, "StageSolveError: no slip velocity satisfies the stage "
                      "equation (target force %.6g N against mu P = %.6g N)",
                      p.A2 * v[R_FX_EX] - p.A1 * v[R_MY_EX] / p.Rx, p.mu * p.P);
@@ -896,12 +943,19 @@ static cf_status fmu_step(Inst *I, double t, double h) {
     cf_state w = c->s;
     cf_vstate vw = c->vs;
     const double P = c->val[R_P];
+    char refusal[512];
+    if (P != c->P_law && load_refused(P, refusal, sizeof refusal)) { /* set_load's */
+        REPRS();
+        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s",
+            rt, rh, refusal);
+        return CF_STATUS_DISCARD;
+    }
     /* set_load: Eq. (34) at the new P; set_mu: the law at a tuned mu */
     if (P != c->P_law || c->val[R_MU] != p.mu) cf_model_law_at_load(c, P, &p, &b);
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
     /* the budget max_work in internal steps of this path (body_model.step_cap): at
      * least 1 (max_work <= 1e9: the cap fits an int) */
-    const double work = CF_VECTOR ? CF_WORK_VECTOR : CF_WORK_SCALAR;
+    const double work = CF_DYN_VY || CF_DYN_SPIN ? CF_WORK_VECTOR : CF_WORK_SCALAR;
     const double steps = floor(c->val[R_MAX_WORK] / work);
     b.max_substeps = steps >= 1.0 ? (int)fmin(steps, (double)INT_MAX) : 1;
     cf_vpath vector = {&vw, c->val[R_FY_EX], c->val[R_MZ_EX], NULL, NULL, NULL};
@@ -1007,7 +1061,8 @@ static size_t uri_to_path(const char *uri, char *path, size_t n) {
 }
 
 /* the table resource (fmu_build/native_fmu.py, table_bytes): "cfmuTBL1", n1, n2, n3
- * (u32), the count of doubles (u64), the axes and the patch coefficients (doubles), the
+ * (u32), the count of doubles (u64), the axes and the load nodes' patch coefficients and
+ * spline (doubles: model.c's cf_model_attach_table), the
  * CRC-32 (zlib's) of all before it (u64); read from the resources folder (a file URI) at
  * instantiation into memory of the front end's; 0 with a logged reason */
 static int load_table(Inst *I, const char *uri, const Inst *probe) {

@@ -22,7 +22,13 @@
 /* Python's max(x, c) for a constant c: x unless c is strictly larger */
 static double py_max(double x, double c) { return c > x ? c : x; }
 
-/* the creep-force table's arrays into p (after cf_model_constants) */
+#if CF_T_NLOADS > CF_LOADS_MAX
+#error "more load nodes than CF_LOADS_MAX (the build refuses such a table)"
+#endif
+
+/* the creep-force table's arrays into p (after cf_model_constants): the axes, each load
+ * node's patches in turn (CF_T_STRIDE doubles each), and with several nodes the spline of
+ * their weights in log P and their onsets of full slip (stepper.c's load_weights) */
 void cf_model_attach_table(const double *table, cf_params *p) {
     if (!CF_TABLE || table == NULL) return;
     p->ax1 = table;
@@ -31,6 +37,9 @@ void cf_model_attach_table(const double *table, cf_params *p) {
     p->coef = p->ax3 + CF_T_N3;
     p->n1 = CF_T_N1, p->n2 = CF_T_N2, p->n3 = CF_T_N3;
     p->ext1 = p->ax1[CF_T_N1 - 1], p->ext2 = p->ax2[CF_T_N2 - 1], p->ext3 = p->ax3[CF_T_N3 - 1];
+    p->n_loads = CF_T_NLOADS;
+    p->spline_k = CF_T_SPLINE_K;
+    p->spline = CF_T_NLOADS > 1 ? p->coef + (size_t)CF_T_NLOADS * CF_T_STRIDE : NULL;
 }
 
 void cf_model_constants(cf_params *p, cf_body *b) {
@@ -59,6 +68,7 @@ void cf_model_constants(cf_params *p, cf_body *b) {
     p->dyn_vy = p->dyn_spin = 0;
     p->rz = 0.0;
     p->Iz = 0.0;
+    p->n_loads = 0, p->spline_k = 0, p->spline = NULL; /* the table's: cf_model_attach_table */
     b->v_creep_floor = CF_V_CREEP_FLOOR;
     b->substep_slack = CF_SUBSTEP_SLACK;
     b->max_substeps = CF_MAX_SUBSTEPS;
@@ -67,7 +77,7 @@ void cf_model_constants(cf_params *p, cf_body *b) {
 /* the law at load P into p and b (its reported a2, p0) */
 void cf_model_law_at_load(const cf_core *c, double P, cf_params *p, cf_body *b) {
     const double *v = c->val;
-    if (CF_TABLE) { /* the table's coefficients do not depend on P (one load node) */
+    if (CF_TABLE) { /* the nodes' weights at P: stepper.c (its patches and onset) */
         cf_table_law(p, P, v[R_MU], CF_T_KFAC, CF_T_M, CF_T_AMIN, CF_T_A_LE_B, CF_T_ESTAR,
                      CF_T_G, CF_T_ONSET, &b->a2, &b->p0);
         return;

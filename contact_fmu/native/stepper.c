@@ -2,9 +2,9 @@
  * (cf_params.sdirk picks the scheme: integrator.SCHEMES).
  *
  * The path: the thin-layer law (layer.LayerContact, Eqs. 40-43 corrected) or the
- * half-space creep-force table (halfspace/table.py) without spin, with lateral slip
- * held at a ratio to Vx or zero, the body of Eqs. (8)-(9) and (20) with vx the
- * only stage unknown, loads held over the interval, methods "full" and
+ * half-space creep-force table (halfspace/table.py), with lateral slip and spin held
+ * at ratios to Vx or zero, the body of Eqs. (8)-(9) and (20) with vx the only stage
+ * unknown (with a spin: the stage slope by the forward difference of RollingBody._law_x), loads held over the interval, methods "full" and
  * "quasistationary". Every expression is that of the Python code, in the same order,
  * and the build forbids contraction to fused multiply-adds, so a step of the thin-layer
  * law without lateral slip gives the same doubles as the Python path; with lateral slip
@@ -147,8 +147,61 @@ static int cell(const double *ax, int n, double x) { /* min(max(bisect_right - 1
     return i < 0 ? 0 : (i > n - 2 ? n - 2 : i);
 }
 
-static const double *patch(const cf_params *p, int i1, int i2, int i3) {
-    return p->coef + ((size_t)((i1 * (p->n2 - 1) + i2) * (p->n3 - 1) + i3)) * 256;
+/* CreepTable._weights: the load nodes' weights at P (n_loads > 1): the interpolating
+ * spline of degree k in log P through the unit vectors (make_interp_spline(log P_j,
+ * eye(n), k): its knots t and coefficients c in p->spline), at log P clamped to the
+ * nodes (the first node's at P = 0), evaluated as scipy's BSpline: the interval t[l] <=
+ * x < t[l + 1] (l < n), de Boor's recursion for the k + 1 B-splines there (_deBoor_D),
+ * then for each weight the sum over their coefficients in order; the same operations. */
+static void load_weights(const cf_params *p, double P, double w[CF_LOADS_MAX]) {
+    const int n = p->n_loads, k = p->spline_k;
+    const double lo = p->spline[0], hi = p->spline[1];
+    const double *t = p->spline + 2, *c = t + n + k + 1;
+    double x = lo;
+    if (P > 0.0) { /* np.clip(math.log(P), lo, hi) */
+        x = log(P);
+        x = x < lo ? lo : (x > hi ? hi : x);
+    }
+    int l = k;
+    while (l + 1 < n && x >= t[l + 1]) l++;
+    double h[4] = {1.0, 0.0, 0.0, 0.0}, hh[4];
+    for (int j = 1; j <= k; j++) {
+        for (int i = 0; i < j; i++) hh[i] = h[i];
+        h[0] = 0.0;
+        for (int m = 1; m <= j; m++) {
+            const double xb = t[l + m], xa = t[l + m - j];
+            if (xb == xa) {
+                h[m] = 0.0;
+                continue;
+            }
+            const double f = hh[m - 1] / (xb - xa);
+            h[m - 1] += f * (xb - x);
+            h[m] = f * (x - xa);
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        double sum = 0.0;
+        for (int a = 0; a <= k; a++) sum = sum + c[(size_t)(l + a - k) * n + j] * h[a];
+        w[j] = sum;
+    }
+}
+
+/* the Hermite patch of cell (i1, i2, i3) at the law's load: the table's own (one node),
+ * or (n_loads > 1) CreepTable._coefficients_at's weighted sum of the nodes' patches,
+ * sum(w_j C_j) from 0 in the nodes' order (the same operations as numpy's elementwise
+ * sum), for this cell only, into blend */
+static const double *patch(const cf_params *p, int i1, int i2, int i3, double blend[256]) {
+    const size_t at = ((size_t)((i1 * (p->n2 - 1) + i2) * (p->n3 - 1) + i3)) * 256;
+    if (p->n_loads <= 1) return p->coef + at;
+    const size_t stride = (size_t)(p->n1 - 1) * (size_t)(p->n2 - 1) * (size_t)(p->n3 - 1) * 256;
+    double w[CF_LOADS_MAX];
+    load_weights(p, p->P, w);
+    for (int e = 0; e < 256; e++) blend[e] = 0.0;
+    for (int j = 0; j < p->n_loads; j++) {
+        const double *C = p->coef + (size_t)j * stride + at;
+        for (int e = 0; e < 256; e++) blend[e] = blend[e] + w[j] * C[e];
+    }
+    return blend;
 }
 
 /* sum over the 64 Hermite terms of w[a b c] = T1[a] T2[b] T3[c] times output o */
@@ -198,7 +251,8 @@ static void table_scalar(const cf_params *p, double vx, double vy, double phi, d
     double t3 = (x3 - p->ax3[i3]) / (p->ax3[i3 + 1] - p->ax3[i3]);
     double T1[4] = {1.0, t1, t1 * t1, t1 * t1 * t1}, T2[4] = {1.0, t2, t2 * t2, t2 * t2 * t2};
     double T3[4] = {1.0, t3, t3 * t3, t3 * t3 * t3};
-    const double *C = patch(p, i1, i2, i3);
+    double blend[256];
+    const double *C = patch(p, i1, i2, i3, blend);
     double fx = sg * patch_sum(C, T1, T2, T3, 0), fy = sg * patch_sum(C, T1, T2, T3, 1);
     double mz = sg * patch_sum(C, T1, T2, T3, 2), adh = patch_sum(C, T1, T2, T3, 3);
     double m = hypot(fx, fy);
@@ -257,7 +311,8 @@ static void table_tx_slope(const cf_params *p, double vx, double vy, double Vx, 
     double T1[4] = {1.0, t1, t1 * t1, pow(t1, 3.0)}, dT1[4] = {0.0, 1.0, 2.0 * t1, 3.0 * t1 * t1};
     double T2[4] = {1.0, t2, t2 * t2, pow(t2, 3.0)}, dT2[4] = {0.0, 1.0, 2.0 * t2, 3.0 * t2 * t2};
     double T3[4] = {1.0, t3, t3 * t3, pow(t3, 3.0)};
-    const double *C = patch(p, i1, i2, i3);
+    double blend[256];
+    const double *C = patch(p, i1, i2, i3, blend);
     double fx = sg * patch_sum(C, T1, T2, T3, 0), fy = sg * patch_sum(C, T1, T2, T3, 1);
     double dfx[2] = {patch_sum(C, dT1, T2, T3, 0) / h1, patch_sum(C, T1, dT2, T3, 0) / h2};
     double dfy[2] = {patch_sum(C, dT1, T2, T3, 1) / h1, patch_sum(C, T1, dT2, T3, 1) / h2};
@@ -289,10 +344,24 @@ static void slope_at(const cf_params *p, double vx, double vy, double V, double 
     else tx_slope(p, vx, vy, V, r);
 }
 
+static void law(const cf_params *p, double vx, double Vx, double T[3]);
+
 /* RollingBody._law_x: Tx and dTx/dvx along a stage path (slope, k); below
- * v_standstill the blend of integrator.forces_at_rest and its slope */
-static void law_x(const cf_params *p, double vx, double Vx, double k, double out[2]) {
+ * v_standstill the blend of integrator.forces_at_rest and its slope; with a held spin
+ * (rz != 0: the laws' slopes have no spin) the forward difference of step fd_step (|vx|
+ * + scale) */
+static void law_x(const cf_params *p, double vx, double Vx, double k, double scale,
+                  double out[2]) {
     const double vs = p->v_standstill, vy = p->ry * Vx;
+    if (p->rz != 0.0) {
+        double T[3], Td[3];
+        law(p, vx, Vx, T);
+        const double dv = p->fd_step * (fabs(vx) + scale);
+        law(p, vx + dv, Vx + k * dv, Td);
+        out[0] = T[0];
+        out[1] = (Td[0] - T[0]) / dv;
+        return;
+    }
     if (fabs(Vx) >= vs) {
         double r[4];
         slope_at(p, vx, vy, Vx, r);
@@ -308,11 +377,11 @@ static void law_x(const cf_params *p, double vx, double Vx, double k, double out
     out[1] = w * sp + (1.0 - w) * sm + k * (rp[0] - rm[0]) / (2.0 * vs);
 }
 
-/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx, lateral slip ry Vx, no spin:
- * the vector path's forces_at (the blend of integrator.forces_at_rest below
+/* RollingBody._law: (Tx, Ty, Mz) at slip vx and speed Vx, lateral slip ry Vx, spin rz
+ * Vx: the vector path's forces_at (the blend of integrator.forces_at_rest below
  * v_standstill) at that state; without spin it marches nothing */
 static void law(const cf_params *p, double vx, double Vx, double T[3]) {
-    const double y[4] = {Vx, vx, p->ry * Vx, 0.0 * Vx};
+    const double y[4] = {Vx, vx, p->ry * Vx, p->rz * Vx};
     march_cache unused = {0, 0.0, 0.0, 0.0, {0.0, 0.0, 0.0}};
     forces_at(p, y, T, &unused);
 }
@@ -325,17 +394,17 @@ typedef struct {
 
 static void residual_algebraic(const stage *s, double v, double f[2]) {
     double o[2];
-    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, o);
+    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, s->scale, o);
     f[0] = o[0] - s->Fe2;
     f[1] = o[1];
 }
 
 static void residual_lobatto(const stage *s, double v2, double f[2]) {
     double o2[2], o1[2];
-    law_x(s->p, v2, s->V2b + s->k * (v2 - s->vn), s->k, o2);
+    law_x(s->p, v2, s->V2b + s->k * (v2 - s->vn), s->k, s->scale, o2);
     double v1 = v2 - s->h * (s->Fe2 - o2[0]) / s->m;
     double dv1 = 1.0 + s->h * o2[1] / s->m;
-    law_x(s->p, v1, s->V1b + s->k * (v1 - s->vn), s->k, o1);
+    law_x(s->p, v1, s->V1b + s->k * (v1 - s->vn), s->k, s->scale, o1);
     f[0] = o1[0] - s->Fe1 + s->m * (v1 + v2 - 2.0 * s->vn) / s->h;
     f[1] = o1[1] * dv1 + s->m * (dv1 + 1.0) / s->h;
 }
@@ -524,7 +593,7 @@ static int lobatto_scalar(const cf_params *p, cf_state *y, double h, double Fx, 
  * in h */
 static void residual_sdirk(const stage *s, double v, double f[2]) {
     double o[2];
-    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, o);
+    law_x(s->p, v, s->V2b + s->k * (v - s->vn), s->k, s->scale, o);
     f[0] = s->m * (v - s->vn) / s->h + o[0] - s->Fe2;
     f[1] = s->m / s->h + o[1];
 }
@@ -680,12 +749,14 @@ void cf_layer_law(cf_params *p, double P, double Rx, double Ry, double k1, doubl
 }
 
 /* The half-space creep-force table (halfspace/table.py, TableLaw) at load P and friction
- * mu, for a table of one load node (its patches independent of P) into p, with a2, p0:
+ * mu into p (the patches of a table of several load nodes are blended at P where they
+ * are read: patch, load_weights), with a2, p0:
  * the Hertz ellipse (halfspace/hertz.py: major = (3 P kfac/(2 pi Amin E*))^(1/3), minor =
  * major (1 - m)^(1/2), the eccentricity parameter m and kfac = (K - E)/m fixed by the
  * geometry, computed by the build), p0 = 3 P/(2 pi a1 a2), c = (a1 a2)^(1/2), xi_ref =
- * mu P/(G c^2), phi_ref = xi_ref/c, creep_full_slip = onset xi_ref; the operations of
- * hertz.py and table.py: the same doubles. */
+ * mu P/(G c^2), phi_ref = xi_ref/c, creep_full_slip = onset xi_ref (several nodes: the
+ * nodes' onsets weighted at P, np.dot(w, onset)); the operations of hertz.py and table.py:
+ * the same doubles. */
 void cf_table_law(cf_params *p, double P, double mu, double kfac, double m, double Amin,
                   int a_le_b, double Estar, double G, double onset, double *a2, double *p0) {
     const double major = pow(3.0 * P * kfac / (2.0 * M_PI * Amin * Estar), 1.0 / 3.0);
@@ -701,7 +772,16 @@ void cf_table_law(cf_params *p, double P, double mu, double kfac, double m, doub
     p->c = c;
     p->xi_ref = xi_ref;
     p->phi_ref = P == 0.0 ? 0.0 : xi_ref / c;
-    p->creep_full_slip = 1.0 * onset * xi_ref; /* np.dot([1.0], onset) * xi_ref */
+    double on = 1.0 * onset; /* np.dot(w, onset): w = [1.0] for one node ... */
+    if (p->n_loads > 1) {    /* ... else the nodes' weights at P */
+        double w[CF_LOADS_MAX];
+        const double *onsets = p->spline + 2 + (p->n_loads + p->spline_k + 1) +
+                               (size_t)p->n_loads * p->n_loads;
+        load_weights(p, P, w);
+        on = 0.0;
+        for (int j = 0; j < p->n_loads; j++) on += w[j] * onsets[j];
+    }
+    p->creep_full_slip = on * xi_ref;
 }
 
 /* dynamics.Body: A1 = M Rx^2/(M Rx^2 + Iy) (1 for Iy = 0), A2 = Iy/(M Rx^2 + Iy),
@@ -763,7 +843,7 @@ static void kinematic_outputs(const cf_params *p, cf_body *b, double Vx, double 
 
 void cf_body_outputs(const cf_params *p, const cf_state *y, cf_body *b) {
     double Vx = y->Vx, vx = y->vx;
-    double Vy = p->ry * Vx, Omega_z = 0.0 * Vx; /* _apply_ratios, spin ratio 0 */
+    double Vy = p->ry * Vx, Omega_z = p->rz * Vx; /* _apply_ratios */
     double *o = b->out;
     kinematic_outputs(p, b, Vx, vx, Vy, Omega_z, y->Tx, y->Ty, y->Mz);
     if (p->law == LAW_TABLE) {
@@ -1574,12 +1654,28 @@ static int vstate_finite(const cf_vstate *y) {
     return finite_all(v, 9);
 }
 
+/* Vy and Omega_z both held at their ratios, vx the only unknown (a held spin: the native
+ * FMU's CF_HELD_SPIN): RollingBody's scalar path, cf_advance, on the vector path's state;
+ * Vy and Omega_z follow Vx (_apply_ratios). *y unchanged on CF_FALLBACK. */
+static int advance_held(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
+    cf_state s = {.Vx = y->Vx, .vx = y->vx, .t = y->t, .dv = y->dv, .Tx = y->Tx, .Ty = y->Ty,
+                  .Mz = y->Mz, .out_sliding = y->out_sliding, .sliding = y->sliding};
+    if (cf_advance(p, &s, h, L[0], L[2], n) != CF_OK) return CF_FALLBACK;
+    y->Vx = s.Vx, y->vx = s.vx, y->t = s.t, y->dv = s.dv;
+    y->Vy = p->ry * s.Vx, y->Oz = p->rz * s.Vx;
+    y->Tx = s.Tx, y->Ty = s.Ty, y->Mz = s.Mz;
+    y->out_sliding = s.out_sliding, y->sliding = s.sliding;
+    y->jac_valid = 0;
+    return CF_OK;
+}
+
 int cf_advance_vector(const cf_params *p, cf_vstate *y, double h, const double *L, int n) {
     if (p->law == LAW_LAYER && p->strips == NULL && !lifted(p))
         return CF_FALLBACK; /* no spin grid (none needed without contact) */
     if (!(h > 0.0 && h <= DBL_MAX) || n < 1 || !(h / n > 0.0) || !finite_all(L, 4) ||
         !vstate_finite(y))
         return CF_FALLBACK;
+    if (!p->dyn_vy && !p->dyn_spin) return advance_held(p, y, h, L, n);
     cf_vstate w = *y;
     if (p->quasistationary && n > 1 && !w.sliding && vadmissible(p, L)) {
         /* RollingBody.advance: rolling under held, admissible loads in one step, unless

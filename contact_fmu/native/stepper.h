@@ -38,17 +38,22 @@
 #endif
 
 /* The C library's oldest versions of the symbols whose default version is newer than
- * the floor of manylinux2014 (glibc 2.17): hypot (2.35) and pow (2.29) were re-versioned
- * when their errno handling changed, not their values (the compat entries wrap the same
- * __ieee754_hypot and __pow), so the binaries built here (with CF_GLIBC_COMPAT, linked
- * with -lm) load on RHEL/Rocky 8-9 and older (tests/test_native.py reads the versions
- * they need). A build elsewhere (a source FMU) binds its own C library's defaults. */
+ * the floor of manylinux2014 (glibc 2.17): hypot (2.35), pow and log (2.29) and fmod
+ * (2.38) were re-versioned when their errno handling changed, not their values (the
+ * compat entries wrap the same __ieee754_hypot, __pow, __log, __ieee754_fmod), so the
+ * binaries built here (with CF_GLIBC_COMPAT, linked with -lm) load on RHEL/Rocky 8-9
+ * and older (tests/test_native.py reads the versions they need). A build elsewhere (a
+ * source FMU) binds its own C library's defaults. */
 #if defined(CF_GLIBC_COMPAT) && defined(__GLIBC__) && defined(__x86_64__)
 __asm__(".symver hypot,hypot@GLIBC_2.2.5");
 __asm__(".symver pow,pow@GLIBC_2.2.5");
+__asm__(".symver log,log@GLIBC_2.2.5");
+__asm__(".symver fmod,fmod@GLIBC_2.2.5");
 #elif defined(CF_GLIBC_COMPAT) && defined(__GLIBC__) && defined(__aarch64__)
 __asm__(".symver hypot,hypot@GLIBC_2.17");
 __asm__(".symver pow,pow@GLIBC_2.17");
+__asm__(".symver log,log@GLIBC_2.17");
+__asm__(".symver fmod,fmod@GLIBC_2.17");
 #endif
 
 #define CF_OK 0
@@ -56,6 +61,8 @@ __asm__(".symver pow,pow@GLIBC_2.17");
 
 /* cf_params.law */
 enum { LAW_LAYER = 0, LAW_TABLE = 1 };
+/* the most load nodes of a creep-force table (cf_params.n_loads; the build refuses more) */
+#define CF_LOADS_MAX 16
 
 /* ---- fmu/body_model.py: a communication step of the body (cf_body) ---------------- */
 /* Why a communication step of the body is not served (else CF_OK): the checks of
