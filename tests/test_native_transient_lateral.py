@@ -20,10 +20,10 @@ import pytest
 from fmpy.validation import validate_fmu
 
 import fmu_build
+from contact_fmu.dynamics.thin_layer_field import MAX_STAGE_ITERATIONS
 from contact_fmu.fmu import variables as fv
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load, runner
-from contact_fmu.dynamics.thin_layer_field import MAX_STAGE_ITERATIONS
 from fmu_build import native_fmu, native_fmu3
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -102,9 +102,9 @@ def test_the_stage_evaluations_count_against_the_budget():
     not reach changes nothing (the same doubles as without one); a budget of 2 stops the
     first stage (its first Newton step needs a second evaluation), and the call declines
     (None: the Python path then takes the step and words it)."""
+    from contact_fmu.dynamics.thin_layer_field import A21, GAMMA
     from contact_fmu.fmu import body_transient
     from contact_fmu.native import library
-    from contact_fmu.dynamics.thin_layer_field import A21, GAMMA
 
     if library() is None:
         pytest.skip("no kernel library")
