@@ -20,6 +20,7 @@ from .._validate import InputError
 from ..dynamics import Body, Lateral, Loads
 from ..integrator import RollingBody, WorkBudgetError
 from ..kinematics import V_CREEP_FLOOR, spin_for_slip
+from . import messages as words
 from .config import ModelConfig
 from .laws import make_law
 from .ranges import within_range
@@ -123,7 +124,7 @@ class BodyModel:
             ) from None
         within_range(self.stepper.outputs())
         if n == self.cap and self.beyond_cap(h):
-            return self.cap_note(h, n, f"h_max = {self.h_max:g} s")
+            return self.cap_note(h, n, words.CAP_LIMITS(h_max=self.h_max))
         return None
 
     def beyond_cap(self, h: float) -> bool:
@@ -133,11 +134,8 @@ class BodyModel:
 
     def cap_note(self, h: float, n: int, limits: str) -> str:
         """The warning of a step taken in the budget's n steps (the native FMU's words)."""
-        return (
-            f"communication step h = {h:g} s needs more internal steps ({limits}) than "
-            f"max_work = {self.max_work:g} allows (each costs {self.work:g}): taken in "
-            f"{n} steps of {h / n:g} s"
-        )
+        return words.CAP_NOTE(h=h, limits=limits, max_work=self.max_work, work=self.work, n=n,
+                          step=h / n)  # fmt: skip
 
     def fast(self) -> native.FastBody | None:
         """The whole step in compiled code (contact_fmu/native) where the stepper's path

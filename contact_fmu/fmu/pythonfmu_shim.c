@@ -40,6 +40,8 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+/* the messages' wording, shared with the native FMUs (generated from fmu/messages.py) */
+#include "../native/cf_messages.h"
 
 #if defined(__x86_64__)
 __asm__(".symver dlopen,dlopen@GLIBC_2.2.5");
@@ -348,8 +350,8 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     fmi2Status st;
     if (s == NULL) return fmi2Error;
     if (s->phase == 0) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "exitInitializationMode refused: called before fmi2EnterInitializationMode");
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_EXIT_BEFORE_ENTER, "fmi2",
+               CF_CALL_NAMES[CF_CALL_ENTER_INIT][0]);
         return fmi2Error;
     }
     s->cell = fmi2OK;
@@ -363,9 +365,8 @@ FMI2_Export fmi2Status fmi2Terminate(fmi2Component c) {
     shim *s = c;
     if (s == NULL) return fmi2Error;
     if (s->phase < 2) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "terminate refused: called before the model is initialised "
-               "(fmi2ExitInitializationMode %s)", s->init_failed ? "failed" : "not called");
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_TERMINATE_BEFORE_INIT, "fmi2",
+               s->init_failed ? CF_MSG_FAILED : CF_MSG_NOT_CALLED);
         return fmi2Error;
     }
     CALL(s, s->api.Terminate(s->inner));
@@ -442,16 +443,17 @@ static fmi2Status adopt(shim *s, fmi2FMUstate *state, fmi2FMUstate st, fmi2Statu
     return status;
 }
 
-static int live_or_refuse(shim *s, fmi2FMUstate st, const char *call) {
+static int live_or_refuse(shim *s, fmi2FMUstate st, cf_call call) {
+    char pointer[40];
     if (find_state(s, st) >= 0) return 1;
-    cf_log(&s->cb, s->name, fmi2Error,
-           "%s: %p is not an FMU state of this instance (never given, or freed)", call, st);
+    snprintf(pointer, sizeof pointer, "%p", st);
+    cf_log(&s->cb, s->name, fmi2Error, CF_MSG_NOT_A_STATE, "fmi2", CF_CALL_NAMES[call][0], pointer);
     return 0;
 }
 
 /* *state given to be overwritten (FMI 2.0: a live state, or NULL for a new one): a
  * live one is freed, a new one takes its place; any other pointer is refused */
-static fmi2Status release_given(shim *s, fmi2FMUstate *state, const char *call) {
+static fmi2Status release_given(shim *s, fmi2FMUstate *state, cf_call call) {
     if (*state == NULL) return fmi2OK;
     if (!live_or_refuse(s, *state, call)) return fmi2Error;
     return fmi2FreeFMUstate(s, state);
@@ -462,7 +464,7 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     fmi2FMUstate st = NULL;
     fmi2Status status, freed;
     if (s == NULL || state == NULL) return fmi2Error;
-    if ((freed = release_given(s, state, "fmi2GetFMUstate")) > fmi2Warning) return freed;
+    if ((freed = release_given(s, state, CF_CALL_GET_STATE)) > fmi2Warning) return freed;
     s->cell = fmi2OK;
     status = with_cell(s, s->api.GetFMUstate(s->inner, &st));
     return adopt(s, state, st, status);
@@ -471,7 +473,7 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
 FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     shim *s = c;
     if (s == NULL) return fmi2Error;
-    if (!live_or_refuse(s, state, "fmi2SetFMUstate")) return fmi2Error;
+    if (!live_or_refuse(s, state, CF_CALL_SET_STATE)) return fmi2Error;
     CALL(s, s->api.SetFMUstate(s->inner, state));
 }
 
@@ -480,7 +482,7 @@ FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
     long i;
     if (s == NULL || state == NULL) return fmi2Error;
     if (*state == NULL) return fmi2OK; /* the standard: nothing to free */
-    if (!live_or_refuse(s, *state, "fmi2FreeFMUstate")) return fmi2Error;
+    if (!live_or_refuse(s, *state, CF_CALL_FREE_STATE)) return fmi2Error;
     i = find_state(s, *state);
     s->states[i] = s->states[--s->n_states];
     s->cell = fmi2OK;
@@ -520,7 +522,7 @@ FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate 
     size_t inner = 0;
     fmi2Status st;
     if (s == NULL || size == NULL) return fmi2Error;
-    if (!live_or_refuse(s, state, "fmi2SerializedFMUstateSize")) return fmi2Error;
+    if (!live_or_refuse(s, state, CF_CALL_STATE_SIZE)) return fmi2Error;
     s->cell = fmi2OK;
     st = with_cell(s, s->api.SerializedFMUstateSize(s->inner, state, &inner));
     if (st <= fmi2Warning) *size = header_size(s) + inner;
@@ -534,7 +536,7 @@ FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state
     unsigned char *p = (unsigned char *)bytes;
     fmi2Status st;
     if (s == NULL || bytes == NULL) return fmi2Error;
-    if (!live_or_refuse(s, state, "fmi2SerializeFMUstate")) return fmi2Error;
+    if (!live_or_refuse(s, state, CF_CALL_SERIALIZE)) return fmi2Error;
     head = header_size(s);
     s->cell = fmi2OK;
     st = with_cell(s, s->api.SerializedFMUstateSize(s->inner, state, &inner));
@@ -587,7 +589,7 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b
                "fmi2DeSerializeFMUstate: the %zu bytes are refused: %s", size, why);
         return fmi2Error;
     }
-    if ((status = release_given(s, state, "fmi2DeSerializeFMUstate")) > fmi2Warning)
+    if ((status = release_given(s, state, CF_CALL_DESERIALIZE)) > fmi2Warning)
         return status;
     s->cell = fmi2OK;
     status = worst(s->api.DeSerializeFMUstate(s->inner, bytes + head, size - head, &st),
