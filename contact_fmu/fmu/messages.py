@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from typing import Any
 
 FMU = "contact_fmu/fmu"  # home: worded through this table by the FMU layer
+SHIM = "pythonfmu_shim.c"  # home: the pythonfmu FMU's status shim, through cf_messages.h
 NATIVE = "the native FMUs only"  # home of a message no pythonfmu FMU logs
 API = "fmi2"  # the pythonfmu FMU's FMI version (its {api})
 
@@ -118,6 +119,7 @@ CALL_NAMES: dict[str, tuple[str, str]] = {
     "STATE_SIZE": ("SerializedFMUstateSize", "SerializedFMUStateSize"),
     "SERIALIZE": ("SerializeFMUstate", "SerializeFMUState"),
     "DESERIALIZE": ("DeSerializeFMUstate", "DeserializeFMUState"),
+    "SET_DEBUG_LOGGING": ("SetDebugLogging", "SetDebugLogging"),
 }
 
 
@@ -170,14 +172,14 @@ SEE_ABOVE = Message("see the messages above")
 # the shim's words (pythonfmu_shim.c) on the pythonfmu FMU: pythonfmu cannot answer them
 EXIT_BEFORE_ENTER = Message(
     "exitInitializationMode refused: called before {api}{call}",
-    home="pythonfmu_shim.c",
+    home=SHIM,
 )
 TERMINATE_BEFORE_INIT = Message(
     "terminate refused: called before the model is initialised ({api}ExitInitializationMode {how})",
-    home="pythonfmu_shim.c",
+    home=SHIM,
 )
-NOT_CALLED = Message("not called", home="pythonfmu_shim.c")
-FAILED = Message("failed", home="pythonfmu_shim.c")
+NOT_CALLED = Message("not called", home=SHIM)
+FAILED = Message("failed", home=SHIM)
 SETUP_AFTER_INIT = Message(
     "{api}{call} after initialisation is ignored",
     home=NATIVE,
@@ -311,6 +313,11 @@ STATE_MODEL = Message("its model state cannot be restored ({why})")
 STATE_MODEL_NOT_FINITE = Message("it is not finite", home=NATIVE, only="Python says why")
 # the pythonfmu FMU's state format (a dict of Python values: slave_state.py)
 _PY_STATE = "the pythonfmu FMU's state format (the native FMU's is its C core, whole)"
+STATE_OWNER = Message(
+    "a state of the FMU {owner!r}, not of this FMU ({package!r})",
+    only=_PY_STATE,
+)
+STATE_UNREADABLE = Message("the state cannot be read ({why})", only=_PY_STATE)
 STATE_FIELDS = Message("not a state of this FMU (its fields differ)", only=_PY_STATE)
 STATE_FLAG = Message("its flag {flag!r} is not a bool", only=_PY_STATE)
 STATE_VARIABLES = Message("its variables differ from this FMU's", only=_PY_STATE)
@@ -336,30 +343,68 @@ STATE_DISAGREE = Message(
 # the registry of live states (the shim's words on the pythonfmu FMU)
 NOT_A_STATE = Message(
     "{api}{call}: {pointer} is not an FMU state of this instance (never given, or freed)",
-    home="pythonfmu_shim.c",
+    home=SHIM,
 )
 NO_PLACE = Message("{api}{call}: no place for the {what} given", home=NATIVE, only="pythonfmu's")
 NO_STATE = Message("{api}{call}: no state given", home=NATIVE, only="pythonfmu's")
 SERIALIZE_BUFFER = Message(
     "{api}{call}: no buffer, or one of {size:zu} bytes ({needed:zu} needed)",
     home=NATIVE,
-    only="the shim's serialisation has its own format",
+    only="the shim asks for the exact size (SERIALIZE_SIZE)",
 )
-BYTES_REFUSED = Message(
-    "{api}{call}: the bytes are refused: {why}",
+SERIALIZE_SIZE = Message(
+    "{api}{call}: size = {size:zu}, the state needs {needed:zu} bytes ({api}{size_call})",
+    home=SHIM,
+    only="the native FMUs take a larger buffer too (SERIALIZE_BUFFER)",
+)
+# bytes refused at deserialisation: the envelope of either format (magic, format version,
+# GUID, length, checksum) names the same faults in the same words
+BYTES_REFUSED = Message("{api}{call}: the {size:zu} bytes are refused: {why}", home=SHIM)
+NOT_SERIALIZED = Message("not a serialized contact_fmu FMU state", home=SHIM)
+OTHER_VERSION = Message("a state of another format version", home=SHIM)
+OTHER_FMU = Message("a state of another FMU (its GUID differs from this FMU's)", home=SHIM)
+LENGTH_DIFFERS = Message("truncated or extended (its length differs from {expected})", home=SHIM)
+LENGTH_RECORDED = Message("the recorded one", home=SHIM, only="the shim's envelope records it")
+LENGTH_OF_STATES = Message(
+    "this FMU's states'", home=NATIVE, only="a native FMU's states have one length"
+)
+CHECKSUM_DIFFERS = Message("damaged (its checksum differs)", home=SHIM)
+PAYLOAD_DIFFERS = Message(
+    "damaged (its payload length differs from this FMU's)",
     home=NATIVE,
-    only="the shim's serialisation has its own format",
+    only="the shim's payload is pythonfmu's, whose length it records",
 )
-NOT_NATIVE_STATE = Message("not an FMU state of a contact_fmu native FMU", home=NATIVE,
-                           only="state format")  # fmt: skip
-STATE_VERSION = Message("a format version this FMU does not read", home=NATIVE, only="format")
-STATE_GUID = Message("the state of another FMU (GUID differs)", home=NATIVE, only="format")
-NO_BYTES = Message("no bytes", home=NATIVE, only="state format")
-DAMAGED = Message("damaged: its {what} does not match", home=NATIVE, only="state format")
-DAMAGED_LENGTH = Message("damaged: its {what} is wrong", home=NATIVE, only="state format")
+NO_BYTES = Message("no bytes", home=NATIVE, only="the shim refuses NULL bytes as not a state")
+TOO_MANY_STATES = Message(
+    "more than {n:d} FMU states held at once: free some ({api}{call})",
+    home=SHIM,
+    only="the native FMUs hold any number (a hash set)",
+)
+# the shim's own (pythonfmu's binary behind it, its instantiation)
+SHIM_LOAD = Message(
+    "cannot load pythonfmu's binary {path}: {why}", home=SHIM, only="the pythonfmu FMU's binary"
+)
+SHIM_LACKS = Message(
+    "pythonfmu's binary lacks {name}", home=SHIM, only="the pythonfmu FMU's binary"
+)
+CO_SIMULATION_ONLY = Message(
+    "this FMU is for co-simulation only (fmuType = {type:d})",
+    home=SHIM,
+    only="the native front ends refuse model exchange in their own version's terms",
+)
+RESOURCE_URI = Message(
+    "resourceLocation {uri} is not a local file URI",
+    home=SHIM,
+    only="pythonfmu needs its resources folder; the native FMUs read a table from it only",
+)
+NOT_A_VARIABLE = Message(
+    "value reference {vr:u} is not a variable of this FMU",
+    home=SHIM,
+    only="the status cell's value reference, the shim's own",
+)
 
 # ---- instantiation, variables, and calls of the native FMUs only ----------------------------
-OUT_OF_MEMORY = Message("{api}{call}: out of memory", home=NATIVE, only="Python's memory")
+OUT_OF_MEMORY = Message("{api}{call}: out of memory", home=SHIM)
 GUID = Message(
     "{api}{call}: GUID {guid} is not this FMU's ({own})", home=NATIVE, only="pythonfmu's"
 )

@@ -117,6 +117,9 @@ static char *cf_strdup(const fmi2CallbackFunctions *cb, const char *s, size_t *l
 
 /* A message to the importer's logger; the text goes as an argument, never as the
  * format. */
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((format(printf, 4, 5)))
+#endif
 static void cf_log(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
                    const char *fmt, ...) {
     char msg[1024];
@@ -208,8 +211,7 @@ static int load_inner(shim *s, const char *resources) {
     snprintf(path, n, "%s%s", resources, CF_INNER);
     lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (lib == NULL) {
-        cf_log(&s->cb, s->name, fmi2Error, "cannot load pythonfmu's binary %s: %s", path,
-               dlerror());
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_SHIM_LOAD, path, dlerror());
         cf_free(&s->cb, path);
         return 0;
     }
@@ -218,7 +220,7 @@ static int load_inner(shim *s, const char *resources) {
 #define F(fn)                                                                          \
     *(void **)(&s->api.fn) = dlsym(lib, "fmi2" #fn);                               \
     if (s->api.fn == NULL) {                                                           \
-        cf_log(&s->cb, s->name, fmi2Error, "pythonfmu's binary lacks fmi2" #fn);       \
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_SHIM_LACKS, "fmi2" #fn);              \
         return 0;                                                                        \
     }
     CF_FUNCTIONS(F)
@@ -257,8 +259,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     char *resources;
     if (functions == NULL) return NULL;
     if (fmuType != fmi2CoSimulation) {
-        cf_log(functions, instanceName, fmi2Error,
-               "this FMU is for co-simulation only (fmuType = %d)", (int)fmuType);
+        cf_log(functions, instanceName, fmi2Error, CF_MSG_CO_SIMULATION_ONLY, (int)fmuType);
         return NULL;
     }
     s = cf_alloc(functions, 1, sizeof *s);
@@ -273,8 +274,8 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     s->guid = cf_strdup(functions, fmuGUID, &s->guid_len);
     resources = uri_path(functions, resourceLocation);
     if (resources == NULL) {
-        cf_log(functions, instanceName, fmi2Error,
-               "resourceLocation %s is not a local file URI", resourceLocation ? resourceLocation : "(null)");
+        cf_log(functions, instanceName, fmi2Error, CF_MSG_RESOURCE_URI,
+               resourceLocation ? resourceLocation : "(null)");
     } else if (load_inner(s, resources)) {
         s->inner = s->api.Instantiate(instanceName, fmuType, fmuGUID, resourceLocation,
                                       &s->inner_cb, visible, fmi2True);
@@ -319,7 +320,8 @@ FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size
     shim *s = c;
     if (s == NULL) return fmi2Error;
     if (set_debug(s, on, n, categories) > fmi2Warning) {
-        cf_log(&s->cb, s->name, fmi2Error, "fmi2SetDebugLogging: out of memory");
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_OUT_OF_MEMORY, "fmi2",
+               CF_CALL_NAMES[CF_CALL_SET_DEBUG_LOGGING][0]);
         return fmi2Error;
     }
     CALL(s, s->api.SetDebugLogging(s->inner, fmi2True, 0, NULL));
@@ -395,8 +397,7 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c) {
         shim *s = c;                                                                     \
         for (size_t i = 0; s != NULL && i < n; i++)                                      \
             if (vr[i] == CF_CELL_VR) {                                                   \
-                cf_log(&s->cb, s->name, fmi2Error,                                       \
-                       "value reference %u is not a variable of this FMU", vr[i]);       \
+                cf_log(&s->cb, s->name, fmi2Error, CF_MSG_NOT_A_VARIABLE, vr[i]);        \
                 return fmi2Error;                                                        \
             }                                                                            \
         CALL(s, s->api.Set##Name(s->inner, vr, n, value));                               \
@@ -434,9 +435,8 @@ static fmi2Status adopt(shim *s, fmi2FMUstate *state, fmi2FMUstate st, fmi2Statu
     if (status > fmi2Warning) return status;
     if (!keep_state(s, st)) {
         s->api.FreeFMUstate(s->inner, &st);
-        cf_log(&s->cb, s->name, fmi2Error,
-               "more than %d FMU states held at once: free some (fmi2FreeFMUstate)",
-               CF_MAX_STATES);
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_TOO_MANY_STATES, CF_MAX_STATES, "fmi2",
+               CF_CALL_NAMES[CF_CALL_FREE_STATE][0]);
         return fmi2Error;
     }
     *state = st;
@@ -447,7 +447,8 @@ static int live_or_refuse(shim *s, fmi2FMUstate st, cf_call call) {
     char pointer[40];
     if (find_state(s, st) >= 0) return 1;
     snprintf(pointer, sizeof pointer, "%p", st);
-    cf_log(&s->cb, s->name, fmi2Error, CF_MSG_NOT_A_STATE, "fmi2", CF_CALL_NAMES[call][0], pointer);
+    cf_log(&s->cb, s->name, fmi2Error, CF_MSG_NOT_A_STATE, "fmi2", CF_CALL_NAMES[call][0],
+           pointer);
     return 0;
 }
 
@@ -542,9 +543,9 @@ FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state
     st = with_cell(s, s->api.SerializedFMUstateSize(s->inner, state, &inner));
     if (st > fmi2Warning) return st;
     if (size != head + inner) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "fmi2SerializeFMUstate: size = %zu, the state needs %zu bytes "
-               "(fmi2SerializedFMUstateSize)", size, head + inner);
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_SERIALIZE_SIZE, "fmi2",
+               CF_CALL_NAMES[CF_CALL_SERIALIZE][0], size, head + inner, "fmi2",
+               CF_CALL_NAMES[CF_CALL_STATE_SIZE][0]);
         return fmi2Error;
     }
     st = with_cell(s, s->api.SerializeFMUstate(s->inner, state, bytes + head, inner));
@@ -568,25 +569,27 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b
     size_t head, m = sizeof CF_MAGIC - 1;
     uint64_t format, glen, inner;
     const char *why = NULL;
+    char length[128];
     fmi2FMUstate st = NULL;
     fmi2Status status;
     if (s == NULL || state == NULL) return fmi2Error;
     head = header_size(s);
     if (bytes == NULL || size < m + 8 || memcmp(p, CF_MAGIC, m) != 0) {
-        why = "not a serialized contact_fmu FMU state";
+        why = CF_MSG_NOT_SERIALIZED;
     } else if ((format = get_le(p + m, 4)) != CF_FORMAT) {
-        why = "a state of another format version";
+        why = CF_MSG_OTHER_VERSION;
     } else if ((glen = get_le(p + m + 4, 4)) != s->guid_len || size < head ||
                memcmp(p + m + 8, s->guid, s->guid_len) != 0) {
-        why = "a state of another FMU (its GUID differs from this FMU's)";
+        why = CF_MSG_OTHER_FMU;
     } else if ((inner = get_le(p + head - 12, 8)) != size - head) {
-        why = "truncated or extended (its length differs from the recorded one)";
+        snprintf(length, sizeof length, CF_MSG_LENGTH_DIFFERS, CF_MSG_LENGTH_RECORDED);
+        why = length;
     } else if (get_le(p + head - 4, 4) != crc32(p + head, (size_t)inner)) {
-        why = "damaged (its checksum differs)";
+        why = CF_MSG_CHECKSUM_DIFFERS;
     }
     if (why != NULL) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "fmi2DeSerializeFMUstate: the %zu bytes are refused: %s", size, why);
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_BYTES_REFUSED, "fmi2",
+               CF_CALL_NAMES[CF_CALL_DESERIALIZE][0], size, why);
         return fmi2Error;
     }
     if ((status = release_given(s, state, CF_CALL_DESERIALIZE)) > fmi2Warning)

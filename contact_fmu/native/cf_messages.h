@@ -201,6 +201,12 @@
 #define CF_MSG_STATE_MODEL "its model state cannot be restored (%s)"
 /* STATE_MODEL_NOT_FINITE: no argument; the native FMUs only: Python says why */
 #define CF_MSG_STATE_MODEL_NOT_FINITE "it is not finite"
+/* STATE_OWNER: owner (repr), package (repr); contact_fmu/fmu: the pythonfmu FMU's state
+ * format (the native FMU's is its C core, whole) */
+#define CF_MSG_STATE_OWNER "a state of the FMU %s, not of this FMU (%s)"
+/* STATE_UNREADABLE: why (text); contact_fmu/fmu: the pythonfmu FMU's state format (the
+ * native FMU's is its C core, whole) */
+#define CF_MSG_STATE_UNREADABLE "the state cannot be read (%s)"
 /* STATE_FIELDS: no argument; contact_fmu/fmu: the pythonfmu FMU's state format (the native
  * FMU's is its C core, whole) */
 #define CF_MSG_STATE_FIELDS "not a state of this FMU (its fields differ)"
@@ -244,24 +250,50 @@
 /* NO_STATE: api (text), call (text); the native FMUs only: pythonfmu's */
 #define CF_MSG_NO_STATE "%s%s: no state given"
 /* SERIALIZE_BUFFER: api (text), call (text), size (zu), needed (zu); the native FMUs only:
- * the shim's serialisation has its own format */
+ * the shim asks for the exact size (SERIALIZE_SIZE) */
 #define CF_MSG_SERIALIZE_BUFFER "%s%s: no buffer, or one of %zu bytes (%zu needed)"
-/* BYTES_REFUSED: api (text), call (text), why (text); the native FMUs only: the shim's
- * serialisation has its own format */
-#define CF_MSG_BYTES_REFUSED "%s%s: the bytes are refused: %s"
-/* NOT_NATIVE_STATE: no argument; the native FMUs only: state format */
-#define CF_MSG_NOT_NATIVE_STATE "not an FMU state of a contact_fmu native FMU"
-/* STATE_VERSION: no argument; the native FMUs only: format */
-#define CF_MSG_STATE_VERSION "a format version this FMU does not read"
-/* STATE_GUID: no argument; the native FMUs only: format */
-#define CF_MSG_STATE_GUID "the state of another FMU (GUID differs)"
-/* NO_BYTES: no argument; the native FMUs only: state format */
+/* SERIALIZE_SIZE: api (text), call (text), size (zu), needed (zu), api (text), size_call
+ * (text); pythonfmu_shim.c: the native FMUs take a larger buffer too (SERIALIZE_BUFFER) */
+#define CF_MSG_SERIALIZE_SIZE "%s%s: size = %zu, the state needs %zu bytes (%s%s)"
+/* BYTES_REFUSED: api (text), call (text), size (zu), why (text); pythonfmu_shim.c */
+#define CF_MSG_BYTES_REFUSED "%s%s: the %zu bytes are refused: %s"
+/* NOT_SERIALIZED: no argument; pythonfmu_shim.c */
+#define CF_MSG_NOT_SERIALIZED "not a serialized contact_fmu FMU state"
+/* OTHER_VERSION: no argument; pythonfmu_shim.c */
+#define CF_MSG_OTHER_VERSION "a state of another format version"
+/* OTHER_FMU: no argument; pythonfmu_shim.c */
+#define CF_MSG_OTHER_FMU "a state of another FMU (its GUID differs from this FMU's)"
+/* LENGTH_DIFFERS: expected (text); pythonfmu_shim.c */
+#define CF_MSG_LENGTH_DIFFERS "truncated or extended (its length differs from %s)"
+/* LENGTH_RECORDED: no argument; pythonfmu_shim.c: the shim's envelope records it */
+#define CF_MSG_LENGTH_RECORDED "the recorded one"
+/* LENGTH_OF_STATES: no argument; the native FMUs only: a native FMU's states have one
+ * length */
+#define CF_MSG_LENGTH_OF_STATES "this FMU's states'"
+/* CHECKSUM_DIFFERS: no argument; pythonfmu_shim.c */
+#define CF_MSG_CHECKSUM_DIFFERS "damaged (its checksum differs)"
+/* PAYLOAD_DIFFERS: no argument; the native FMUs only: the shim's payload is pythonfmu's,
+ * whose length it records */
+#define CF_MSG_PAYLOAD_DIFFERS "damaged (its payload length differs from this FMU's)"
+/* NO_BYTES: no argument; the native FMUs only: the shim refuses NULL bytes as not a state */
 #define CF_MSG_NO_BYTES "no bytes"
-/* DAMAGED: what (text); the native FMUs only: state format */
-#define CF_MSG_DAMAGED "damaged: its %s does not match"
-/* DAMAGED_LENGTH: what (text); the native FMUs only: state format */
-#define CF_MSG_DAMAGED_LENGTH "damaged: its %s is wrong"
-/* OUT_OF_MEMORY: api (text), call (text); the native FMUs only: Python's memory */
+/* TOO_MANY_STATES: n (d), api (text), call (text); pythonfmu_shim.c: the native FMUs hold
+ * any number (a hash set) */
+#define CF_MSG_TOO_MANY_STATES "more than %d FMU states held at once: free some (%s%s)"
+/* SHIM_LOAD: path (text), why (text); pythonfmu_shim.c: the pythonfmu FMU's binary */
+#define CF_MSG_SHIM_LOAD "cannot load pythonfmu's binary %s: %s"
+/* SHIM_LACKS: name (text); pythonfmu_shim.c: the pythonfmu FMU's binary */
+#define CF_MSG_SHIM_LACKS "pythonfmu's binary lacks %s"
+/* CO_SIMULATION_ONLY: type (d); pythonfmu_shim.c: the native front ends refuse model
+ * exchange in their own version's terms */
+#define CF_MSG_CO_SIMULATION_ONLY "this FMU is for co-simulation only (fmuType = %d)"
+/* RESOURCE_URI: uri (text); pythonfmu_shim.c: pythonfmu needs its resources folder; the
+ * native FMUs read a table from it only */
+#define CF_MSG_RESOURCE_URI "resourceLocation %s is not a local file URI"
+/* NOT_A_VARIABLE: vr (u); pythonfmu_shim.c: the status cell's value reference, the shim's
+ * own */
+#define CF_MSG_NOT_A_VARIABLE "value reference %u is not a variable of this FMU"
+/* OUT_OF_MEMORY: api (text), call (text); pythonfmu_shim.c */
 #define CF_MSG_OUT_OF_MEMORY "%s%s: out of memory"
 /* GUID: api (text), call (text), guid (text), own (text); the native FMUs only:
  * pythonfmu's */
@@ -331,6 +363,7 @@ typedef enum {
     CF_CALL_STATE_SIZE,
     CF_CALL_SERIALIZE,
     CF_CALL_DESERIALIZE,
+    CF_CALL_SET_DEBUG_LOGGING,
     CF_N_CALLS
 } cf_call;
 static const char *const CF_CALL_NAMES[CF_N_CALLS][2] = {
@@ -354,6 +387,7 @@ static const char *const CF_CALL_NAMES[CF_N_CALLS][2] = {
     [CF_CALL_STATE_SIZE] = {"SerializedFMUstateSize", "SerializedFMUStateSize"},
     [CF_CALL_SERIALIZE] = {"SerializeFMUstate", "SerializeFMUState"},
     [CF_CALL_DESERIALIZE] = {"DeSerializeFMUstate", "DeserializeFMUState"},
+    [CF_CALL_SET_DEBUG_LOGGING] = {"SetDebugLogging", "SetDebugLogging"},
 };
 
 #endif

@@ -1850,34 +1850,32 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
     const char *why = NULL;
     uint32_t version = 0, glen = 0;
     uint64_t plen = 0, sum = 0;
-    char damaged[80];
+    char length[128];
     if (p == NULL || state == NULL) why = CF_MSG_NO_BYTES;
     else if (size < sizeof MAGIC + 8 || memcmp(p, MAGIC, sizeof MAGIC) != 0)
-        why = CF_MSG_NOT_NATIVE_STATE;
+        why = CF_MSG_NOT_SERIALIZED;
     if (why == NULL) {
         memcpy(&version, p + 8, 4);
         memcpy(&glen, p + 12, 4);
-        if (version != STATE_VERSION) why = CF_MSG_STATE_VERSION;
+        if (version != STATE_VERSION) why = CF_MSG_OTHER_VERSION;
         else if (glen != strlen(CF_GUID) || size < 16 + (size_t)glen ||
                  memcmp(p + 16, CF_GUID, glen) != 0)
-            why = CF_MSG_STATE_GUID;
+            why = CF_MSG_OTHER_FMU;
     }
     if (why == NULL) {
         if (size != serialized_size()) {
-            why = (snprintf(damaged, sizeof damaged, CF_MSG_DAMAGED_LENGTH, "length"), damaged);
+            snprintf(length, sizeof length, CF_MSG_LENGTH_DIFFERS, CF_MSG_LENGTH_OF_STATES);
+            why = length;
         } else {
             memcpy(&plen, p + 16 + glen, 8);
             memcpy(&sum, p + size - 8, 8);
-            if (plen != sizeof(cf_core))
-                why = (snprintf(damaged, sizeof damaged, CF_MSG_DAMAGED_LENGTH, "payload length"),
-                       damaged);
-            else if (fnv1a(p, size - 8) != sum)
-                why = (snprintf(damaged, sizeof damaged, CF_MSG_DAMAGED, "checksum"), damaged);
+            if (plen != sizeof(cf_core)) why = CF_MSG_PAYLOAD_DIFFERS;
+            else if (fnv1a(p, size - 8) != sum) why = CF_MSG_CHECKSUM_DIFFERS;
         }
     }
     if (why != NULL) {
         say(I, CF_STATUS_ERROR, CF_MSG_BYTES_REFUSED, I->api, call_name(I, CF_CALL_DESERIALIZE),
-            why);
+            size, why);
         return CF_STATUS_ERROR;
     }
     cf_core *c = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core)); /* on the heap */
@@ -1892,7 +1890,7 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
     if (state_problem(c, problem, sizeof problem)) {
         I->cb.release(I->env, c);
         say(I, CF_STATUS_ERROR, CF_MSG_BYTES_REFUSED, I->api, call_name(I, CF_CALL_DESERIALIZE),
-            problem);
+            size, problem);
         return CF_STATUS_ERROR;
     }
     cf_core *s = state_to_fill(I, state, CF_CALL_DESERIALIZE);
