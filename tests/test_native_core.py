@@ -21,6 +21,8 @@ from pathlib import Path
 import pytest
 
 from contact_fmu import examples as ex
+from contact_fmu.fmu import variables as fv
+from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.fmu.slave import CELL_VR, ContactSlave
 from contact_fmu.native import core
 from contact_fmu.scenario import load
@@ -32,16 +34,20 @@ GUID = "{core-test}"
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
 
 
+def compiled(cfg: ModelConfig, folder: Path) -> ctypes.CDLL:
+    """The core library of ``cfg``, compiled in ``folder``."""
+    for name in native_fmu.CORE:
+        shutil.copyfile(native_fmu.NATIVE_DIR / name, folder / name)
+    (folder / native_fmu.HEADER).write_text(native_fmu.header(cfg, GUID))
+    return core.load(native_fmu.compile_binary(folder, folder / "core.so", core.FLAGS,
+                                               native_fmu.CORE))  # fmt: skip
+
+
 @pytest.fixture(scope="module")
 def fig13(tmp_path_factory):
     """(configuration, the core library compiled for it)."""
     cfg = load(ROOT / "scenarios" / "fig13.toml").config
-    src = tmp_path_factory.mktemp("core")
-    for name in native_fmu.CORE:
-        shutil.copyfile(native_fmu.NATIVE_DIR / name, src / name)
-    (src / native_fmu.HEADER).write_text(native_fmu.header(cfg, GUID))
-    lib = native_fmu.compile_binary(src, src / "core.so", core.FLAGS, native_fmu.CORE)
-    return cfg, core.load(lib)
+    return cfg, compiled(cfg, tmp_path_factory.mktemp("core"))
 
 
 class Adapter:
@@ -147,6 +153,15 @@ CALLS = [
 ]
 
 
+def answers(target, calls: list, outputs: list[str]) -> tuple[list, list]:
+    """The status of each call and the outputs read after it; the messages logged."""
+    got = [target.run("step", 0.0, H)[0], target.run("init")[0]]
+    for call in calls:
+        got.append(target.run(*call)[0])
+        got.append(target.run("get", outputs))
+    return got, target.messages()
+
+
 def test_the_core_answers_every_call_as_the_adapter_does(fig13):
     """The calls above, from the start (a step before initialisation, then initialised
     at the scene's values): the same status for each call, the same messages word for
@@ -155,21 +170,73 @@ def test_the_core_answers_every_call_as_the_adapter_does(fig13):
     10 s is taken in the budget's internal steps with a warning, the same on both)."""
     cfg, lib = fig13
     outputs = reals(cfg)
-    answers = []
     targets = (Adapter(cfg), Native(cfg, lib))
     assert targets[0].vr == targets[1].vr  # one model description: the same references
-    for target in targets:
-        got = [target.run("step", 0.0, H)[0], target.run("init")[0]]
-        for call in CALLS:
-            got.append(target.run(*call)[0])
-            got.append(target.run("get", outputs))
-        answers.append((got, target.messages()))
-    assert answers[0][0] == answers[1][0]
-    assert answers[0][1] == answers[1][1]
-    statuses = [s for s in answers[0][0] if isinstance(s, int)]
+    python, native = (answers(t, CALLS, outputs) for t in targets)
+    assert python == native
+    statuses = [s for s in python[0] if isinstance(s, int)]
     assert {core.OK, core.WARNING, core.DISCARD, core.ERROR} <= set(statuses)
     # each answer other than OK is explained by one message of its status
-    assert [s for s, _ in answers[0][1]] == [s for s in statuses if s != core.OK]
+    assert [s for s, _ in python[1]] == [s for s in statuses if s != core.OK]
+
+
+def _other_calls(cfg: ModelConfig) -> list:
+    """Calls of the full body (Eqs. 10-11: the vector stepper, the law's spin by the
+    strip march), the rigid body (Eqs. 8-9) and the contact mode (the law at the inputs,
+    direct feedthrough): good values, then bad ones held and corrected, bad steps, a
+    fixed parameter set after initialisation; in contact mode, a parameter read while an
+    input is held bad (OK: only the outputs cannot be had)."""
+    Rx = float(cfg.start(fv.BY_NAME["Rx"]))
+    common = [("step", H, 0.0), ("step", 1.0, H), ("set", "Rx", 2.0 * Rx)]
+    if cfg.mode == "rigid_body":
+        return [("set", "Tx", 10.0), ("step", 0.0, H), ("set", "Tx", math.inf),
+                ("step", H, H), ("set", "Tx", 10.0), ("step", H, H), ("set", "My_ex", 1e30),
+                ("step", 2 * H, 1.0), ("set", "My_ex", 0.0), *common]  # fmt: skip
+    if cfg.mode == "contact":
+        return [("set", "Vx", 10.0), ("set", "Omega_y", 0.999 * 10.0 / Rx),
+                ("set", "Omega_z", 0.5), ("step", 0.0, H), ("set", "P", -1.0),
+                ("get", ["mu"]), ("step", H, H), ("set", "P", 1e3), ("set", "Vy", math.nan),
+                ("set", "Vy", 0.01), ("step", H, H), *common]  # fmt: skip
+    return [("set", "Fx_ex", 0.1), ("set", "Fy_ex", 0.05), ("set", "Mz_ex", 1e-4),
+            ("step", 0.0, H), ("set", "Fy_ex", math.nan), ("step", H, H),
+            ("set", "Fy_ex", 0.05), ("step", H, H), ("set", "Fx_ex", -1.2e308),
+            ("step", 2 * H, H), ("set", "Fx_ex", 0.1), ("step", 2 * H, H), *common]  # fmt: skip
+
+
+def _close(a: list[float], b: list[float]) -> bool:
+    """Within 1e-12 of the larger magnitude, value by value (exact zeros equal)."""
+    return len(a) == len(b) and all(
+        abs(x - y) <= 1e-12 * max(abs(x), abs(y)) for x, y in zip(a, b, strict=True)
+    )
+
+
+@pytest.mark.parametrize("mode", ["body", "rigid_body", "contact"])
+def test_the_core_of_every_mode_answers_as_the_adapter_does(tmp_path, mode):
+    """The full body, rigid-body and contact FMUs' models (ModelConfig.full): the core
+    and the adapter's Python path answer the calls of _other_calls with the same
+    statuses and the same messages word for word (one refusal of a getReal call logged
+    once), and the same doubles after each call. The contact mode with a spin input
+    marches the strips on the law's spin grid, built in C here and by numpy in Python:
+    the same to rounding, within 1e-12 of each value (tests/test_native_contact_spin.py's
+    tolerance between the two FMUs); the bodies step through the same C stepper: the
+    same doubles."""
+    cfg = ModelConfig.full(mode)
+    targets = (Adapter(cfg), Native(cfg, compiled(cfg, tmp_path)))
+    assert targets[0].vr == targets[1].vr
+    python, native = (answers(t, _other_calls(cfg), reals(cfg)) for t in targets)
+    assert python[1] == native[1]
+    if mode != "contact":
+        assert python == native
+    for a, b in zip(python[0], native[0], strict=True):
+        if isinstance(a, int):
+            assert a == b
+        else:
+            assert a[0] == b[0] and _close(a[1], b[1]), (a, b)
+    statuses = [s if isinstance(s, int) else s[0] for s in python[0]]  # getReal's too
+    assert core.OK in statuses and core.ERROR in statuses
+    assert [s for s, _ in python[1]] == [s for s in statuses if s != core.OK]
+    if mode == "contact":  # mu read while P = -1 is held: OK
+        assert python[0][2 + 2 * 5] == core.OK  # the call after the 5 before it
 
 
 def test_the_cores_state_restores_bit_for_bit(fig13):

@@ -137,6 +137,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         self._fast_reads: dict[tuple[int, ...], Any] = {}
         self._getters: dict[str, Any] = {}  # the Python getters of the Real outputs
         self._init_problem: str | None = None  # why exitInitializationMode failed
+        self._reading = False  # in a get call, whose outputs are refreshed (_read)
         self._terminated = False
         self._undo: Any = None  # this model's snapshot while a state is being set
         for v in self._vars.values():
@@ -223,7 +224,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         self._guarded("setBoolean", super().set_boolean, vrs, values)
 
     def get_integer(self, vrs: list[int]) -> list[int]:
-        return self._guarded("getInteger", super().get_integer, vrs)
+        return self._read("getInteger", super().get_integer, vrs)
 
     def get_boolean(self, vrs: list[int]) -> list[bool]:
         return self._guarded("getBoolean", super().get_boolean, vrs)
@@ -233,8 +234,31 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         return [str(v) for v in out]
 
     # ---- get/set -------------------------------------------------------------------------
+    def _read(self, call: str, method: Any, vrs: list[int]) -> Any:
+        """A get call by pythonfmu's getters: direct feedthrough's outputs, where the call
+        reads one, refreshed once for the call, not per value (a refusal is logged once,
+        as by the native FMU)."""
+        if self._stale() and any(
+            vr in self.vars and self._causality[self.vars[vr].name] == fv.OUTPUT for vr in vrs
+        ):
+            self._refresh()
+        self._reading = True
+        try:
+            return self._guarded(call, method, vrs)
+        finally:
+            self._reading = False
+
+    def _stale(self) -> bool:
+        """Outputs to refresh before a value is read outside a get call's own refresh."""
+        return (
+            self._call.dirty
+            and not self._reading
+            and self._model is not None
+            and self._model.feedthrough
+        )
+
     def _real_output(self, name: str) -> float:
-        if self._call.dirty and self._model is not None and self._model.feedthrough:
+        if self._stale():
             self._refresh()
         return self._out[name]  # floats, checked finite by _collect
 
@@ -242,7 +266,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         var = self._vars[name]
         if self._causality[name] == fv.OUTPUT:
             self._sync_out()
-            if self._call.dirty and self._model is not None and self._model.feedthrough:
+            if self._stale():
                 self._refresh()
             value = self._out[name]
         else:
@@ -343,7 +367,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
                 read = self._fast_reads[key] = itemgetter(*(self._fast_vr[vr] for vr in key))
             if read is not None:
                 return list(read(self._fast_out)) if len(key) > 1 else [read(self._fast_out)]
-        return self._guarded("getReal", super().get_real, vrs)
+        return self._read("getReal", super().get_real, vrs)
 
     def _inputs(self) -> dict[str, float]:
         return dict(self._call.inputs)

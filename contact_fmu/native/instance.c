@@ -1200,10 +1200,18 @@ static cf_status held_bad(const Inst *I, unsigned vr) {
     return CF_STATUS_ERROR;
 }
 
+/* the contact mode's outputs to refresh for a get call: once for the call (its refusal
+ * logged once), where it reads an output (a parameter or an input reads as it is) */
+static cf_status refresh_for(Inst *I, const unsigned *vr, size_t n) {
+    if (CF_MODE != MODE_CONTACT || !I->c.dirty || !I->c.built) return CF_STATUS_OK;
+    for (size_t i = 0; i < n; i++)
+        if (vr[i] < CF_N_VARS && CF_VARS[vr[i]].kind == K_OUTPUT) return refresh(I);
+    return CF_STATUS_OK;
+}
+
 cf_status cf_get_real(cf_inst *I, const unsigned *vr, size_t n, double *v) {
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
-    cf_status status = CF_STATUS_OK;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
+    cf_status status = refresh_for(I, vr, n);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_REAL, CF_CALL_GET_REAL)) return CF_STATUS_ERROR;
         v[i] = I->c.var[vr[i]];
@@ -1244,8 +1252,7 @@ cf_status cf_get_line(cf_inst *I, int which, double *v) {
 
 cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
-    cf_status status = CF_STATUS_OK;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
+    cf_status status = refresh_for(I, vr, n);
     for (size_t i = 0; i < n; i++) {
         if (!vr_ok(I, vr[i], T_INTEGER, CF_CALL_GET_INTEGER)) return CF_STATUS_ERROR;
         const double x = I->c.var[vr[i]];
