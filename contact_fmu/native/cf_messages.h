@@ -166,8 +166,8 @@
 #define CF_MSG_FIELD_NO_ROOT \
     "StageSolveError: no slip velocity satisfies the stage equation (target force %.6g N against " \
     "mu P = %.6g N)"
-/* FIELD_SHIFT: columns (g); the native FMUs only: the pythonfmu FMU's lattice rolls by any
- * number of columns */
+/* FIELD_SHIFT: columns (g); the native FMUs only: the Python field has no limit of its own
+ * (an OverflowError there) */
 #define CF_MSG_FIELD_SHIFT \
     "the step would roll the traction field's lattice by more than %g columns (the loads or the " \
     "step drive the body beyond what the field resolves)"
