@@ -239,6 +239,20 @@ def test_the_core_of_every_mode_answers_as_the_adapter_does(tmp_path, mode):
         assert python[0][2 + 2 * 5] == core.OK  # the call after the 5 before it
 
 
+@pytest.mark.parametrize("scene", ["brake", "railway", "cornering"])
+def test_the_core_of_a_scene_answers_as_the_adapter_does(tmp_path, scene):
+    """The scenes' body models (SDIRK2 on the brake, Vy from Eq. 10 on the railway, Vy
+    and Omega_z from Eqs. 10-11 in the curve): the full body's calls that the scene has
+    inputs for, with the same statuses, messages word for word and doubles on both."""
+    cfg = load(ROOT / "scenarios" / f"{scene}.toml").config
+    calls = [c for c in _other_calls(ModelConfig.full("body")) if c[0] != "set" or
+             c[1] in (*cfg.inputs, "Rx")]  # fmt: skip
+    targets = (Adapter(cfg), Native(cfg, compiled(cfg, tmp_path)))
+    python, native = (answers(t, calls, reals(cfg)) for t in targets)
+    assert python == native
+    assert any(s == core.DISCARD for s in python[0])  # the bad steps are refused alike
+
+
 def test_the_cores_state_restores_bit_for_bit(fig13):
     """instance.c's FMU state as bytes: get, step on, set, step again gives the same
     doubles as the first time; bytes altered in their checksum are refused naming the
