@@ -3,7 +3,7 @@
 Every message an FMU logs, and every reason a message quotes, is a ``Message`` here: a
 template in ``str.format``'s syntax with named fields. The pythonfmu adapter
 (``slave.py``, ``slave_state.py``, the models of this package) formats it by calling it
-(``STEP_DISCARDED(t=t, h=h, why=why)``); the C core (``native/instance.c``, and the
+(``STEP_DISCARDED(t=t, h=h, why=why)``); the C core (``native/instance.c``, ``fmi3.c``, and the
 pythonfmu FMU's status shim ``pythonfmu_shim.c``) formats the printf constant generated
 from it into ``native/cf_messages.h`` (``CF_MSG_STEP_DISCARDED``, by ``python -m
 contact_fmu.native.abi_header --write``; tests/test_native_abi.py checks the committed
@@ -24,11 +24,12 @@ How a field is written, on both targets (the one formatting rule):
 C's arguments follow the fields in the order they appear, one per occurrence.
 ``raised``: the type of the exception that carries the text in Python, which
 ``slave_state.describe`` writes before it (``FloatingPointError: ...``); the C constant
-includes it. ``home``: where the Python side words the message: ``FMU`` (through this
-table, from contact_fmu/fmu), or the numerics module that raises it (the numerics import
-no FMU module: its text is this template's, tests/test_fmu_messages.py checks the
-fragments); ``only``: why a message has one target only (the other has no such call or
-no such state).
+includes it. ``home``: where the pythonfmu FMU words the message: ``FMU`` (through this
+table, from contact_fmu/fmu), ``SHIM`` (its status shim, through cf_messages.h), the
+numerics module that raises it (the numerics import no FMU module: its text is this
+template's, tests/test_fmu_messages.py checks the pieces), or ``NATIVE`` where it does
+not; ``only``: why a message has one target only (the other has no such call or no
+such state).
 """
 
 from __future__ import annotations
@@ -65,8 +66,7 @@ class Message:
 
     def __call__(self, **fields: Any) -> str:
         """The text, as the C core writes it from the same template."""
-        text = _FORMATTER.vformat(self.template, (), fields)
-        return text  # the raised type is describe()'s to add
+        return _FORMATTER.vformat(self.template, (), fields)  # the raised type: describe()'s
 
     def fields(self) -> list[tuple[str, str]]:
         """(name, how) of each field in order: how is "repr", "text" or the spec."""
