@@ -78,7 +78,7 @@ NATIVE_DIR = Path(native.__file__).resolve().parent
 # CORE: what every front end is linked with (the FMI 3.0 FMU's: native_fmu3.SOURCES)
 FRONT_END = "fmi2.c"
 CORE = ("instance.c", "model.c", "stepper.c", "field.c", "instance.h", "model.h", "stepper.h",
-        "field.h", "cf_abi.h", "cf_core.h")  # fmt: skip
+        "field.h", "cf_abi.h", "cf_core.h", "cf_messages.h")  # fmt: skip
 SOURCES = (FRONT_END, *CORE)
 HEADER = "cf_model.h"
 # no -fvisibility=hidden: the sources hide what is not fmi2* themselves (stepper.h)

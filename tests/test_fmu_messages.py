@@ -10,6 +10,9 @@ messages on while pythonfmu's own logger drops them) and for the native FMU.
 
 from __future__ import annotations
 
+import ast
+import re
+import string
 import subprocess
 import sys
 from pathlib import Path
@@ -18,6 +21,7 @@ import fmpy
 import pytest
 
 import fmu_build
+from contact_fmu.fmu import messages as words
 from contact_fmu.fmu import variables as fv
 from contact_fmu.scenario import load
 from fmu_build import native_fmu
@@ -107,3 +111,92 @@ except FMICallException:
     assert "A 1" in lines and "B 0" in lines, lines
     assert "refused" in lines, lines
     assert any(line.startswith("[ERROR]") and "Rx" in line for line in lines), lines
+
+
+# ---- one declaration of the wording (contact_fmu/fmu/messages.py) ------------------------
+PACKAGE = ROOT / "contact_fmu"
+NATIVE_SOURCES = sorted((PACKAGE / "native").glob("*.c"))  # the C core and its front ends
+SHIM = PACKAGE / "fmu" / "pythonfmu_shim.c"  # the pythonfmu FMU's binary
+
+
+def _string_pieces(path: Path) -> list[str]:
+    """The literal text of every string and f-string of a Python module (an f-string's
+    pieces between its fields; implicit concatenation joined, as the parser does)."""
+    pieces = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            pieces.append(node.value)
+        elif isinstance(node, ast.JoinedStr):
+            pieces += [v.value for v in node.values if isinstance(v, ast.Constant)]
+    return pieces
+
+
+def _literals(m: words.Message) -> list[str]:
+    return [lit for lit, *_ in string.Formatter().parse(m.template) if lit.strip()]
+
+
+def test_every_message_is_worded_once_and_used_by_both_targets_or_says_why_not():
+    """Each message of fmu/messages.py is formatted by the native FMUs (CF_MSG_<NAME> in
+    a C source of contact_fmu/native, or through a message composed of it) and by the
+    pythonfmu FMU (the adapter's words.<NAME>; its status shim's CF_MSG_<NAME>; or the
+    numerics module it names, whose own strings hold every literal piece of the
+    template), unless it says why it has one target only: then the other does not use
+    it. No C source or adapter module words a message of the table itself (a template's
+    full text appears nowhere else)."""
+    table = words.table()
+    name_of = {id(m): n for n, m in table.items()}
+    native_text = "\n".join(p.read_text() for p in NATIVE_SOURCES)
+    shim_text = SHIM.read_text()
+    fmu_text = "\n".join(
+        p.read_text() for p in (PACKAGE / "fmu").glob("*.py") if p.name != "messages.py"
+    )
+
+    def composed_closure(used: set[str]) -> set[str]:
+        """A composed message's parts reach a target through it."""
+        for n in list(used):
+            used |= {name_of[id(p)] for p in table[n].parts}
+        return used
+
+    native = composed_closure({n for n in table if re.search(rf"\bCF_MSG_{n}\b", native_text)})
+    shim = composed_closure({n for n in table if re.search(rf"\bCF_MSG_{n}\b", shim_text)})
+
+    def pythonfmu(n: str, m: words.Message) -> bool:
+        if n in shim:
+            return True
+        if m.parts:
+            return all(pythonfmu(name_of[id(p)], p) for p in m.parts)
+        if m.home.endswith(".py"):  # a numerics module: its own strings hold the words
+            pieces = _string_pieces(PACKAGE / m.home)
+            return all(any(lit in piece for piece in pieces) for lit in _literals(m))
+        return re.search(rf"\bwords\.{n}\b", fmu_text) is not None
+
+    for n, m in table.items():
+        py, c = pythonfmu(n, m), n in native
+        if m.only is None:
+            assert py and c, (n, py, c)
+        elif m.home == words.NATIVE:
+            assert c and not py, (n, py, c)
+        else:
+            assert py and not c, (n, py, c)
+    # the wording lives in the table only: no full template elsewhere (a literal text of
+    # a whole message, longer than a few words)
+    for n, m in table.items():
+        whole = max(_literals(m), key=len, default="")
+        if len(whole) > 30 and not m.home.endswith(".py"):
+            assert whole not in fmu_text, n
+            assert whole.replace('"', '\\"') not in native_text + shim_text, n
+
+
+def test_the_numerics_input_error_is_the_invalid_template():
+    """_validate.InputError words a refused value as the table's INVALID does (the
+    numerics import no FMU module: the same words, checked here): the requirement of a
+    step's load limit (integrator) and of the body's inertia (dynamics) reach both
+    targets in these words."""
+    from contact_fmu._validate import InputError
+
+    e = InputError("Fx_ex", -1.2e308, words.REQ_LOAD_FX(limit=1e9, cap=0.1 + 0.2))
+    assert (
+        str(e)
+        == words.LOAD_LIMIT_FX(name="Fx_ex", value=-1.2e308, limit=1e9, cap=0.1 + 0.2)
+        == "Fx_ex = -1.2e+308 is invalid: must be <= 1e+09 mu P = 0.3 N in magnitude"
+    )

@@ -29,6 +29,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
 from contact_fmu import examples as ex
+from contact_fmu.fmu import messages as words
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.scenario import load, runner
@@ -497,12 +498,13 @@ def test_fmu_state_round_trips_and_damaged_bytes_are_refused(fmus):
         assert fresh.outputs() == first
         flipped = bytearray(data)
         flipped[len(data) // 2] ^= 0x08
+        length = words.LENGTH_DIFFERS(expected=words.LENGTH_OF_STATES())
         cases = {
-            "flipped": (bytes(flipped), "damaged: its checksum does not match"),
-            "truncated": (data[:-20], "damaged: its length is wrong"),
-            "extended": (data + b"x", "damaged: its length is wrong"),
-            "garbage": (b"garbage", "not an FMU state of a contact_fmu native FMU"),
-            "fmi2": (foreign, "the state of another FMU (GUID differs)"),
+            "flipped": (bytes(flipped), words.CHECKSUM_DIFFERS()),
+            "truncated": (data[:-20], length),
+            "extended": (data + b"x", length),
+            "garbage": (b"garbage", words.NOT_SERIALIZED()),
+            "fmi2": (foreign, words.OTHER_FMU()),
         }
         for case, (raw, reason) in cases.items():
             before = a.outputs()
@@ -511,7 +513,7 @@ def test_fmu_state_round_trips_and_damaged_bytes_are_refused(fmus):
             assert e.value.status == ERROR, case
             assert a.messages[-1] == (
                 ERROR,
-                f"fmi3DeserializeFMUState: the bytes are refused: {reason}",
+                f"fmi3DeserializeFMUState: the {len(raw)} bytes are refused: {reason}",
             ), case
             assert a.outputs() == before
             assert a.step(H) == OK

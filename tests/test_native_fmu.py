@@ -782,7 +782,7 @@ REFUSALS = {
         "extended": "truncated or extended",
     },
     "native": {
-        "garbage": "not an FMU state",
+        "garbage": "not a serialized contact_fmu FMU state",
         "foreign": "another FMU",
         "flipped": "checksum",
         "truncated": "length",

@@ -20,6 +20,7 @@ from .._validate import InputError
 from ..dynamics.body import Loads
 from ..dynamics.integrator import RollingBody, WorkBudgetError
 from ..dynamics.kinematics import V_CREEP_FLOOR
+from . import messages as words
 from .config import ModelConfig
 from .factory import initial_state, make_body, make_lateral, make_law
 from .ranges import within_range
@@ -111,12 +112,11 @@ class BodyModel:
         try:
             self.stepper.advance(h, loads, n)
         except WorkBudgetError as e:
-            raise WorkBudgetError(
-                e.limit, f", beyond max_work = {self.max_work:g} (each costs {self.eval_work:g})"
-            ) from None
+            why = words.BEYOND_MAX_WORK(max_work=self.max_work, work=self.eval_work)
+            raise WorkBudgetError(e.limit, why) from None
         within_range(self.stepper.outputs())
         if n == self.cap and self.beyond_cap(h):
-            return self.cap_note(h, n, f"h_max = {self.h_max:g} s")
+            return self.cap_note(h, n, words.CAP_LIMITS(h_max=self.h_max))
         return None
 
     def beyond_cap(self, h: float) -> bool:
@@ -126,11 +126,8 @@ class BodyModel:
 
     def cap_note(self, h: float, n: int, limits: str) -> str:
         """The warning of a step taken in the budget's n steps (the native FMU's words)."""
-        return (
-            f"communication step h = {h:g} s needs more internal steps ({limits}) than "
-            f"max_work = {self.max_work:g} allows (each costs {self.work:g}): taken in "
-            f"{n} steps of {h / n:g} s"
-        )
+        return words.CAP_NOTE(h=h, limits=limits, max_work=self.max_work, work=self.work, n=n,
+                          step=h / n)  # fmt: skip
 
     def fast(self) -> native.FastBody | None:
         """The whole step in compiled code (contact_fmu/native) where the stepper's path

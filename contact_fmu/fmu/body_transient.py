@@ -38,6 +38,7 @@ import numpy as np
 
 from .._validate import InputError
 from ..dynamics.thin_layer_field import TransientRollingBody
+from . import messages as words
 from .body_model import MAX_WORK, WORK_PER_CELL, WORK_PER_CELL_EVAL, BodyModel, substeps
 from .config import ModelConfig
 from .factory import initial_state, make_body, make_lateral, make_law
@@ -70,9 +71,9 @@ def parse_times(text: str) -> tuple[float, ...]:
     try:
         times = [float(p) for p in parts]
     except ValueError:
-        raise InputError("field_times", text, "times in s separated by spaces or commas") from None
+        raise InputError("field_times", text, words.FIELD_TIMES_SYNTAX()) from None
     if not all(math.isfinite(t) for t in times):
-        raise InputError("field_times", text, "finite times in s")
+        raise InputError("field_times", text, words.FIELD_TIMES_FINITE())
     return tuple(sorted(times))
 
 
@@ -123,7 +124,7 @@ class FieldRecorder:
             np.savetxt(self.path, table, fmt=fmt, delimiter=",",
                        header=",".join(FIELD_COLUMNS), comments="")  # fmt: skip
         except OSError as e:
-            raise InputError("field_file", str(self.path), f"a writable file ({e})") from None
+            raise InputError("field_file", str(self.path), words.REQ_FIELD_FILE(why=e)) from None
 
     def state(self) -> tuple:
         return tuple(self.captures)
@@ -180,14 +181,13 @@ class TransientBodyModel(BodyModel):
             raise InputError(
                 "max_work",
                 self.max_work,
-                f">= {self.work:g}, the work of one internal step on the {field.nx} x "
-                f"{field.ny} field",
+                words.REQ_MAX_WORK_FIELD(work=self.work, nx=field.nx, ny=field.ny),
             )
         n = self.internal_steps(h)
         capped = n == self.cap and self.beyond_cap(h)
         note = super().step(h, inputs)
         if capped:
-            limits = f"h_max = {self.h_max:g} s, cells_per_step = {self.cells:g}"
+            limits = words.CAP_LIMITS_FIELD(h_max=self.h_max, cells=self.cells)
             note = self.cap_note(h, n, limits)
         self.recorder.capture_due(self.stepper.t, self.stepper.field_arrays)
         return note
@@ -220,9 +220,7 @@ def _in_contact(P: float) -> float:
     """P > 0, or InputError: the traction field (its grid over the ellipse, Eq. 34) needs
     a contact; lift-off (P = 0) is the steady phase's (docs/model.md, "Lift-off")."""
     if P == 0.0:
-        raise InputError(
-            "P", P, "> 0 in the transient phase (lift-off, P = 0, is the steady phase's)"
-        )
+        raise InputError("P", P, words.REQ_LIFTOFF())
     return P
 
 

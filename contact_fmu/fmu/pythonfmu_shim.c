@@ -40,6 +40,8 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+/* the messages' wording, shared with the native FMUs (generated from fmu/messages.py) */
+#include "../native/cf_messages.h"
 
 #if defined(__x86_64__)
 __asm__(".symver dlopen,dlopen@GLIBC_2.2.5");
@@ -115,6 +117,9 @@ static char *cf_strdup(const fmi2CallbackFunctions *cb, const char *s, size_t *l
 
 /* A message to the importer's logger; the text goes as an argument, never as the
  * format. */
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((format(printf, 4, 5)))
+#endif
 static void cf_log(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
                    const char *fmt, ...) {
     char msg[1024];
@@ -206,8 +211,7 @@ static int load_inner(shim *s, const char *resources) {
     snprintf(path, n, "%s%s", resources, CF_INNER);
     lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (lib == NULL) {
-        cf_log(&s->cb, s->name, fmi2Error, "cannot load pythonfmu's binary %s: %s", path,
-               dlerror());
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_SHIM_LOAD, path, dlerror());
         cf_free(&s->cb, path);
         return 0;
     }
@@ -216,7 +220,7 @@ static int load_inner(shim *s, const char *resources) {
 #define F(fn)                                                                          \
     *(void **)(&s->api.fn) = dlsym(lib, "fmi2" #fn);                               \
     if (s->api.fn == NULL) {                                                           \
-        cf_log(&s->cb, s->name, fmi2Error, "pythonfmu's binary lacks fmi2" #fn);       \
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_SHIM_LACKS, "fmi2" #fn);              \
         return 0;                                                                        \
     }
     CF_FUNCTIONS(F)
@@ -255,8 +259,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     char *resources;
     if (functions == NULL) return NULL;
     if (fmuType != fmi2CoSimulation) {
-        cf_log(functions, instanceName, fmi2Error,
-               "this FMU is for co-simulation only (fmuType = %d)", (int)fmuType);
+        cf_log(functions, instanceName, fmi2Error, CF_MSG_CO_SIMULATION_ONLY, (int)fmuType);
         return NULL;
     }
     s = cf_alloc(functions, 1, sizeof *s);
@@ -271,8 +274,8 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     s->guid = cf_strdup(functions, fmuGUID, &s->guid_len);
     resources = uri_path(functions, resourceLocation);
     if (resources == NULL) {
-        cf_log(functions, instanceName, fmi2Error,
-               "resourceLocation %s is not a local file URI", resourceLocation ? resourceLocation : "(null)");
+        cf_log(functions, instanceName, fmi2Error, CF_MSG_RESOURCE_URI,
+               resourceLocation ? resourceLocation : "(null)");
     } else if (load_inner(s, resources)) {
         s->inner = s->api.Instantiate(instanceName, fmuType, fmuGUID, resourceLocation,
                                       &s->inner_cb, visible, fmi2True);
@@ -317,7 +320,8 @@ FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size
     shim *s = c;
     if (s == NULL) return fmi2Error;
     if (set_debug(s, on, n, categories) > fmi2Warning) {
-        cf_log(&s->cb, s->name, fmi2Error, "fmi2SetDebugLogging: out of memory");
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_OUT_OF_MEMORY, "fmi2",
+               CF_CALL_NAMES[CF_CALL_SET_DEBUG_LOGGING][0]);
         return fmi2Error;
     }
     CALL(s, s->api.SetDebugLogging(s->inner, fmi2True, 0, NULL));
@@ -348,8 +352,8 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     fmi2Status st;
     if (s == NULL) return fmi2Error;
     if (s->phase == 0) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "exitInitializationMode refused: called before fmi2EnterInitializationMode");
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_EXIT_BEFORE_ENTER, "fmi2",
+               CF_CALL_NAMES[CF_CALL_ENTER_INIT][0]);
         return fmi2Error;
     }
     s->cell = fmi2OK;
@@ -363,9 +367,8 @@ FMI2_Export fmi2Status fmi2Terminate(fmi2Component c) {
     shim *s = c;
     if (s == NULL) return fmi2Error;
     if (s->phase < 2) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "terminate refused: called before the model is initialised "
-               "(fmi2ExitInitializationMode %s)", s->init_failed ? "failed" : "not called");
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_TERMINATE_BEFORE_INIT, "fmi2",
+               s->init_failed ? CF_MSG_FAILED : CF_MSG_NOT_CALLED);
         return fmi2Error;
     }
     CALL(s, s->api.Terminate(s->inner));
@@ -394,8 +397,7 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c) {
         shim *s = c;                                                                     \
         for (size_t i = 0; s != NULL && i < n; i++)                                      \
             if (vr[i] == CF_CELL_VR) {                                                   \
-                cf_log(&s->cb, s->name, fmi2Error,                                       \
-                       "value reference %u is not a variable of this FMU", vr[i]);       \
+                cf_log(&s->cb, s->name, fmi2Error, CF_MSG_NOT_A_VARIABLE, vr[i]);        \
                 return fmi2Error;                                                        \
             }                                                                            \
         CALL(s, s->api.Set##Name(s->inner, vr, n, value));                               \
@@ -433,25 +435,26 @@ static fmi2Status adopt(shim *s, fmi2FMUstate *state, fmi2FMUstate st, fmi2Statu
     if (status > fmi2Warning) return status;
     if (!keep_state(s, st)) {
         s->api.FreeFMUstate(s->inner, &st);
-        cf_log(&s->cb, s->name, fmi2Error,
-               "more than %d FMU states held at once: free some (fmi2FreeFMUstate)",
-               CF_MAX_STATES);
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_TOO_MANY_STATES, CF_MAX_STATES, "fmi2",
+               CF_CALL_NAMES[CF_CALL_FREE_STATE][0]);
         return fmi2Error;
     }
     *state = st;
     return status;
 }
 
-static int live_or_refuse(shim *s, fmi2FMUstate st, const char *call) {
+static int live_or_refuse(shim *s, fmi2FMUstate st, cf_call call) {
+    char pointer[40];
     if (find_state(s, st) >= 0) return 1;
-    cf_log(&s->cb, s->name, fmi2Error,
-           "%s: %p is not an FMU state of this instance (never given, or freed)", call, st);
+    snprintf(pointer, sizeof pointer, "%p", st);
+    cf_log(&s->cb, s->name, fmi2Error, CF_MSG_NOT_A_STATE, "fmi2", CF_CALL_NAMES[call][0],
+           pointer);
     return 0;
 }
 
 /* *state given to be overwritten (FMI 2.0: a live state, or NULL for a new one): a
  * live one is freed, a new one takes its place; any other pointer is refused */
-static fmi2Status release_given(shim *s, fmi2FMUstate *state, const char *call) {
+static fmi2Status release_given(shim *s, fmi2FMUstate *state, cf_call call) {
     if (*state == NULL) return fmi2OK;
     if (!live_or_refuse(s, *state, call)) return fmi2Error;
     return fmi2FreeFMUstate(s, state);
@@ -462,7 +465,7 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     fmi2FMUstate st = NULL;
     fmi2Status status, freed;
     if (s == NULL || state == NULL) return fmi2Error;
-    if ((freed = release_given(s, state, "fmi2GetFMUstate")) > fmi2Warning) return freed;
+    if ((freed = release_given(s, state, CF_CALL_GET_STATE)) > fmi2Warning) return freed;
     s->cell = fmi2OK;
     status = with_cell(s, s->api.GetFMUstate(s->inner, &st));
     return adopt(s, state, st, status);
@@ -471,7 +474,7 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
 FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     shim *s = c;
     if (s == NULL) return fmi2Error;
-    if (!live_or_refuse(s, state, "fmi2SetFMUstate")) return fmi2Error;
+    if (!live_or_refuse(s, state, CF_CALL_SET_STATE)) return fmi2Error;
     CALL(s, s->api.SetFMUstate(s->inner, state));
 }
 
@@ -480,7 +483,7 @@ FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
     long i;
     if (s == NULL || state == NULL) return fmi2Error;
     if (*state == NULL) return fmi2OK; /* the standard: nothing to free */
-    if (!live_or_refuse(s, *state, "fmi2FreeFMUstate")) return fmi2Error;
+    if (!live_or_refuse(s, *state, CF_CALL_FREE_STATE)) return fmi2Error;
     i = find_state(s, *state);
     s->states[i] = s->states[--s->n_states];
     s->cell = fmi2OK;
@@ -520,7 +523,7 @@ FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate 
     size_t inner = 0;
     fmi2Status st;
     if (s == NULL || size == NULL) return fmi2Error;
-    if (!live_or_refuse(s, state, "fmi2SerializedFMUstateSize")) return fmi2Error;
+    if (!live_or_refuse(s, state, CF_CALL_STATE_SIZE)) return fmi2Error;
     s->cell = fmi2OK;
     st = with_cell(s, s->api.SerializedFMUstateSize(s->inner, state, &inner));
     if (st <= fmi2Warning) *size = header_size(s) + inner;
@@ -534,15 +537,15 @@ FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state
     unsigned char *p = (unsigned char *)bytes;
     fmi2Status st;
     if (s == NULL || bytes == NULL) return fmi2Error;
-    if (!live_or_refuse(s, state, "fmi2SerializeFMUstate")) return fmi2Error;
+    if (!live_or_refuse(s, state, CF_CALL_SERIALIZE)) return fmi2Error;
     head = header_size(s);
     s->cell = fmi2OK;
     st = with_cell(s, s->api.SerializedFMUstateSize(s->inner, state, &inner));
     if (st > fmi2Warning) return st;
     if (size != head + inner) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "fmi2SerializeFMUstate: size = %zu, the state needs %zu bytes "
-               "(fmi2SerializedFMUstateSize)", size, head + inner);
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_SERIALIZE_SIZE, "fmi2",
+               CF_CALL_NAMES[CF_CALL_SERIALIZE][0], size, head + inner, "fmi2",
+               CF_CALL_NAMES[CF_CALL_STATE_SIZE][0]);
         return fmi2Error;
     }
     st = with_cell(s, s->api.SerializeFMUstate(s->inner, state, bytes + head, inner));
@@ -566,28 +569,30 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b
     size_t head, m = sizeof CF_MAGIC - 1;
     uint64_t format, glen, inner;
     const char *why = NULL;
+    char length[128];
     fmi2FMUstate st = NULL;
     fmi2Status status;
     if (s == NULL || state == NULL) return fmi2Error;
     head = header_size(s);
     if (bytes == NULL || size < m + 8 || memcmp(p, CF_MAGIC, m) != 0) {
-        why = "not a serialized contact_fmu FMU state";
+        why = CF_MSG_NOT_SERIALIZED;
     } else if ((format = get_le(p + m, 4)) != CF_FORMAT) {
-        why = "a state of another format version";
+        why = CF_MSG_OTHER_VERSION;
     } else if ((glen = get_le(p + m + 4, 4)) != s->guid_len || size < head ||
                memcmp(p + m + 8, s->guid, s->guid_len) != 0) {
-        why = "a state of another FMU (its GUID differs from this FMU's)";
+        why = CF_MSG_OTHER_FMU;
     } else if ((inner = get_le(p + head - 12, 8)) != size - head) {
-        why = "truncated or extended (its length differs from the recorded one)";
+        snprintf(length, sizeof length, CF_MSG_LENGTH_DIFFERS, CF_MSG_LENGTH_RECORDED);
+        why = length;
     } else if (get_le(p + head - 4, 4) != crc32(p + head, (size_t)inner)) {
-        why = "damaged (its checksum differs)";
+        why = CF_MSG_CHECKSUM_DIFFERS;
     }
     if (why != NULL) {
-        cf_log(&s->cb, s->name, fmi2Error,
-               "fmi2DeSerializeFMUstate: the %zu bytes are refused: %s", size, why);
+        cf_log(&s->cb, s->name, fmi2Error, CF_MSG_BYTES_REFUSED, "fmi2",
+               CF_CALL_NAMES[CF_CALL_DESERIALIZE][0], size, why);
         return fmi2Error;
     }
-    if ((status = release_given(s, state, "fmi2DeSerializeFMUstate")) > fmi2Warning)
+    if ((status = release_given(s, state, CF_CALL_DESERIALIZE)) > fmi2Warning)
         return status;
     s->cell = fmi2OK;
     status = worst(s->api.DeSerializeFMUstate(s->inner, bytes + head, size - head, &st),

@@ -9,11 +9,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from .._validate import InputError
+from . import messages as words
 from .variables import RATE_MAX, SPEED_MAX
-
-# why the initial state can be beyond its range: Rx, not range-checked against the
-# speeds, is free to be small (native/instance.c: START_RANGE_WHY, the same words)
-START_RANGE_WHY = "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
 
 
 def within_range(out: Mapping[str, float], start: bool = False) -> None:
@@ -26,7 +23,9 @@ def within_range(out: Mapping[str, float], start: bool = False) -> None:
                         ("Omega_z", RATE_MAX)):  # fmt: skip
         value = out.get(name, 0.0)
         if not abs(value) <= bound:
-            why = START_RANGE_WHY if start else "the loads drive the body beyond it"
+            # the initial state can be beyond: Rx, not range-checked against the speeds,
+            # is free to be small
+            why = words.RANGE_START() if start else words.RANGE_STEP()
             raise InputError(
-                name + "0" if start else name, value, f"within abs <= {bound:g} ({why})"
+                name + "0" if start else name, value, words.WITHIN_RANGE(bound=bound, why=why)
             )

@@ -59,6 +59,7 @@ from pythonfmu import (
 )
 from pythonfmu.enums import Fmi2Status
 
+from . import messages as words
 from . import variables as fv
 from .call_state import TIME_RTOL, CallState
 from .config import ModelConfig
@@ -80,7 +81,10 @@ _CAUSALITY = {
 _TYPES = {"Real": Real, "Integer": Integer, "String": String}
 # the String parameters' choices (integrator.RollingBody checks them at set-up; refused
 # at once here, as by the native FMU, in RollingBody's words)
-_CHOICES = {"method": ("full", "quasistationary"), "scheme": ("lobatto3c", "sdirk2")}
+_CHOICES = {
+    "method": (("full", "quasistationary"), words.METHOD_CHOICES()),
+    "scheme": (("lobatto3c", "sdirk2"), words.SCHEME_CHOICES()),
+}
 
 
 class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
@@ -133,6 +137,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         self._fast_reads: dict[tuple[int, ...], Any] = {}
         self._getters: dict[str, Any] = {}  # the Python getters of the Real outputs
         self._init_problem: str | None = None  # why exitInitializationMode failed
+        self._reading = False  # in a get call, whose outputs are refreshed (_read)
         self._terminated = False
         self._undo: Any = None  # this model's snapshot while a state is being set
         for v in self._vars.values():
@@ -203,7 +208,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         try:
             return method(vrs, *args)
         except (KeyError, TypeError) as e:
-            self._refuse(f"{call}: value references {list(vrs)}: {describe(e)}")
+            self._refuse(words.GUARDED(call=call, vrs=list(vrs), why=describe(e)))
             return [0] * len(vrs) if call.startswith("get") else None
 
     def set_string(self, vrs: list[int], values: list[str]) -> None:
@@ -219,7 +224,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         self._guarded("setBoolean", super().set_boolean, vrs, values)
 
     def get_integer(self, vrs: list[int]) -> list[int]:
-        return self._guarded("getInteger", super().get_integer, vrs)
+        return self._read("getInteger", super().get_integer, vrs)
 
     def get_boolean(self, vrs: list[int]) -> list[bool]:
         return self._guarded("getBoolean", super().get_boolean, vrs)
@@ -229,8 +234,31 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         return [str(v) for v in out]
 
     # ---- get/set -------------------------------------------------------------------------
+    def _read(self, call: str, method: Any, vrs: list[int]) -> Any:
+        """A get call by pythonfmu's getters: direct feedthrough's outputs, where the call
+        reads one, refreshed once for the call, not per value (a refusal is logged once,
+        as by the native FMU)."""
+        if self._stale() and any(
+            vr in self.vars and self._causality[self.vars[vr].name] == fv.OUTPUT for vr in vrs
+        ):
+            self._refresh()
+        self._reading = True
+        try:
+            return self._guarded(call, method, vrs)
+        finally:
+            self._reading = False
+
+    def _stale(self) -> bool:
+        """Outputs to refresh before a value is read outside a get call's own refresh."""
+        return (
+            self._call.dirty
+            and not self._reading
+            and self._model is not None
+            and self._model.feedthrough
+        )
+
     def _real_output(self, name: str) -> float:
-        if self._call.dirty and self._model is not None and self._model.feedthrough:
+        if self._stale():
             self._refresh()
         return self._out[name]  # floats, checked finite by _collect
 
@@ -238,13 +266,13 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         var = self._vars[name]
         if self._causality[name] == fv.OUTPUT:
             self._sync_out()
-            if self._call.dirty and self._model is not None and self._model.feedthrough:
+            if self._stale():
                 self._refresh()
             value = self._out[name]
         else:
             value = self._call.values[name]
             if name in self._call.bad:  # the value set was refused: not a value to use
-                self._refuse(f"{name}: {self._call.bad[name]} (held until corrected)")
+                self._refuse(words.HELD_AT_GET(name=name, invalid=self._call.bad[name]))
         if var.type == "Integer":
             return int(value)
         if var.type == "String":
@@ -254,18 +282,15 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
     def _set(self, name: str, value: Any) -> None:
         c = self._causality[name]
         if c == fv.OUTPUT:
-            self._error(f"{name} is an output of this FMU: the value {value!r} set is ignored")
+            self._error(words.SET_OUTPUT(name=name, value=value))
             return
         var = self._vars[name]
         if c == fv.PARAMETER and self._model is not None and not var.tunable:
-            self._error(
-                f"{name} is a fixed parameter and the model is initialised: "
-                f"{name} = {value!r} is ignored ({name} stays {self._call.values[name]!r})"
-            )
+            self._error(words.SET_FIXED(name=name, value=value, now=self._call.values[name]))
             return
         problem = self.cfg.check(name, value)
-        if problem is None and value not in _CHOICES.get(name, (value,)):
-            problem = " or ".join(f'"{s}"' for s in _CHOICES[name])
+        if problem is None and name in _CHOICES and value not in _CHOICES[name][0]:
+            problem = _CHOICES[name][1]
         if c == fv.PARAMETER and self._model is not None:
             self._fast_pull()  # the outputs of the mu they were computed with (_out_mu)
         self._call.values[name] = (
@@ -279,9 +304,9 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
             if self._call.bad:
                 self._call.bad.pop(name, None)
         else:
-            msg = f"{name} = {value!r} is invalid: must be {problem}"
+            msg = words.INVALID(name=name, value=value, requirement=problem)
             self._call.bad[name] = msg
-            self.log(f"{msg}; doStep answers fmi2Discard until it is corrected", Fmi2Status.error)
+            self.log(words.HELD(invalid=msg, api=words.API), Fmi2Status.error)
         if c == fv.INPUT:
             self._call.dirty = True
         elif problem is None and self._model is not None:  # a tunable parameter
@@ -298,7 +323,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         except Exception as e:
             self._model.restore(snap)
             self._call.values[name] = self._model_params[name]
-            self._refuse(f"{name} = {value!r} is refused: {describe(e)}")
+            self._refuse(words.TUNE_REFUSED(name=name, value=value, why=describe(e)))
             return
         finally:
             if self._fast is not None:
@@ -342,7 +367,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
                 read = self._fast_reads[key] = itemgetter(*(self._fast_vr[vr] for vr in key))
             if read is not None:
                 return list(read(self._fast_out)) if len(key) > 1 else [read(self._fast_out)]
-        return self._guarded("getReal", super().get_real, vrs)
+        return self._read("getReal", super().get_real, vrs)
 
     def _inputs(self) -> dict[str, float]:
         return dict(self._call.inputs)
@@ -379,7 +404,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         """Set the model up from the current parameters and inputs; False with a message."""
         if self._call.bad:
             for msg in self._call.bad.values():
-                self._error(f"cannot initialise the model: {msg}")
+                self._error(words.CANNOT_INITIALISE(why=msg))
             return False
         try:
             module = importlib.import_module(f"..{self.cfg.model_module}", __package__)
@@ -388,7 +413,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
             )
             out = self._collect(model.outputs())
         except Exception as e:  # an exception reaching pythonfmu would be fmi2Fatal
-            self._error(f"cannot initialise the model: {describe(e)}")
+            self._error(words.CANNOT_INITIALISE(why=describe(e)))
             return False
         self._model, self._model_params, self._out = model, self._params(), out
         self._call.dirty = False
@@ -402,7 +427,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         for name in self._out:
             value = float(outputs[name])
             if not math.isfinite(value):
-                raise FloatingPointError(f"output {name} = {value!r} is not finite")
+                raise FloatingPointError(words.OUTPUT_NOT_FINITE(name=name, value=value))
             out[name] = value
         return out
 
@@ -412,7 +437,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         outputs kept are those of the last good inputs, never served as fmi2OK."""
         bad = [m for n, m in self._call.bad.items() if self._causality.get(n) == fv.INPUT]
         if bad:
-            self._refuse("no outputs for the current inputs: " + "; ".join(bad))
+            self._refuse(words.NO_OUTPUTS(why="; ".join(bad)))
             return
         snap = self._model.snapshot()
         try:
@@ -422,7 +447,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
             self._call.dirty = False
         except Exception as e:
             self._model.restore(snap)
-            self._refuse(f"no outputs for the current inputs: {describe(e)}")
+            self._refuse(words.NO_OUTPUTS(why=describe(e)))
 
     # ---- FMI calls --------------------------------------------------------------------------
     def setup_experiment(
@@ -432,7 +457,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         if math.isfinite(start):
             self._call.time = start
         else:
-            self._error(f"startTime = {start_time!r} is invalid: must be finite; using 0")
+            self._error(words.START_TIME(start=start_time))
 
     def exit_initialization_mode(self) -> None:
         """The model set up from the parameters and inputs; a model that cannot start
@@ -449,8 +474,8 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         for problem in getattr(native, "PROBLEMS", ()):
             self.log(problem, Fmi2Status.warning)
         if not built:
-            self._init_problem = "; ".join(self._call.bad.values()) or "see the messages above"
-            self._refuse(f"exitInitializationMode: the model cannot start: {self._init_problem}")
+            self._init_problem = "; ".join(self._call.bad.values()) or words.SEE_ABOVE()
+            self._refuse(words.CANNOT_START(why=self._init_problem))
 
     def terminate(self) -> None:
         """No step after this: the compiled step's calls give way to the Python ones,
@@ -478,34 +503,26 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         try:
             return self._do_step(float(t), float(h))
         except Exception as e:  # never let an exception reach pythonfmu (fmi2Fatal)
-            return self._discard(f"doStep discarded: {describe(e)}")
+            return self._discard(words.STEP_FAILED(why=describe(e)))
 
     def _do_step(self, t: float, h: float) -> bool:
-        if self._terminated or self._model is None:
-            why = (
-                "after fmi2Terminate"
-                if self._terminated
-                else "before the model is initialised (fmi2ExitInitializationMode "
-                + ("failed: " + self._init_problem if self._init_problem else "not called")
-                + ")"
-            )
-            self._error(f"doStep at t = {t!r} refused: called {why}")
+        if self._terminated:
+            terminate = words.CALL_NAMES["TERMINATE"][0]
+            self._error(words.STEP_AFTER_TERMINATE(t=t, api=words.API, call=terminate))
+            return False
+        if self._model is None:
+            if why := self._init_problem:
+                self._error(words.STEP_AFTER_FAILED_INIT(t=t, api=words.API, why=why))
+            else:
+                self._error(words.STEP_BEFORE_INIT(t=t, api=words.API))
             return False
         if not (math.isfinite(h) and h > 0.0):
-            return self._discard(
-                f"communicationStepSize = {h!r} is invalid: must be > 0 and finite"
-            )
+            return self._discard(words.STEP_SIZE(h=h))
         now = self._call.time
         if not math.isfinite(t) or abs(t - now) > TIME_RTOL * max(abs(t), abs(now)):
-            return self._discard(
-                f"currentCommunicationPoint = {t!r} is invalid: must be the FMU's time "
-                f"{self._call.time!r}"
-            )
+            return self._discard(words.STEP_TIME(t=t, time=now))
         if self._call.bad:
-            return self._discard(
-                f"doStep at t = {t!r} discarded, state unchanged: "
-                + "; ".join(self._call.bad.values())
-            )
+            return self._discard(words.STEP_HELD(t=t, why="; ".join(self._call.bad.values())))
         self._fast_pull()
         snap = self._model.snapshot()
         try:
@@ -515,9 +532,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
             self._model.restore(snap)
             if self._fast is not None:  # the stepper may have stepped the struct too
                 self._fast_push()
-            return self._discard(
-                f"doStep at t = {t!r} with h = {h!r} discarded, state unchanged: {describe(e)}"
-            )
+            return self._discard(words.STEP_DISCARDED(t=t, h=h, why=describe(e)))
         self._out, self._call.time, self._call.dirty = out, t + h, False
         self._out_mu = self._call.values.get("mu")
         if self._fast is not None:

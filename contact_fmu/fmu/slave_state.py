@@ -16,6 +16,7 @@ import importlib
 import math
 from typing import Any
 
+from . import messages as words
 from . import state_bytes
 from . import variables as fv
 from .package_loader import PACKAGE as _PACKAGE  # the owner named in the state bytes
@@ -60,11 +61,11 @@ class FmuStateMixin:
         if problem is None:
             self._call.bad.pop(STATE, None)
             return
-        msg = f"the FMU state given to setFMUstate is refused: {problem}"
+        msg = words.STATE_REFUSED(why=problem)
         if self._cell is None:  # no fmi2Error to answer with: refuse the steps instead
             self._call.bad[STATE] = msg
-            msg += " (doStep refused until a valid state is set)"
-        self._error(msg + "; the instance's state is unchanged")
+            msg += words.STATE_HELD_NOTE()
+        self._error(words.STATE_UNCHANGED(refused=msg))
 
     def _apply_state(self, state: Any) -> str | None:
         """Apply ``state`` if it is a whole, admissible state of this FMU; else the
@@ -72,32 +73,41 @@ class FmuStateMixin:
         if isinstance(state, state_bytes.Unreadable):
             return state.reason
         if not isinstance(state, dict) or set(state) != _STATE_FIELDS:
-            return "not a state of this FMU (its fields differ)"
+            return words.STATE_FIELDS()
         t, values, out, dirty = state["time"], state["values"], state["out"], state["dirty"]
         if type(t) is not float or not math.isfinite(t):
-            return f"its time {t!r} is not a finite float"
+            return words.STATE_TIME(time=t)
         if type(dirty) is not bool:
-            return f"its flag {dirty!r} is not a bool"
+            return words.STATE_FLAG(flag=dirty)
         if not isinstance(values, dict) or set(values) != set(self._call.values):
-            return "its variables differ from this FMU's"
+            return words.STATE_VARIABLES()
         bad = {}
         for n, v in values.items():
             string = self._vars[n].type == "String"
             if isinstance(v, str) != string or isinstance(v, bool):
-                return f"its value of {n}, {v!r}, is not a {'string' if string else 'number'}"
+                kind = "string" if string else "number"
+                return words.STATE_VALUE_TYPE(name=n, value=v, kind=kind)
             if (problem := self.cfg.check(n, v)) is not None:
-                bad[n] = f"{n} = {v!r} is invalid: must be {problem}"
+                bad[n] = words.INVALID(name=n, value=v, requirement=problem)
         recorded = state["bad"]
-        if not isinstance(recorded, dict) or set(recorded) - {STATE} != set(bad):
-            return "its record of invalid values does not match its values"
+        if not isinstance(recorded, dict):
+            return words.STATE_RECORD_TYPE(record=recorded)
+        for n, v in values.items():  # the first value recorded otherwise than it is
+            if (n in bad) != (n in recorded):
+                one = bad[n] if n in bad else words.STATE_NAMED(name=n, value=v)
+                was = "invalid" if n in recorded else "valid"
+                return words.STATE_RECORD(value=one, recorded=was)
+        if extra := sorted(set(recorded) - {STATE} - set(values), key=repr):
+            one = words.STATE_NOT_A_VARIABLE(name=extra[0])
+            return words.STATE_RECORD(value=one, recorded="invalid")
         if not isinstance(out, dict) or set(out) != set(self._out):
-            return "its outputs differ from this FMU's"
+            return words.STATE_OUTPUTS()
         for n, v in out.items():
             if type(v) is not float or not math.isfinite(v):
-                return f"its output {n} = {v!r} is not a finite float"
+                return words.STATE_OUTPUT(name=n, value=v)
         out_mu = state["out_mu"]
         if out_mu is not None and (type(out_mu) is not float or not 0.0 < out_mu < math.inf):
-            return f"its outputs' mu {out_mu!r} is not a positive float"
+            return words.STATE_OUT_MU(mu=out_mu)
         model, params = None, None
         if state["model"] is not None:
             model, params = self._state_model(state["model"], values, bad, t)
@@ -126,11 +136,11 @@ class FmuStateMixin:
         instance's model unless it is the one to restore (then undone on failure); or
         (reason, None)."""
         if not isinstance(saved, tuple | list) or len(saved) != 2:
-            return "its model part is not (parameters, snapshot)", None
+            return words.STATE_MODEL_PART(), None
         params, snap = saved
         own = {n: v for n, v in values.items() if self._causality[n] == fv.PARAMETER}
-        if params != own or any(n in bad for n in own):
-            return "its model's parameters differ from its values or are invalid", None
+        if not isinstance(params, dict) or params != own or any(n in bad for n in own):
+            return words.STATE_PARAMS(value=_first_differing(params, own, bad)), None
         if self._model is not None and params == self._model_params:
             model = self._model
             self._undo = model.snapshot()
@@ -148,7 +158,7 @@ class FmuStateMixin:
             self._collect(model.outputs())
         except Exception as e:
             self._restore_own(model)
-            return f"its model state cannot be restored ({describe(e)})", None
+            return words.STATE_MODEL(why=describe(e)), None
         return model, dict(params)
 
     def _restore_own(self, model: Any) -> None:
@@ -167,6 +177,17 @@ class FmuStateMixin:
         return state_bytes.loads(data, _PACKAGE)
 
 
+def _first_differing(params: Any, own: dict[str, Any], bad: dict[str, str]) -> str:
+    """The first parameter held invalid, or whose model value differs from the state's
+    (as the native FMU names it: its refusal, or NAME = VALUE)."""
+    for n, v in own.items():
+        if n in bad:
+            return bad[n]
+        if not isinstance(params, dict) or n not in params or params[n] != v:
+            return words.STATE_NAMED(name=n, value=v)
+    return words.STATE_NAMED(name="parameters", value=params)
+
+
 def _coulomb_excess(out: dict[str, float], mu: Any, P: Any) -> str | None:
     """Why outputs break Coulomb's bound abs(T) <= mu P (rounding allowed), or None."""
     if "Tx" not in out or not isinstance(P, float) or not isinstance(mu, float):
@@ -174,7 +195,7 @@ def _coulomb_excess(out: dict[str, float], mu: Any, P: Any) -> str | None:
     T = math.hypot(out["Tx"], out.get("Ty", 0.0))
     if T <= mu * P * (1.0 + 1e-12):
         return None
-    return f"its outputs break Coulomb's bound: abs(T) = {T!r} N > mu P = {mu * P!r} N"
+    return words.STATE_COULOMB(T=T, muP=mu * P)
 
 
 def describe(e: Exception) -> str:

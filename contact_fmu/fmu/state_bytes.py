@@ -16,6 +16,8 @@ import io
 import pickle
 from typing import Any, NamedTuple
 
+from . import messages as words
+
 MAGIC = b"contact_fmu FMU state 1\n"
 # numpy's pickle entry points for arrays, dtypes and scalars (numpy 1.x and 2.x names)
 _NUMPY = {
@@ -44,15 +46,15 @@ def dumps(state: Any, package: str) -> bytes:
 def loads(data: bytes, package: str) -> Any:
     """The state written by ``dumps`` for ``package``, or Unreadable."""
     if not data.startswith(MAGIC):
-        return Unreadable("not a serialized contact_fmu FMU state")
+        return Unreadable(words.NOT_SERIALIZED())
     owner, _, body = data[len(MAGIC) :].partition(b"\n")
     if owner != package.encode():
         name = owner.decode(errors="replace")
-        return Unreadable(f"a state of the FMU {name!r}, not of this FMU ({package!r})")
+        return Unreadable(words.STATE_OWNER(owner=name, package=package))
     try:
         return _Restricted(io.BytesIO(body), package).load()
     except Exception as e:  # truncated or altered bytes: any unpickling error
-        return Unreadable(f"the state cannot be read ({type(e).__name__}: {e})")
+        return Unreadable(words.STATE_UNREADABLE(why=f"{type(e).__name__}: {e}"))
 
 
 class _Restricted(pickle.Unpickler):

@@ -27,6 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cf_messages.h"
 #include "fmi3Functions.h"
 #include "instance.h"
 
@@ -331,8 +332,8 @@ fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference valueRe
 static fmi3Status no_variable(const cf_inst *I, const char *fn, const fmi3ValueReference vr[],
                               size_t n) {
     if (n == 0) return fmi3OK;
-    return REFUSE("%s: value reference %u is not a variable of this type", fn,
-                  vr ? (unsigned)vr[0] : 0u);
+    /* the instance layer's words (cf_messages.h): fn is "fmi3" and the call's name */
+    return REFUSE(CF_MSG_VR_TYPE, "fmi3", fn + 4, vr ? (unsigned)vr[0] : 0u);
 }
 
 #define NO_VARIABLE(NAME, T, CONST)                                                        \

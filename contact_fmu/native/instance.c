@@ -18,8 +18,9 @@
  * ranges, starts and the check messages come from contact_fmu/fmu/variables.py through
  * the generated cf_model.h; the constants the Python integrator uses travel in it too.
  *
- * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py, docs/reliability.md); in
- * FMI 2.0's words (a status CF_STATUS_X is fmi2X):
+ * Behaviour, the pythonfmu FMU's (contact_fmu/fmu/slave.py, docs/reliability.md), every
+ * message a template of contact_fmu/fmu/messages.py (cf_messages.h's CF_MSG_*, the
+ * pythonfmu FMU's words); in FMI 2.0's words (a status CF_STATUS_X is fmi2X):
  * - an inadmissible value (non-finite, out of its declared range) answers fmi2Error at
  *   its setter and is held, with a logged error naming the variable and the value;
  *   while it is held every doStep answers fmi2Discard with that message and changes
@@ -51,6 +52,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cf_messages.h"
 #include "instance.h"
 #include "model.h"
 
@@ -144,41 +146,14 @@ static const char *category(cf_status s) {
     }
 }
 
-/* a message to the importer's logger (never as its format) */
-/* The FMI calls that messages name, after the api prefix: FMI 2.0's name and FMI 3.0's
- * (FMI 3.0 renamed the typed accessors and the FMU state calls, instantiates a
- * co-simulation instance by its own call and sets the experiment up at
- * EnterInitializationMode). */
-typedef enum {
-    C_INSTANTIATE, C_SETUP_EXPERIMENT, C_ENTER_INIT, C_TERMINATE,
-    C_GET_REAL, C_GET_INTEGER, C_GET_BOOLEAN, C_GET_STRING,
-    C_SET_REAL, C_SET_INTEGER, C_SET_BOOLEAN, C_SET_STRING, C_DIRECTIONAL,
-    C_GET_STATE, C_SET_STATE, C_FREE_STATE, C_STATE_SIZE, C_SERIALIZE, C_DESERIALIZE,
-    N_CALLS
-} call_id;
-static const char *const CALL_NAMES[N_CALLS][2] = {
-    [C_INSTANTIATE] = {"Instantiate", "InstantiateCoSimulation"},
-    [C_SETUP_EXPERIMENT] = {"SetupExperiment", "EnterInitializationMode"},
-    [C_ENTER_INIT] = {"EnterInitializationMode", "EnterInitializationMode"},
-    [C_TERMINATE] = {"Terminate", "Terminate"},
-    [C_GET_REAL] = {"GetReal", "GetFloat64"},
-    [C_GET_INTEGER] = {"GetInteger", "GetInt32"},
-    [C_GET_BOOLEAN] = {"GetBoolean", "GetBoolean"},
-    [C_GET_STRING] = {"GetString", "GetString"},
-    [C_SET_REAL] = {"SetReal", "SetFloat64"},
-    [C_SET_INTEGER] = {"SetInteger", "SetInt32"},
-    [C_SET_BOOLEAN] = {"SetBoolean", "SetBoolean"},
-    [C_SET_STRING] = {"SetString", "SetString"},
-    [C_DIRECTIONAL] = {"GetDirectionalDerivative", "GetDirectionalDerivative"},
-    [C_GET_STATE] = {"GetFMUstate", "GetFMUState"},
-    [C_SET_STATE] = {"SetFMUstate", "SetFMUState"},
-    [C_FREE_STATE] = {"FreeFMUstate", "FreeFMUState"},
-    [C_STATE_SIZE] = {"SerializedFMUstateSize", "SerializedFMUStateSize"},
-    [C_SERIALIZE] = {"SerializeFMUstate", "SerializeFMUState"},
-    [C_DESERIALIZE] = {"DeSerializeFMUstate", "DeserializeFMUState"},
-};
+/* The FMI calls that messages name (cf_messages.h: CF_CALL_NAMES, from fmu/messages.py):
+ * FMI 2.0's name and FMI 3.0's after the api prefix. */
+typedef cf_call call_id;
 
-static const char *call_name(const Inst *I, call_id k) { return CALL_NAMES[k][I->v3]; }
+static const char *call_name(const Inst *I, call_id k) { return CF_CALL_NAMES[k][I->v3]; }
+
+/* a message to the importer's logger (never as its format): fmt is one of cf_messages.h's
+ * CF_MSG_* (the wording of fmu/messages.py, the pythonfmu FMU's) */
 
 static void vsay(const Inst *I, cf_status status, const char *fmt, va_list ap) {
     if (I == NULL || I->cb.log == NULL) return;
@@ -205,6 +180,9 @@ void cf_log(const cf_inst *I, cf_status status, const char *fmt, ...) {
     va_end(ap);
 }
 
+/* a String value as Python's repr writes it, quoted: its buffer's size */
+#define QUOTED ((FIELD_TEXT > METHOD_TEXT ? FIELD_TEXT : METHOD_TEXT) + 2)
+
 /* Var.check for a Real: NULL if admissible, else the requirement (the range check is
  * cf_core.h's, fmi.c's too) */
 static const char *requirement(const cf_var *v, double x) {
@@ -227,7 +205,7 @@ static void value_text(const cf_var *v, double x, char *out, size_t n) {
 static void bad_text(const cf_var *v, double x, char *out, size_t n) {
     char r[40];
     value_text(v, x, r, sizeof r);
-    snprintf(out, n, "%s = %s is invalid: must be %s", v->name, r, requirement(v, x));
+    snprintf(out, n, CF_MSG_INVALID, v->name, r, requirement(v, x));
 }
 
 static int any_bad(const cf_core *c) {
@@ -253,27 +231,32 @@ static const char *string_text(const cf_core *c, int i) {
 }
 
 /* what a String held must be where the FMU refuses it (RollingBody's words, and
- * body_transient.parse_times' for field_times), or NULL */
-static const char *string_requirement(const cf_core *c, int i) {
+ * body_transient.parse_times' for field_times), or NULL; buf (n bytes) holds the text of
+ * a requirement that carries a number */
+static const char *string_requirement(const cf_core *c, int i, char *buf, size_t n) {
     const int f = field_string(i);
     if (f >= 0) {
         const char *text = string_text(c, i);
         if (strlen(text) >= FIELD_TEXT - 1) /* set longer: cut */
-            return "a text of fewer than 1023 characters (the native FMU's)";
+            return snprintf(buf, n, CF_MSG_TEXT_TOO_LONG, FIELD_TEXT - 1), buf;
         if (f == 0) return NULL;
         double times[CF_FIELD_CAPTURES];
-        const int n = cf_model_field_times(text, times);
-        return n == -1   ? "times in s separated by spaces or commas"
-               : n == -2 ? "finite times in s"
-               : n == -3 ? "at most 8 times (the native FMU's captures of the field)"
+        const int k = cf_model_field_times(text, times);
+        if (k == -3) snprintf(buf, n, CF_MSG_FIELD_TIMES_MANY, CF_FIELD_CAPTURES);
+        return k == -1   ? CF_MSG_FIELD_TIMES_SYNTAX
+               : k == -2 ? CF_MSG_FIELD_TIMES_FINITE
+               : k == -3 ? buf
                          : NULL;
     }
     if ((is_scheme(i) ? c->scheme : c->method) >= 0) return NULL;
-    return is_scheme(i) ? "\"lobatto3c\" or \"sdirk2\"" : "\"full\" or \"quasistationary\"";
+    return is_scheme(i) ? CF_MSG_SCHEME_CHOICES : CF_MSG_METHOD_CHOICES;
 }
 
 /* a String held that the FMU refuses */
-static int string_bad(const cf_core *c, int i) { return string_requirement(c, i) != NULL; }
+static int string_bad(const cf_core *c, int i) {
+    char buf[80];
+    return string_requirement(c, i, buf, sizeof buf) != NULL;
+}
 
 /* the message of the first bad value held that became bad after the order *last
  * (they are told in the order they became bad), *last moved to it; 0 when none is left */
@@ -283,10 +266,12 @@ static int next_bad(const cf_core *c, unsigned *last, char *one, size_t n) {
         if (c->bad[i] > *last && (best < 0 || c->bad[i] < c->bad[best])) best = i;
     if (best < 0) return 0;
     *last = c->bad[best];
-    if (CF_VARS[best].type == T_STRING)
-        snprintf(one, n, "%s = '%s' is invalid: must be %s", CF_VARS[best].name,
-                 string_text(c, best), string_requirement(c, best));
-    else
+    if (CF_VARS[best].type == T_STRING) {
+        char q[QUOTED], buf[80];
+        snprintf(q, sizeof q, "'%s'", string_text(c, best));
+        snprintf(one, n, CF_MSG_INVALID, CF_VARS[best].name, q,
+                 string_requirement(c, best, buf, sizeof buf));
+    } else
         bad_text(&CF_VARS[best], c->var[best], one, n);
     return 1;
 }
@@ -295,7 +280,7 @@ static int next_bad(const cf_core *c, unsigned *last, char *one, size_t n) {
 static void bad_list(const Inst *I, char *out, size_t n) {
     size_t k = 0;
     unsigned last = 0;
-    char one[256];
+    char one[QUOTED + 256];
     out[0] = '\0';
     while (next_bad(&I->c, &last, one, sizeof one)) {
         int w = snprintf(out + k, n - k, "%s%s", k ? "; " : "", one);
@@ -354,16 +339,23 @@ static const char *contact_outputs(const Inst *I, const cf_core *c, cf_params *p
  * table, ranges.within_range(start=True)): beyond, every step would be discarded,
  * so the model cannot start; 0 with the reason logged, in within_range's words. Rx is
  * free to be small, so Omega_y0 = (Vx0 - vx0)/Rx can be beyond RATE_MAX. */
-#define START_RANGE_WHY "Omega_y0 = (Vx0 - vx0)/Rx: the model cannot start there"
 static int start_in_range(Inst *I, const double *out) {
     int which;
     if (cf_body_out_check(out, 0ul, &which) != CF_STEP_RANGE) return 1; /* 0: no finite check */
     const cf_ranged *q = &CF_RANGED[which];
-    char rv[40];
+    char rv[40], name[16], why[256];
     py_repr(out[q->i], rv, sizeof rv);
-    say(I, CF_STATUS_ERROR, "cannot initialise the model: %s0 = %s is invalid: must be within abs "
-        "<= %g (" START_RANGE_WHY ")", q->name, rv, q->bound);
+    snprintf(name, sizeof name, "%s0", q->name);
+    snprintf(why, sizeof why, CF_MSG_OUT_OF_RANGE, name, rv, q->bound, CF_MSG_RANGE_START);
+    say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
     return 0;
+}
+
+/* "cannot initialise the model: FloatingPointError: output NAME = R is not finite" */
+static void start_not_finite(const Inst *I, const char *name, const char *r) {
+    char why[256];
+    snprintf(why, sizeof why, CF_MSG_OUTPUT_NOT_FINITE, name, r);
+    say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
 }
 
 /* the body's initial outputs: within range (start_in_range), then finite; 0 with the
@@ -373,8 +365,7 @@ static int start_ok(Inst *I, const double *out) {
     if (!start_in_range(I, out)) return 0;
     const char *bad = nonfinite(out, r, sizeof r);
     if (bad) {
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: output %s = %s "
-            "is not finite", bad, r);
+        start_not_finite(I, bad, r);
         return 0;
     }
     return 1;
@@ -388,10 +379,10 @@ static int build_rigid(Inst *I) {
     static const char *const names[3] = {"M", "Rx", "Iy"};
     for (int k = 0; k < 3; k++)
         if (!(v[need[k]] > 0.0)) {
-            char r[40];
+            char r[40], why[256];
             py_repr(v[need[k]], r, sizeof r);
-            say(I, CF_STATUS_ERROR, "cannot initialise the model: %s = %s is invalid: must be > 0",
-                names[k], r);
+            snprintf(why, sizeof why, CF_MSG_NOT_POSITIVE, names[k], r);
+            say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
             return 0;
         }
     double out[N_OUT] = {0};
@@ -417,9 +408,7 @@ static int load_refused(double P, char *why, size_t n) {
         return 0;
     char r[40];
     py_repr(P, r, sizeof r);
-    snprintf(why, n, "P = %s is invalid: must be within the load range [%g, %g] N of the FMU's "
-             "creep-force table (its layers, kb + ks > 0, break the load similarity)", r,
-             CF_T_P_LO, CF_T_P_HI);
+    snprintf(why, n, CF_MSG_TABLE_LOAD_RANGE, "P", r, CF_T_P_LO, CF_T_P_HI);
     return 1;
 }
 
@@ -429,9 +418,8 @@ static void ensure_grid(Inst *I, const cf_params *law, const cf_body *b, cf_para
     p->strips = cf_model_grid(I->grid, &I->c, law, b);
 }
 
-/* body_transient._in_contact: the traction field needs a contact */
-#define P_LIFTOFF "P = 0.0 is invalid: must be > 0 in the transient phase (lift-off, P = 0, " \
-                  "is the steady phase's)"
+/* body_transient._in_contact: the traction field needs a contact (P = 0.0 refused) */
+static void liftoff_text(char *why, size_t n) { snprintf(why, n, CF_MSG_P_LIFTOFF, "P", "0.0"); }
 
 /* the field's summary outputs served, finite (slave._collect), after cf_body_out_check:
  * the index into out (N_OUT_ALL) of the first that is not, or -1 */
@@ -466,8 +454,9 @@ static int capture_due(Inst *I, const cf_tstate *tr, const cf_params *law, const
     char err[256];
     if (cf_model_field_write(c->field_text[0], c->cap, *n, c->val[R_KB] + c->val[R_KS], tr,
                              I->field, err, sizeof err) != 0) {
-        snprintf(why, size, "field_file = '%s' is invalid: must be a writable file (%s)",
-                 c->field_text[0], err);
+        char q[QUOTED];
+        snprintf(q, sizeof q, "'%s'", c->field_text[0]);
+        snprintf(why, size, CF_MSG_FIELD_FILE, "field_file", q, err);
         *n = before;
         return -1;
     }
@@ -502,19 +491,17 @@ static int build_transient(Inst *I, cf_params *p, cf_body *b) {
     const int k = bad ? -1 : field_nonfinite(I, out);
     if (!bad && k >= 0) py_repr(out[k], r, sizeof r);
     if (bad || k >= 0) {
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: output %s = %s "
-            "is not finite", bad ? bad : out_name(k), r);
+        start_not_finite(I, bad ? bad : out_name(k), r);
         return 0;
     }
     if (rc != CF_FIELD_OK) { /* the summary of a field at rest: no input reaches here */
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: the traction "
-            "field's summary is not finite");
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, CF_MSG_FIELD_SUMMARY);
         return 0;
     }
     int n = 0; /* the captures due at the start time (body_transient.build) */
     char why[FIELD_TEXT + 256];
     if (capture_due(I, fs, p, b, &n, why, sizeof why) != 0) {
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", why);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
     }
     c->n_captured = n;
@@ -530,31 +517,32 @@ static int build_transient(Inst *I, cf_params *p, cf_body *b) {
 static int build(Inst *I) {
     cf_core *c = &I->c;
     unsigned last = 0;
-    char one[256];
+    char one[QUOTED + 256];
     int held = 0;
     while (next_bad(c, &last, one, sizeof one)) { /* one message each, as slave.py */
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", one);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, one);
         held = 1;
     }
     if (held) return 0;
     const double *v = c->val;
-    char r[40];
+    char r[40], why[512];
     if (CF_MODE == MODE_RIGID) return build_rigid(I);
     if (CF_TRANSIENT && v[R_P] == 0.0) { /* body_transient.build's first check */
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: " P_LIFTOFF);
+        liftoff_text(why, sizeof why);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
     }
     /* LayerContact.__post_init__ beyond the declared ranges */
     if (!CF_TABLE && !(v[R_K1] + v[R_K2] > 0.0)) {
         py_repr(v[R_K1] + v[R_K2], r, sizeof r);
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: k1 + k2 = %s is invalid: must be > 0 "
-            "(a Winkler layer carries the load)", r);
+        snprintf(why, sizeof why, CF_MSG_WINKLER, "k1 + k2", r);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
     }
     if (!CF_TABLE && !(v[R_KB] + v[R_KS] > 0.0)) {
         py_repr(v[R_KB] + v[R_KS], r, sizeof r);
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: kb + ks = %s is invalid: must be > 0 "
-            "(tangential layer compliance)", r);
+        snprintf(why, sizeof why, CF_MSG_COMPLIANCE, "kb + ks", r);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
     }
     cf_params p;
@@ -567,7 +555,7 @@ static int build(Inst *I) {
     cf_model_attach_table(I->table, &p);
     char why[512];
     if (load_refused(v[R_P], why, sizeof why)) { /* the law first, as make_law */
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: %s", why);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
     }
     if (CF_MODE == MODE_CONTACT) {
@@ -575,9 +563,7 @@ static int build(Inst *I) {
         double out[N_OUT];
         const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
         if (bad) {
-            say(I, CF_STATUS_ERROR, "cannot initialise the model: FloatingPointError: output "
-                "%s = %s "
-                "is not finite", bad, r);
+            start_not_finite(I, bad, r);
             return 0;
         }
         c->p = p, c->b = b;
@@ -591,8 +577,8 @@ static int build(Inst *I) {
     const double M = v[R_M], Rx = v[R_RX], Iy = v[R_IY];
     if (CF_VECTOR && CF_DYN_SPIN && !(v[R_IZ] > 0.0)) { /* dynamics.Body's checks */
         py_repr(v[R_IZ], r, sizeof r);
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: Iz = %s is invalid: must be "
-            "> 0", r);
+        snprintf(why, sizeof why, CF_MSG_NOT_POSITIVE, "Iz", r);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
     }
     /* A1, A2 (Eq. 23) divide by M Rx^2 + Iy: it must neither underflow to 0 nor overflow
@@ -604,9 +590,8 @@ static int build(Inst *I) {
         py_repr(M, rM, sizeof rM);
         py_repr(Rx, rR, sizeof rR);
         py_repr(Iy, rI, sizeof rI);
-        say(I, CF_STATUS_ERROR, "cannot initialise the model: M Rx^2 + Iy = %s is invalid: "
-            "must be positive and finite with M Rx^2 > 0 (M = %s, Rx = %s, Iy = %s)", r, rM,
-            rR, rI);
+        snprintf(why, sizeof why, CF_MSG_INERTIA, "M Rx^2 + Iy", r, rM, rR, rI);
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
     }
     p.M = M, p.Rx = Rx;
@@ -665,11 +650,10 @@ static void out_check_text(int why, int which, const double *out, char *t, size_
     if (why == CF_STEP_RANGE) {
         const cf_ranged *q = &CF_RANGED[which];
         py_repr(out[q->i], rv, sizeof rv);
-        snprintf(t, n, "%s = %s is invalid: must be within abs <= %g (the loads drive the "
-                 "body beyond it)", q->name, rv, q->bound);
+        snprintf(t, n, CF_MSG_OUT_OF_RANGE, q->name, rv, q->bound, CF_MSG_RANGE_STEP);
     } else {
         py_repr(out[which], rv, sizeof rv);
-        snprintf(t, n, "FloatingPointError: output %s = %s is not finite", out_name(which), rv);
+        snprintf(t, n, CF_MSG_OUTPUT_NOT_FINITE, out_name(which), rv);
     }
 }
 
@@ -687,8 +671,7 @@ static cf_status other_step(Inst *I, double t, double h) {
         const int refused = load_refused(c->val[R_P], why_text, sizeof why_text);
         const char *bad = refused ? NULL : contact_outputs(I, c, &p, &b, out, r, sizeof r);
         if (bad) {
-            snprintf(why_text, sizeof why_text, "FloatingPointError: output %s = %s is not "
-                     "finite", bad, r);
+            snprintf(why_text, sizeof why_text, CF_MSG_OUTPUT_NOT_FINITE, bad, r);
         } else if (!refused) {
             c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
             memcpy(c->b.out, out, sizeof out);
@@ -710,8 +693,7 @@ static cf_status other_step(Inst *I, double t, double h) {
         char rt[40], rh[40];
         py_repr(t, rt, sizeof rt);
         py_repr(h, rh, sizeof rh);
-        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
-            rh, why_text);
+        say(I, CF_STATUS_DISCARD, CF_MSG_STEP_DISCARDED, rt, rh, why_text);
         return CF_STATUS_DISCARD;
     }
     publish(c);
@@ -728,7 +710,7 @@ static cf_status refresh(Inst *I) {
         if (c->bad[i] && CF_VARS[i].kind == K_INPUT) {
             char list[1536];
             bad_list(I, list, sizeof list);
-            say(I, CF_STATUS_ERROR, "no outputs for the current inputs: %s", list);
+            say(I, CF_STATUS_ERROR, CF_MSG_NO_OUTPUTS, list);
             return CF_STATUS_ERROR;
         }
     cf_params p = c->p;
@@ -736,13 +718,13 @@ static cf_status refresh(Inst *I) {
     double out[N_OUT];
     char r[40], why[512];
     if (load_refused(c->val[R_P], why, sizeof why)) {
-        say(I, CF_STATUS_ERROR, "no outputs for the current inputs: %s", why);
+        say(I, CF_STATUS_ERROR, CF_MSG_NO_OUTPUTS, why);
         return CF_STATUS_ERROR;
     }
     const char *bad = contact_outputs(I, c, &p, &b, out, r, sizeof r);
     if (bad) {
-        say(I, CF_STATUS_ERROR, "no outputs for the current inputs: FloatingPointError: output "
-            "%s = %s is not finite", bad, r);
+        snprintf(why, sizeof why, CF_MSG_OUTPUT_NOT_FINITE, bad, r);
+        say(I, CF_STATUS_ERROR, CF_MSG_NO_OUTPUTS, why);
         return CF_STATUS_ERROR;
     }
     c->p = p, c->b = b, c->P_law = p.P, c->dirty = 0;
@@ -783,21 +765,18 @@ static cf_status transient_step(Inst *I, double t, double h) {
     double out[N_OUT_ALL];
     int n = 1;
     if (P == 0.0) {
-        snprintf(why, sizeof why, P_LIFTOFF);
+        liftoff_text(why, sizeof why);
     } else if (cap < 1.0) {
         py_repr(v[R_MAX_WORK], r, sizeof r);
-        snprintf(why, sizeof why, "max_work = %s is invalid: must be >= %g, the work of one "
-                 "internal step on the %d x %d field", r, work, CF_FIELD_NX, CF_FIELD_NY);
+        snprintf(why, sizeof why, CF_MSG_MAX_WORK_FIELD, "max_work", r, work, CF_FIELD_NX,
+                 CF_FIELD_NY);
     } else {
         const cf_tstate *fs = &c->fs;
         if (P != c->P_law || v[R_MU] != p.mu) cf_model_law_at_load(c, P, &p, &b);
         /* LayerField.set_load's growth: columns where a1 passes X, strips where a2 passes Y */
         if (P != c->P_law && (ceil((p.a1 - fs->X) / fs->dx - 1e-12) > 0.0 || b.a2 > fs->Y)) {
             py_repr(P, r, sizeof r);
-            snprintf(why, sizeof why, "P = %s is invalid: must be at most the load at set-up "
-                     "(its contact, a1 = %g m and a2 = %g m, outgrows the field laid there, X = "
-                     "%g m and Y = %g m: the native FMU's field has the fixed size of %d x %d "
-                     "cells, the pythonfmu FMU's grows)", r, p.a1, b.a2, fs->X, fs->Y,
+            snprintf(why, sizeof why, CF_MSG_FIELD_OUTGROWN, r, p.a1, b.a2, fs->X, fs->Y,
                      CF_FIELD_NX, CF_FIELD_NY);
         }
     }
@@ -847,26 +826,20 @@ static cf_status transient_step(Inst *I, double t, double h) {
         const int check = rc == CF_FIELD_OK ? cf_body_out_check(out, I->served, &which) : CF_OK;
         if (rc == CF_FIELD_OK && check == CF_OK) k = field_nonfinite(I, out);
         if (rc == CF_FIELD_BUDGET) { /* WorkBudgetError, as BodyModel.step words it */
-            snprintf(why, sizeof why, "WorkBudgetError: the stage solves need more than %d "
-                     "evaluations of the law, beyond max_work = %g (each costs %g)",
-                     fb.eval_limit, v[R_MAX_WORK], eval_work);
+            snprintf(why, sizeof why, CF_MSG_WORK_BUDGET_MAX, fb.eval_limit, v[R_MAX_WORK],
+                     eval_work);
         } else if (rc == CF_FIELD_NO_ROOT) { /* TransientRollingBody._solve_scalar's words */
-            snprintf(why, sizeof why, "StageSolveError: no slip velocity satisfies the stage "
-                     "equation (target force %.6g N against mu P = %.6g N)",
+            snprintf(why, sizeof why, CF_MSG_FIELD_NO_ROOT,
                      p.A2 * v[R_FX_EX] - p.A1 * v[R_MY_EX] / p.Rx, p.mu * p.P);
         } else if (rc == CF_FIELD_RANGE) {
-            snprintf(why, sizeof why, "the step would roll the traction field's lattice by "
-                     "more than %g columns (the loads or the step drive the body beyond what "
-                     "the field resolves)", CF_FIELD_SHIFT_MAX);
+            snprintf(why, sizeof why, CF_MSG_FIELD_SHIFT, CF_FIELD_SHIFT_MAX);
         } else if (rc != CF_FIELD_OK) {
-            snprintf(why, sizeof why, "FloatingPointError: the traction field's step is not "
-                     "finite (the loads or the step drive it beyond the doubles)");
+            snprintf(why, sizeof why, CF_MSG_FIELD_NOT_FINITE);
         } else if (check != CF_OK) {
             out_check_text(check, which, out, why, sizeof why);
         } else if (k >= 0) {
             py_repr(out[k], r, sizeof r);
-            snprintf(why, sizeof why, "FloatingPointError: output %s = %s is not finite",
-                     out_name(k), r);
+            snprintf(why, sizeof why, CF_MSG_OUTPUT_NOT_FINITE, out_name(k), r);
         } else {
             capture_due(I, tr, &p, &b, &n_captured, why, sizeof why); /* why: its failure */
         }
@@ -875,8 +848,7 @@ static cf_status transient_step(Inst *I, double t, double h) {
         char rt[40], rh[40];
         py_repr(t, rt, sizeof rt);
         py_repr(h, rh, sizeof rh);
-        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s",
-            rt, rh, why);
+        say(I, CF_STATUS_DISCARD, CF_MSG_STEP_DISCARDED, rt, rh, why);
         return CF_STATUS_DISCARD;
     }
     memcpy(b.out, out, sizeof b.out);
@@ -884,10 +856,8 @@ static cf_status transient_step(Inst *I, double t, double h) {
     publish(c);
     c->time = t + h;
     if (needed > cap) { /* TransientBodyModel.step's cap_note */
-        say(I, CF_STATUS_WARNING, "communication step h = %g s needs more internal steps "
-            "(h_max = %g s, cells_per_step = %g) than max_work = %g allows (each costs %g): "
-            "taken in %d steps of %g s", h, v[R_H_MAX], v[R_CELLS_PER_STEP], v[R_MAX_WORK],
-            work, n, h / n);
+        say(I, CF_STATUS_WARNING, CF_MSG_CAP_NOTE_FIELD, h, v[R_H_MAX], v[R_CELLS_PER_STEP],
+            v[R_MAX_WORK], work, n, h / n);
         return CF_STATUS_WARNING;
     }
     return CF_STATUS_OK;
@@ -905,35 +875,32 @@ static cf_status fmu_step(Inst *I, double t, double h) {
         if (c->init_tried) bad_list(I, list, sizeof list); /* the values that stop it */
         REPRS();
         if (c->phase == PH_TERMINATED)
-            say(I, CF_STATUS_ERROR, "doStep at t = %s refused: called after %s%s", rt,
-                I->api, call_name(I, C_TERMINATE));
+            say(I, CF_STATUS_ERROR, CF_MSG_STEP_AFTER_TERMINATE, rt, I->api,
+                call_name(I, CF_CALL_TERMINATE));
+        else if (c->init_tried)
+            say(I, CF_STATUS_ERROR, CF_MSG_STEP_AFTER_FAILED_INIT, rt, I->api,
+                list[0] ? list : CF_MSG_SEE_ABOVE);
         else
-            say(I, CF_STATUS_ERROR, "doStep at t = %s refused: called before the model is "
-                "initialised (%sExitInitializationMode %s%s)", rt, I->api,
-                c->init_tried ? "failed: " : "not called",
-                c->init_tried ? (list[0] ? list : "see the messages above") : "");
+            say(I, CF_STATUS_ERROR, CF_MSG_STEP_BEFORE_INIT, rt, I->api);
         return CF_STATUS_ERROR;
     }
     if (!cf_step_size_ok(h)) {
         REPRS();
-        say(I, CF_STATUS_DISCARD, "communicationStepSize = %s is invalid: must be > 0 and "
-            "finite", rh);
+        say(I, CF_STATUS_DISCARD, CF_MSG_STEP_SIZE, rh);
         return CF_STATUS_DISCARD;
     }
     if (!cf_time_ok(t, c->time, CF_TIME_RTOL)) {
         char now[40];
         REPRS();
         py_repr(c->time, now, sizeof now);
-        say(I, CF_STATUS_DISCARD, "currentCommunicationPoint = %s is invalid: must be the "
-            "FMU's time "
-            "%s", rt, now);
+        say(I, CF_STATUS_DISCARD, CF_MSG_STEP_TIME, rt, now);
         return CF_STATUS_DISCARD;
     }
     if (c->next_bad && any_bad(c)) {
         char list[1536];
         bad_list(I, list, sizeof list);
         REPRS();
-        say(I, CF_STATUS_DISCARD, "doStep at t = %s discarded, state unchanged: %s", rt, list);
+        say(I, CF_STATUS_DISCARD, CF_MSG_STEP_HELD, rt, list);
         return CF_STATUS_DISCARD;
     }
     if (CF_MODE != MODE_BODY) return other_step(I, t, h);
@@ -946,8 +913,7 @@ static cf_status fmu_step(Inst *I, double t, double h) {
     char refusal[512];
     if (P != c->P_law && load_refused(P, refusal, sizeof refusal)) { /* set_load's */
         REPRS();
-        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s",
-            rt, rh, refusal);
+        say(I, CF_STATUS_DISCARD, CF_MSG_STEP_DISCARDED, rt, rh, refusal);
         return CF_STATUS_DISCARD;
     }
     /* set_load: Eq. (34) at the new P; set_mu: the law at a tuned mu */
@@ -975,21 +941,17 @@ static cf_status fmu_step(Inst *I, double t, double h) {
             const int fx = why == CF_STEP_FX_LIMIT;
             const double cap = cf_load_cap(&p);
             py_repr(fx ? b.Fx_ex : b.My_ex, rv, sizeof rv);
-            snprintf(why_text, sizeof why_text, "%s = %s is invalid: must be <= %g mu P%s = "
-                     "%.6g %s in magnitude", fx ? "Fx_ex" : "My_ex", rv, CF_LOAD_LIMIT,
-                     fx ? "" : " Rx", fx ? cap : cap * p.Rx, fx ? "N" : "N m");
+            snprintf(why_text, sizeof why_text, fx ? CF_MSG_LOAD_LIMIT_FX : CF_MSG_LOAD_LIMIT_MY,
+                     fx ? "Fx_ex" : "My_ex", rv, CF_LOAD_LIMIT, fx ? cap : cap * p.Rx);
         } else if (why == CF_STEP_RANGE || why == CF_STEP_NONFINITE) {
             out_check_text(why, which, b.out, why_text, sizeof why_text);
         } else if (why == CF_STEP_NO_SLIDING) {
-            snprintf(why_text, sizeof why_text, "StageSolveError: eta = inf (Iy = 0) admits no "
-                     "gross sliding: |A2 Fx_ex - A1 My_ex/Rx| = %.6g N reaches mu P = %.6g N",
+            snprintf(why_text, sizeof why_text, CF_MSG_NO_GROSS_SLIDING,
                      fabs(cf_target_x(&p, b.Fx_ex, b.My_ex)), p.mu * p.P);
         } else { /* CF_STEP_NO_ROOT: no other code reaches here (the law is at P, h > 0) */
-            snprintf(why_text, sizeof why_text, "StageSolveError: no root: the stage residual "
-                     "keeps its sign (loads beyond mu P?)");
+            snprintf(why_text, sizeof why_text, CF_MSG_NO_ROOT);
         }
-        say(I, CF_STATUS_DISCARD, "doStep at t = %s with h = %s discarded, state unchanged: %s", rt,
-            rh, why_text);
+        say(I, CF_STATUS_DISCARD, CF_MSG_STEP_DISCARDED, rt, rh, why_text);
         return CF_STATUS_DISCARD;
     }
     c->p = p, c->b = b, c->s = w, c->vs = vw, c->P_law = P;
@@ -998,9 +960,8 @@ static cf_status fmu_step(Inst *I, double t, double h) {
 #undef REPRS
     const int n = b.max_substeps;
     if (capped && h / b.h_max > n) { /* BodyModel.cap_note */
-        say(I, CF_STATUS_WARNING, "communication step h = %g s needs more internal steps "
-            "(h_max = %g s) than max_work = %g allows (each costs %g): taken in %d "
-            "steps of %g s", h, b.h_max, c->val[R_MAX_WORK], work, n, h / n);
+        say(I, CF_STATUS_WARNING, CF_MSG_CAP_NOTE_BODY, h, b.h_max, c->val[R_MAX_WORK], work, n,
+            h / n);
         return CF_STATUS_WARNING;
     }
     return CF_STATUS_OK;
@@ -1071,8 +1032,8 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
     const char *name = "/table.bin";
     if (k && path[k - 1] == '/') name++;
     if (k + strlen(name) + 1 > sizeof path) {
-        say(probe, CF_STATUS_ERROR, "%s%s: the resource path is too long",
-            I->api, call_name(I, C_INSTANTIATE));
+        say(probe, CF_STATUS_ERROR, CF_MSG_RESOURCE_PATH, I->api,
+            call_name(I, CF_CALL_INSTANTIATE));
         return 0;
     }
     strcat(path, name);
@@ -1080,8 +1041,8 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
     const size_t size = 8 + 12 + 8 + 8 * n_data + 8;
     FILE *f = fopen(path, "rb");
     if (f == NULL) {
-        say(probe, CF_STATUS_ERROR, "%s%s: the creep-force table %s cannot be opened",
-            I->api, call_name(I, C_INSTANTIATE), path);
+        say(probe, CF_STATUS_ERROR, CF_MSG_TABLE_OPEN, I->api, call_name(I, CF_CALL_INSTANTIATE),
+            path);
         return 0;
     }
     unsigned char *buf = (unsigned char *)I->cb.alloc(I->env, size + 1, 1);
@@ -1101,16 +1062,17 @@ static int load_table(Inst *I, const char *uri, const Inst *probe) {
         else if (crc32_of(buf, size - 8) != sum) why = "damaged: its checksum does not match";
     }
     if (why) {
-        say(probe, CF_STATUS_ERROR, "%s%s: the creep-force table %s is refused: %s",
-            I->api, call_name(I, C_INSTANTIATE), path, why);
+        say(probe, CF_STATUS_ERROR, CF_MSG_TABLE_REFUSED, I->api,
+            call_name(I, CF_CALL_INSTANTIATE), path, why);
         if (buf) I->cb.release(I->env, buf);
         return 0;
     }
     I->table = (double *)I->cb.alloc(I->env, n_data, sizeof(double));
     if (I->table) memcpy(I->table, buf + 28, 8 * n_data);
     I->cb.release(I->env, buf);
-    if (I->table == NULL) say(probe, CF_STATUS_ERROR, "%s%s: out of memory",
-        I->api, call_name(I, C_INSTANTIATE));
+    if (I->table == NULL)
+        say(probe, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, I->api,
+            call_name(I, CF_CALL_INSTANTIATE));
     return I->table != NULL;
 }
 
@@ -1143,8 +1105,7 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
     Inst probe;
     probe_for(&probe, cb, env, api, name);
     if (guid == NULL || strcmp(guid, CF_GUID) != 0) {
-        say(&probe, CF_STATUS_ERROR, "%s%s: GUID %s is not this FMU's (%s)", api,
-            call_name(&probe, C_INSTANTIATE),
+        say(&probe, CF_STATUS_ERROR, CF_MSG_GUID, api, call_name(&probe, CF_CALL_INSTANTIATE),
             guid ? guid : "(null)", CF_GUID);
         return NULL;
     }
@@ -1153,7 +1114,8 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
                         sizeof(max_align_t);
     Inst *I = (Inst *)cb->alloc(env, 1, head + env_size);
     if (I == NULL) {
-        say(&probe, CF_STATUS_ERROR, "%s%s: out of memory", api, call_name(&probe, C_INSTANTIATE));
+        say(&probe, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, api,
+            call_name(&probe, CF_CALL_INSTANTIATE));
         return NULL;
     }
     memset(I, 0, sizeof *I);
@@ -1166,7 +1128,8 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
     I->name = (char *)I->cb.alloc(I->env, len, 1);
     if (I->name == NULL) {
         cb->release(env, I);
-        say(&probe, CF_STATUS_ERROR, "%s%s: out of memory", api, call_name(&probe, C_INSTANTIATE));
+        say(&probe, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, api,
+            call_name(&probe, CF_CALL_INSTANTIATE));
         return NULL;
     }
     memcpy(I->name, probe.name, len);
@@ -1180,8 +1143,8 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
         if (I->grid == NULL) {
             I->cb.release(I->env, I->name);
             cb->release(env, I);
-            say(&probe, CF_STATUS_ERROR, "%s%s: out of memory",
-                api, call_name(&probe, C_INSTANTIATE));
+            say(&probe, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, api,
+                call_name(&probe, CF_CALL_INSTANTIATE));
             return NULL;
         }
         for (int k = 0; k < 5; k++) I->grid->key[k] = NAN;
@@ -1193,8 +1156,8 @@ cf_inst *cf_instantiate(const char *api, const char *name, const char *guid,
             if (I->grid) I->cb.release(I->env, I->grid);
             I->cb.release(I->env, I->name);
             cb->release(env, I);
-            say(&probe, CF_STATUS_ERROR, "%s%s: out of memory",
-                api, call_name(&probe, C_INSTANTIATE));
+            say(&probe, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, api,
+                call_name(&probe, CF_CALL_INSTANTIATE));
             return NULL;
         }
     }
@@ -1220,8 +1183,8 @@ void cf_free_instance(cf_inst *I) {
 /* ---- phases ------------------------------------------------------------------------- */
 cf_status cf_setup_experiment(cf_inst *I, double start) {
     if (I->c.built) {
-        say(I, CF_STATUS_ERROR, "%s%s after initialisation is ignored",
-            I->api, call_name(I, C_SETUP_EXPERIMENT));
+        say(I, CF_STATUS_ERROR, CF_MSG_SETUP_AFTER_INIT, I->api,
+            call_name(I, CF_CALL_SETUP_EXPERIMENT));
         return CF_STATUS_ERROR;
     }
     if (isfinite(start)) {
@@ -1230,7 +1193,7 @@ cf_status cf_setup_experiment(cf_inst *I, double start) {
     }
     char r[40];
     py_repr(start, r, sizeof r);
-    say(I, CF_STATUS_ERROR, "startTime = %s is invalid: must be finite; using 0", r);
+    say(I, CF_STATUS_ERROR, CF_MSG_START_TIME, r);
     return CF_STATUS_ERROR;
 }
 
@@ -1241,16 +1204,14 @@ cf_status cf_enter_initialization_mode(cf_inst *I) {
 
 cf_status cf_exit_initialization_mode(cf_inst *I) {
     if (I->c.phase == PH_INSTANTIATED) { /* FMI: only in initialisation mode */
-        say(I, CF_STATUS_ERROR, "exitInitializationMode refused: called before "
-            "%s%s", I->api, call_name(I, C_ENTER_INIT));
+        say(I, CF_STATUS_ERROR, CF_MSG_EXIT_BEFORE_ENTER, I->api, call_name(I, CF_CALL_ENTER_INIT));
         return CF_STATUS_ERROR;
     }
     I->c.init_tried = 1;
     if (!build(I)) { /* slave.exit_initialization_mode's refusal, its words */
         char list[1536];
         bad_list(I, list, sizeof list);
-        say(I, CF_STATUS_ERROR, "exitInitializationMode: the model cannot start: %s",
-            list[0] ? list : "see the messages above");
+        say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_START, list[0] ? list : CF_MSG_SEE_ABOVE);
         return CF_STATUS_ERROR;
     }
     I->c.phase = PH_STEP;
@@ -1259,8 +1220,8 @@ cf_status cf_exit_initialization_mode(cf_inst *I) {
 
 cf_status cf_terminate(cf_inst *I) {
     if (!I->c.built) { /* FMI: only once initialised; after an error: reset or free */
-        say(I, CF_STATUS_ERROR, "terminate refused: called before the model is initialised "
-            "(%sExitInitializationMode %s)", I->api, I->c.init_tried ? "failed" : "not called");
+        say(I, CF_STATUS_ERROR, CF_MSG_TERMINATE_BEFORE_INIT, I->api,
+            I->c.init_tried ? CF_MSG_FAILED : CF_MSG_NOT_CALLED);
         return CF_STATUS_ERROR;
     }
     I->c.phase = PH_TERMINATED;
@@ -1277,8 +1238,7 @@ cf_status cf_reset(cf_inst *I) {
 /* ---- variables ----------------------------------------------------------------------- */
 static int vr_ok(const Inst *I, unsigned vr, int type, call_id call) {
     if (vr < CF_N_VARS && CF_VARS[vr].type == type) return 1;
-    say(I, CF_STATUS_ERROR, "%s%s: value reference %u is not a variable of this type", I->api,
-        call_name(I, call), vr);
+    say(I, CF_STATUS_ERROR, CF_MSG_VR_TYPE, I->api, call_name(I, call), vr);
     return 0;
 }
 
@@ -1287,16 +1247,24 @@ static cf_status held_bad(const Inst *I, unsigned vr) {
     if (!I->c.bad[vr]) return CF_STATUS_OK;
     char msg[256];
     bad_text(&CF_VARS[vr], I->c.var[vr], msg, sizeof msg);
-    say(I, CF_STATUS_ERROR, "%s: %s (held until corrected)", CF_VARS[vr].name, msg);
+    say(I, CF_STATUS_ERROR, CF_MSG_HELD_AT_GET, CF_VARS[vr].name, msg);
     return CF_STATUS_ERROR;
+}
+
+/* the contact mode's outputs to refresh for a get call: once for the call (its refusal
+ * logged once), where it reads an output (a parameter or an input reads as it is) */
+static cf_status refresh_for(Inst *I, const unsigned *vr, size_t n) {
+    if (CF_MODE != MODE_CONTACT || !I->c.dirty || !I->c.built) return CF_STATUS_OK;
+    for (size_t i = 0; i < n; i++)
+        if (vr[i] < CF_N_VARS && CF_VARS[vr[i]].kind == K_OUTPUT) return refresh(I);
+    return CF_STATUS_OK;
 }
 
 cf_status cf_get_real(cf_inst *I, const unsigned *vr, size_t n, double *v) {
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
-    cf_status status = CF_STATUS_OK;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
+    cf_status status = refresh_for(I, vr, n);
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_REAL, C_GET_REAL)) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[i], T_REAL, CF_CALL_GET_REAL)) return CF_STATUS_ERROR;
         v[i] = I->c.var[vr[i]];
         if (held_bad(I, vr[i]) != CF_STATUS_OK) status = CF_STATUS_ERROR;
     }
@@ -1312,8 +1280,7 @@ cf_status cf_get_line(cf_inst *I, int which, double *v) {
     static const char *const NAMES[3] = {"x_centre", "tau_x_centre", "tau_y_centre"};
     cf_core *c = &I->c;
     if (!c->built) {
-        say(I, CF_STATUS_ERROR, "%s: the model is set up at %sExitInitializationMode: read "
-            "it after", NAMES[which], I->api);
+        say(I, CF_STATUS_ERROR, CF_MSG_LINE_BEFORE_INIT, NAMES[which], I->api);
         return CF_STATUS_ERROR;
     }
     if (CF_MODE == MODE_CONTACT && c->dirty) {
@@ -1326,8 +1293,8 @@ cf_status cf_get_line(cf_inst *I, int which, double *v) {
     const double phi = contact ? c->val[R_OMEGA_Z] : o[O_OMEGA_Z];
     double line[3][CF_LINE_N];
     if (cf_model_centre_line(c, &c->p, &c->b, o[O_VX_SLIP], o[O_VY_SLIP], Vx, phi, line) != 0) {
-        say(I, CF_STATUS_ERROR, "%s: the traction field is not finite at vx = %g, vy = %g, "
-            "Vx = %g, Omega_z = %g", NAMES[which], o[O_VX_SLIP], o[O_VY_SLIP], Vx, phi);
+        say(I, CF_STATUS_ERROR, CF_MSG_LINE_NOT_FINITE, NAMES[which], o[O_VX_SLIP],
+            o[O_VY_SLIP], Vx, phi);
         return CF_STATUS_ERROR;
     }
     memcpy(v, line[which], sizeof line[which]);
@@ -1336,10 +1303,9 @@ cf_status cf_get_line(cf_inst *I, int which, double *v) {
 
 cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
-    cf_status status = CF_STATUS_OK;
-    if (CF_MODE == MODE_CONTACT && I->c.dirty && I->c.built && n > 0) status = refresh(I);
+    cf_status status = refresh_for(I, vr, n);
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_INTEGER, C_GET_INTEGER)) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[i], T_INTEGER, CF_CALL_GET_INTEGER)) return CF_STATUS_ERROR;
         const double x = I->c.var[vr[i]];
         if (CF_VARS[vr[i]].kind == K_OUTPUT) v[i] = x > 0.5 ? 1 : 0; /* regime, 0 or 1 */
         else v[i] = x >= INT_MIN && x <= INT_MAX ? (int)x : 0; /* nx, ny: set as int */
@@ -1349,8 +1315,7 @@ cf_status cf_get_integer(cf_inst *I, const unsigned *vr, size_t n, int *v) {
 
 cf_status cf_get_boolean(cf_inst *I, const unsigned *vr, size_t n) {
     if (n == 0) return CF_STATUS_OK;
-    say(I, CF_STATUS_ERROR, "%s%s: this FMU has no Boolean variable (vr %u)", I->api,
-        call_name(I, C_GET_BOOLEAN),
+    say(I, CF_STATUS_ERROR, CF_MSG_NO_BOOLEAN, I->api, call_name(I, CF_CALL_GET_BOOLEAN),
         vr ? vr[0] : 0u);
     return CF_STATUS_ERROR;
 }
@@ -1358,7 +1323,7 @@ cf_status cf_get_boolean(cf_inst *I, const unsigned *vr, size_t n) {
 cf_status cf_get_string(cf_inst *I, const unsigned *vr, size_t n, const char **v) {
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     for (size_t i = 0; i < n; i++) {
-        if (!vr_ok(I, vr[i], T_STRING, C_GET_STRING)) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[i], T_STRING, CF_CALL_GET_STRING)) return CF_STATUS_ERROR;
         const int f = field_string((int)vr[i]);
         char *out = f >= 0 ? I->field_out[f] : is_scheme((int)vr[i]) ? I->scheme_out
                                                                         : I->method_out;
@@ -1372,16 +1337,14 @@ cf_status cf_get_string(cf_inst *I, const unsigned *vr, size_t n, const char **v
 static int settable(Inst *I, int i, const char *value) {
     const cf_var *v = &CF_VARS[i];
     if (v->kind == K_OUTPUT) {
-        say(I, CF_STATUS_ERROR, "%s is an output of this FMU: the value %s set is ignored",
-            v->name, value);
+        say(I, CF_STATUS_ERROR, CF_MSG_SET_OUTPUT, v->name, value);
         return 0;
     }
     if (v->kind == K_PARAMETER && I->c.built && v->role != R_MU) { /* mu is tunable */
         char now[80];
         if (v->type == T_STRING) snprintf(now, sizeof now, "'%s'", string_text(&I->c, i));
         else value_text(v, I->c.var[i], now, sizeof now);
-        say(I, CF_STATUS_ERROR, "%s is a fixed parameter and the model is initialised: %s = %s "
-            "is ignored (%s stays %s)", v->name, v->name, value, v->name, now);
+        say(I, CF_STATUS_ERROR, CF_MSG_SET_FIXED, v->name, v->name, value, v->name, now);
         return 0;
     }
     return 1;
@@ -1396,7 +1359,7 @@ cf_status cf_set_real(cf_inst *I, const unsigned *vr, size_t n, const double *v)
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (!vr_ok(I, vr[k], T_REAL, C_SET_REAL)) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[k], T_REAL, CF_CALL_SET_REAL)) return CF_STATUS_ERROR;
         const int i = (int)vr[k];
         const cf_var *var = &CF_VARS[i];
         char r[40] = "";
@@ -1416,8 +1379,7 @@ cf_status cf_set_real(cf_inst *I, const unsigned *vr, size_t n, const double *v)
         if (bad) { /* refused: an error, the value held (as the pythonfmu FMU) */
             char msg[256];
             bad_text(var, v[k], msg, sizeof msg);
-            say(I, CF_STATUS_ERROR, "%s; doStep answers %sDiscard until it is corrected", msg,
-                I->api);
+            say(I, CF_STATUS_ERROR, CF_MSG_HELD, msg, I->api);
             status = CF_STATUS_ERROR;
         }
     }
@@ -1430,7 +1392,7 @@ cf_status cf_set_integer(cf_inst *I, const unsigned *vr, size_t n, const int *v)
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (!vr_ok(I, vr[k], T_INTEGER, C_SET_INTEGER)) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[k], T_INTEGER, CF_CALL_SET_INTEGER)) return CF_STATUS_ERROR;
         const int i = (int)vr[k];
         const cf_var *var = &CF_VARS[i];
         char r[24];
@@ -1447,8 +1409,7 @@ cf_status cf_set_integer(cf_inst *I, const unsigned *vr, size_t n, const int *v)
         if (bad) {
             char msg[256];
             bad_text(var, (double)v[k], msg, sizeof msg);
-            say(I, CF_STATUS_ERROR, "%s; doStep answers %sDiscard until it is corrected", msg,
-                I->api);
+            say(I, CF_STATUS_ERROR, CF_MSG_HELD, msg, I->api);
             status = CF_STATUS_ERROR;
         }
     }
@@ -1457,8 +1418,7 @@ cf_status cf_set_integer(cf_inst *I, const unsigned *vr, size_t n, const int *v)
 
 cf_status cf_set_boolean(cf_inst *I, const unsigned *vr, size_t n) {
     if (n == 0) return CF_STATUS_OK;
-    say(I, CF_STATUS_ERROR, "%s%s: this FMU has no Boolean variable (vr %u)", I->api,
-        call_name(I, C_SET_BOOLEAN),
+    say(I, CF_STATUS_ERROR, CF_MSG_NO_BOOLEAN, I->api, call_name(I, CF_CALL_SET_BOOLEAN),
         vr ? vr[0] : 0u);
     return CF_STATUS_ERROR;
 }
@@ -1467,7 +1427,7 @@ cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n, const char *co
     if (n > 0 && (vr == NULL || v == NULL)) return CF_STATUS_ERROR;
     cf_status status = CF_STATUS_OK;
     for (size_t k = 0; k < n; k++) {
-        if (!vr_ok(I, vr[k], T_STRING, C_SET_STRING)) return CF_STATUS_ERROR;
+        if (!vr_ok(I, vr[k], T_STRING, CF_CALL_SET_STRING)) return CF_STATUS_ERROR;
         const char *s = v[k] ? v[k] : "";
         char shown[METHOD_TEXT + 2];
         snprintf(shown, sizeof shown, "'%s'", s);
@@ -1491,10 +1451,11 @@ cf_status cf_set_string(cf_inst *I, const unsigned *vr, size_t n, const char *co
         const int bad = string_bad(C, i);
         mark(C, i, bad);
         if (bad) {
-            const char *text = string_text(C, i);
-            say(I, CF_STATUS_ERROR, "%s = '%s' is invalid: must be %s; doStep answers %sDiscard "
-                "until it is corrected", CF_VARS[i].name, text, string_requirement(C, i),
-                I->api);
+            char q[QUOTED], buf[80], msg[QUOTED + 256];
+            snprintf(q, sizeof q, "'%s'", string_text(C, i));
+            snprintf(msg, sizeof msg, CF_MSG_INVALID, CF_VARS[i].name, q,
+                     string_requirement(C, i, buf, sizeof buf));
+            say(I, CF_STATUS_ERROR, CF_MSG_HELD, msg, I->api);
             status = CF_STATUS_ERROR;
         }
     }
@@ -1515,21 +1476,21 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
                                     const unsigned *ur, size_t nu, const double *du,
                                     double *dz) {
     if (CF_MODE != MODE_CONTACT) {
-        say(I, CF_STATUS_ERROR, "%s%s: provided by the contact mode only "
-            "(providesDirectionalDerivative is false here)", I->api, call_name(I, C_DIRECTIONAL));
+        say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_MODE, I->api,
+            call_name(I, CF_CALL_DIRECTIONAL));
         return CF_STATUS_ERROR;
     }
     if ((nz && (zr == NULL || dz == NULL)) || (nu && (ur == NULL || du == NULL)))
         return CF_STATUS_ERROR;
     cf_core *C = &I->c;
     if (!C->built) {
-        say(I, CF_STATUS_ERROR, "%s%s: the model is not initialised",
-            I->api, call_name(I, C_DIRECTIONAL));
+        say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_BEFORE_INIT, I->api,
+            call_name(I, CF_CALL_DIRECTIONAL));
         return CF_STATUS_ERROR;
     }
     if (C->next_bad && any_bad(C)) {
-        say(I, CF_STATUS_ERROR, "%s%s: an input is invalid (see setReal)",
-            I->api, call_name(I, C_DIRECTIONAL));
+        say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_BAD_INPUT, I->api,
+            call_name(I, CF_CALL_DIRECTIONAL));
         return CF_STATUS_ERROR;
     }
     if (C->dirty && refresh(I) != CF_STATUS_OK) return CF_STATUS_ERROR; /* logged there */
@@ -1537,8 +1498,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
     double dir[4] = {0.0, 0.0, 0.0, 0.0};
     for (size_t j = 0; j < nu; j++) {
         if (ur[j] >= CF_N_VARS || CF_VARS[ur[j]].kind != K_INPUT || CF_VARS[ur[j]].type != T_REAL) {
-            say(I, CF_STATUS_ERROR, "%s%s: value reference %u is not a "
-                "Real input", I->api, call_name(I, C_DIRECTIONAL), ur[j]);
+            say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_VR, I->api,
+                call_name(I, CF_CALL_DIRECTIONAL), ur[j], "input");
             return CF_STATUS_ERROR;
         }
         const int role = CF_VARS[ur[j]].role;
@@ -1547,8 +1508,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
         if (k < 0) only_kin = 0;
         else dir[k] += du[j];
         if (!isfinite(du[j])) {
-            say(I, CF_STATUS_ERROR, "%s%s: a direction is not finite",
-                I->api, call_name(I, C_DIRECTIONAL));
+            say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_DIRECTION, I->api,
+                call_name(I, CF_CALL_DIRECTIONAL));
             return CF_STATUS_ERROR;
         }
     }
@@ -1559,8 +1520,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
     for (i = 0; i < nz; i++) {
         if (zr[i] >= CF_N_VARS || CF_VARS[zr[i]].kind != K_OUTPUT ||
             CF_VARS[zr[i]].type != T_REAL) {
-            say(I, CF_STATUS_ERROR, "%s%s: value reference %u is not a "
-                "Real output", I->api, call_name(I, C_DIRECTIONAL), zr[i]);
+            say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_VR, I->api,
+                call_name(I, CF_CALL_DIRECTIONAL), zr[i], "output");
             return CF_STATUS_ERROR;
         }
         const int role = CF_VARS[zr[i]].role;
@@ -1588,8 +1549,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
                 cf_params p = C->p;
                 cf_body b = C->b;
                 if (contact_outputs(I, &X, &p, &b, sgn ? minus : plus, r, sizeof r)) {
-                    say(I, CF_STATUS_ERROR, "%s%s: the outputs are not "
-                        "finite next to the inputs", I->api, call_name(I, C_DIRECTIONAL));
+                    say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_NEAR, I->api,
+                        call_name(I, CF_CALL_DIRECTIONAL));
                     return CF_STATUS_ERROR;
                 }
             }
@@ -1601,8 +1562,8 @@ cf_status cf_directional_derivative(cf_inst *I, const unsigned *zr, size_t nz,
     }
     return CF_STATUS_OK;
 not_finite:
-    say(I, CF_STATUS_ERROR, "%s%s: the derivative of %s is not finite at "
-        "the current inputs", I->api, call_name(I, C_DIRECTIONAL), CF_VARS[zr[i]].name);
+    say(I, CF_STATUS_ERROR, CF_MSG_DIRECTIONAL_NOT_FINITE, I->api,
+        call_name(I, CF_CALL_DIRECTIONAL), CF_VARS[zr[i]].name);
     return CF_STATUS_ERROR;
 }
 
@@ -1659,13 +1620,12 @@ static const char *state_problem(const cf_core *c, char *why, size_t n) {
     if (c->phase < PH_INSTANTIATED || c->phase > PH_TERMINATED || (c->built != 0) != c->built ||
         (c->dirty != 0) != c->dirty || (c->init_tried != 0) != c->init_tried ||
         (c->built && !c->init_tried)) {
-        snprintf(why, n, "its phase and flags (%d, %d, %d, %d) are not this FMU's", c->phase,
-                 c->built, c->dirty, c->init_tried);
+        snprintf(why, n, CF_MSG_STATE_FLAGS, c->phase, c->built, c->dirty, c->init_tried);
         return why;
     }
     if (!isfinite(c->time)) {
         py_repr(c->time, r, sizeof r);
-        snprintf(why, n, "its time %s is not a finite float", r);
+        snprintf(why, n, CF_MSG_STATE_TIME, r);
         return why;
     }
     for (int i = 0; i < CF_N_VARS; i++) {
@@ -1673,41 +1633,45 @@ static const char *state_problem(const cf_core *c, char *why, size_t n) {
         if (v->kind == K_OUTPUT) {
             if (c->bad[i] || !isfinite(c->var[i])) {
                 py_repr(c->var[i], r, sizeof r);
-                snprintf(why, n, "its output %s = %s is not a finite float", v->name, r);
+                snprintf(why, n, CF_MSG_STATE_OUTPUT, v->name, r);
                 return why;
             }
             continue;
         }
         int bad;
-        char one[256];
+        char one[QUOTED + 256];
         if (v->type == T_STRING) {
             bad = string_bad(c, i);
         } else {
             if (v->role < R_COUNT && !same_double(c->val[v->role], c->var[i])) {
-                snprintf(why, n, "its values of %s disagree", v->name);
+                snprintf(why, n, CF_MSG_STATE_DISAGREE, v->name);
                 return why;
             }
             bad = requirement(v, c->var[i]) != NULL;
         }
         if (bad != (c->bad[i] != 0)) { /* the text of the value: only for the refusal */
             if (v->type == T_STRING) {
-                snprintf(one, sizeof one, "%s = '%s'", v->name, string_text(c, i));
+                char q[QUOTED];
+                snprintf(q, sizeof q, "'%s'", string_text(c, i));
+                snprintf(one, sizeof one, CF_MSG_STATE_NAMED, v->name, q);
             } else if (bad) {
                 bad_text(v, c->var[i], one, sizeof one);
             } else {
                 py_repr(c->var[i], r, sizeof r);
-                snprintf(one, sizeof one, "%s = %s", v->name, r);
+                snprintf(one, sizeof one, CF_MSG_STATE_NAMED, v->name, r);
             }
-            snprintf(why, n, "its record of invalid values does not match its values (%s, "
-                     "recorded as %s)", one, c->bad[i] ? "invalid" : "valid");
+            snprintf(why, n, CF_MSG_STATE_RECORD, one, c->bad[i] ? "invalid" : "valid");
             return why;
         }
         if (bad && c->built && v->kind == K_PARAMETER && v->role != R_MU) {
-            if (v->type == T_STRING)
-                snprintf(one, sizeof one, "%s = '%s'", v->name, string_text(c, i));
-            else bad_text(v, c->var[i], one, sizeof one);
-            snprintf(why, n, "its model's parameters differ from its values or are invalid "
-                     "(%s)", one);
+            if (v->type == T_STRING) {
+                char q[QUOTED];
+                snprintf(q, sizeof q, "'%s'", string_text(c, i));
+                snprintf(one, sizeof one, CF_MSG_STATE_NAMED, v->name, q);
+            } else {
+                bad_text(v, c->var[i], one, sizeof one);
+            }
+            snprintf(why, n, CF_MSG_STATE_PARAMS, one);
             return why;
         }
     }
@@ -1748,7 +1712,7 @@ static const char *state_problem(const cf_core *c, char *why, size_t n) {
         }
         if (!(body_ok && rigid_ok && law_ok && jac_ok && field_ok && captures_ok &&
               all_finite(c->b.out, N_OUT))) {
-            snprintf(why, n, "its model state cannot be restored (it is not finite)");
+            snprintf(why, n, CF_MSG_STATE_MODEL, CF_MSG_STATE_MODEL_NOT_FINITE);
             return why;
         }
     }
@@ -1814,8 +1778,9 @@ static void forget(Inst *I, const void *st) { /* linear probing's backward-shift
 
 static int live_or_refuse(const Inst *I, const void *st, call_id call) {
     if (live(I, st)) return 1;
-    say(I, CF_STATUS_ERROR, "%s%s: %p is not an FMU state of this instance (never given, or "
-        "freed)", I->api, call_name(I, call), (void *)(uintptr_t)st);
+    char pointer[40];
+    snprintf(pointer, sizeof pointer, "%p", (void *)(uintptr_t)st);
+    say(I, CF_STATUS_ERROR, CF_MSG_NOT_A_STATE, I->api, call_name(I, call), pointer);
     return 0;
 }
 
@@ -1826,17 +1791,16 @@ static cf_core *state_to_fill(Inst *I, void **state, call_id call) {
     cf_core *s = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core));
     if (s != NULL && keep(I, s)) return s;
     if (s != NULL) I->cb.release(I->env, s);
-    say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, call));
+    say(I, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, I->api, call_name(I, call));
     return NULL;
 }
 
 cf_status cf_get_state(cf_inst *I, void **state) {
     if (state == NULL) {
-        say(I, CF_STATUS_ERROR, "%s%s: no place for the state given",
-            I->api, call_name(I, C_GET_STATE));
+        say(I, CF_STATUS_ERROR, CF_MSG_NO_PLACE, I->api, call_name(I, CF_CALL_GET_STATE), "state");
         return CF_STATUS_ERROR;
     }
-    cf_core *s = state_to_fill(I, state, C_GET_STATE);
+    cf_core *s = state_to_fill(I, state, CF_CALL_GET_STATE);
     if (s == NULL) return CF_STATUS_ERROR;
     *s = I->c;
     *state = s;
@@ -1845,23 +1809,24 @@ cf_status cf_get_state(cf_inst *I, void **state) {
 
 cf_status cf_set_state(cf_inst *I, const void *state) {
     if (state == NULL) {
-        say(I, CF_STATUS_ERROR, "%s%s: no state given", I->api, call_name(I, C_SET_STATE));
+        say(I, CF_STATUS_ERROR, CF_MSG_NO_STATE, I->api, call_name(I, CF_CALL_SET_STATE));
         return CF_STATUS_ERROR;
     }
-    if (!live_or_refuse(I, state, C_SET_STATE)) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, state, CF_CALL_SET_STATE)) return CF_STATUS_ERROR;
     /* checked on a copy (on the heap: a transient field's core is hundreds of kB) */
     cf_core *c = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core));
     if (c == NULL) {
-        say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, C_SET_STATE));
+        say(I, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, I->api, call_name(I, CF_CALL_SET_STATE));
         return CF_STATUS_ERROR;
     }
     *c = *(const cf_core *)state;
     sanitize(c);
-    char why[512];
+    char why[2 * QUOTED + 512];
     if (state_problem(c, why, sizeof why)) { /* slave._set_fmu_state's words */
+        char refused[sizeof why + 128];
         I->cb.release(I->env, c);
-        say(I, CF_STATUS_ERROR, "the FMU state given to setFMUstate is refused: %s; the "
-            "instance's state is unchanged", why);
+        snprintf(refused, sizeof refused, CF_MSG_STATE_REFUSED, why);
+        say(I, CF_STATUS_ERROR, CF_MSG_STATE_UNCHANGED, refused);
         return CF_STATUS_ERROR;
     }
     const int captured = I->c.n_captured;
@@ -1880,11 +1845,11 @@ cf_status cf_set_state(cf_inst *I, const void *state) {
 
 cf_status cf_free_state(cf_inst *I, void **state) {
     if (state == NULL) {
-        say(I, CF_STATUS_ERROR, "%s%s: no state given", I->api, call_name(I, C_FREE_STATE));
+        say(I, CF_STATUS_ERROR, CF_MSG_NO_STATE, I->api, call_name(I, CF_CALL_FREE_STATE));
         return CF_STATUS_ERROR;
     }
     if (*state == NULL) return CF_STATUS_OK; /* the standard: nothing to free */
-    if (!live_or_refuse(I, *state, C_FREE_STATE)) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, *state, CF_CALL_FREE_STATE)) return CF_STATUS_ERROR;
     forget(I, *state);
     I->cb.release(I->env, *state);
     *state = NULL;
@@ -1908,20 +1873,19 @@ static size_t serialized_size(void) {
 
 cf_status cf_serialized_size(cf_inst *I, const void *state, size_t *size) {
     if (size == NULL) {
-        say(I, CF_STATUS_ERROR, "%s%s: no place for the size given",
-            I->api, call_name(I, C_STATE_SIZE));
+        say(I, CF_STATUS_ERROR, CF_MSG_NO_PLACE, I->api, call_name(I, CF_CALL_STATE_SIZE), "size");
         return CF_STATUS_ERROR;
     }
-    if (!live_or_refuse(I, state, C_STATE_SIZE)) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, state, CF_CALL_STATE_SIZE)) return CF_STATUS_ERROR;
     *size = serialized_size();
     return CF_STATUS_OK;
 }
 
 cf_status cf_serialize(cf_inst *I, const void *state, unsigned char *out, size_t size) {
-    if (!live_or_refuse(I, state, C_SERIALIZE)) return CF_STATUS_ERROR;
+    if (!live_or_refuse(I, state, CF_CALL_SERIALIZE)) return CF_STATUS_ERROR;
     if (out == NULL || size < serialized_size()) {
-        say(I, CF_STATUS_ERROR, "%s%s: no buffer, or one of %zu bytes (%zu "
-            "needed)", I->api, call_name(I, C_SERIALIZE), size, serialized_size());
+        say(I, CF_STATUS_ERROR, CF_MSG_SERIALIZE_BUFFER, I->api, call_name(I, CF_CALL_SERIALIZE),
+            size, serialized_size());
         return CF_STATUS_ERROR;
     }
     unsigned char *p = out;
@@ -1944,47 +1908,50 @@ cf_status cf_deserialize(cf_inst *I, const unsigned char *in, size_t size, void 
     const char *why = NULL;
     uint32_t version = 0, glen = 0;
     uint64_t plen = 0, sum = 0;
-    if (p == NULL || state == NULL) why = "no bytes";
+    char length[128];
+    if (p == NULL || state == NULL) why = CF_MSG_NO_BYTES;
     else if (size < sizeof MAGIC + 8 || memcmp(p, MAGIC, sizeof MAGIC) != 0)
-        why = "not an FMU state of a contact_fmu native FMU";
+        why = CF_MSG_NOT_SERIALIZED;
     if (why == NULL) {
         memcpy(&version, p + 8, 4);
         memcpy(&glen, p + 12, 4);
-        if (version != STATE_VERSION) why = "a format version this FMU does not read";
+        if (version != STATE_VERSION) why = CF_MSG_OTHER_VERSION;
         else if (glen != strlen(CF_GUID) || size < 16 + (size_t)glen ||
                  memcmp(p + 16, CF_GUID, glen) != 0)
-            why = "the state of another FMU (GUID differs)";
+            why = CF_MSG_OTHER_FMU;
     }
     if (why == NULL) {
-        if (size != serialized_size()) why = "damaged: its length is wrong";
-        else {
+        if (size != serialized_size()) {
+            snprintf(length, sizeof length, CF_MSG_LENGTH_DIFFERS, CF_MSG_LENGTH_OF_STATES);
+            why = length;
+        } else {
             memcpy(&plen, p + 16 + glen, 8);
             memcpy(&sum, p + size - 8, 8);
-            if (plen != sizeof(cf_core)) why = "damaged: its payload length is wrong";
-            else if (fnv1a(p, size - 8) != sum) why = "damaged: its checksum does not match";
+            if (plen != sizeof(cf_core)) why = CF_MSG_PAYLOAD_DIFFERS;
+            else if (fnv1a(p, size - 8) != sum) why = CF_MSG_CHECKSUM_DIFFERS;
         }
     }
     if (why != NULL) {
-        say(I, CF_STATUS_ERROR, "%s%s: the bytes are refused: %s",
-            I->api, call_name(I, C_DESERIALIZE), why);
+        say(I, CF_STATUS_ERROR, CF_MSG_BYTES_REFUSED, I->api, call_name(I, CF_CALL_DESERIALIZE),
+            size, why);
         return CF_STATUS_ERROR;
     }
     cf_core *c = (cf_core *)I->cb.alloc(I->env, 1, sizeof(cf_core)); /* on the heap */
     if (c == NULL) {
-        say(I, CF_STATUS_ERROR, "%s%s: out of memory", I->api, call_name(I, C_DESERIALIZE));
+        say(I, CF_STATUS_ERROR, CF_MSG_OUT_OF_MEMORY, I->api,
+            call_name(I, CF_CALL_DESERIALIZE));
         return CF_STATUS_ERROR;
     }
     memcpy(c, p + 16 + glen + 8, sizeof(cf_core));
     sanitize(c);
-    char problem[512];
+    char problem[2 * QUOTED + 512];
     if (state_problem(c, problem, sizeof problem)) {
         I->cb.release(I->env, c);
-        say(I, CF_STATUS_ERROR, "%s%s: the bytes are refused: %s",
-            I->api, call_name(I, C_DESERIALIZE),
-            problem);
+        say(I, CF_STATUS_ERROR, CF_MSG_BYTES_REFUSED, I->api, call_name(I, CF_CALL_DESERIALIZE),
+            size, problem);
         return CF_STATUS_ERROR;
     }
-    cf_core *s = state_to_fill(I, state, C_DESERIALIZE);
+    cf_core *s = state_to_fill(I, state, CF_CALL_DESERIALIZE);
     if (s != NULL) *s = *c;
     I->cb.release(I->env, c);
     if (s == NULL) return CF_STATUS_ERROR;

@@ -3,8 +3,8 @@
  * instance.c holds every rule of the FMU that is not FMI 2.0 plumbing: the phases
  * (instantiated, initialisation, stepping, terminated) and which call each admits, the
  * checks of a value against its declared range, of a step's time and size and the
- * admission of a step, the wording of every message (the pythonfmu FMU's, word for
- * word: tests/test_native_fmu.py), the FMU states (one format, one registry of the live
+ * admission of a step, every message (in the words of contact_fmu/fmu/messages.py, the
+ * pythonfmu FMU's too: the generated cf_messages.h), the FMU states (one format, one registry of the live
  * states an instance handed out), their serialisation, the creep-force table resource
  * (a file URI) and its CRC. A front end (fmi2.c for FMI 2.0, fmi3.c for FMI 3.0)
  * translates its arguments and statuses and calls these functions, a few lines each.
@@ -17,8 +17,8 @@
  * front end's to refuse. Messages that name an FMI call or status begin the name with
  * the API prefix given at instantiation, "fmi2" or "fmi3", and name the call as that
  * version does ("fmi2SetReal: ..." / "fmi3SetFloat64: ...", "fmi2DeSerializeFMUstate" /
- * "fmi3DeserializeFMUState", "doStep answers fmi2Discard" / "fmi3Discard": instance.c's
- * table of call names); categories are those
+ * "fmi3DeserializeFMUState", "doStep answers fmi2Discard" / "fmi3Discard": the table of
+ * call names CF_CALL_NAMES of cf_messages.h); categories are those
  * of the model description's LogCategories
  * (logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll). */
 #ifndef CF_INSTANCE_H
