@@ -553,7 +553,6 @@ static int build(Inst *I) {
     memset(&s, 0, sizeof s);
     cf_model_constants(&p, &b);
     cf_model_attach_table(I->table, &p);
-    char why[512];
     if (load_refused(v[R_P], why, sizeof why)) { /* the law first, as make_law */
         say(I, CF_STATUS_ERROR, CF_MSG_CANNOT_INITIALISE, why);
         return 0;
