@@ -47,7 +47,7 @@ from contact_fmu.fmu.slave import CELL_VR, ContactSlave
 from contact_fmu.integrator import EvalBudget, RollingBody
 from contact_fmu.native import field as native_field
 from contact_fmu.scenario import load
-from contact_fmu.scenario.instance import DISCARD, ERROR, OK, Instance
+from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from contact_fmu.transient import TransientRollingBody
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -461,3 +461,53 @@ def test_hostile_loads_on_the_transient_field_take_bounded_internal_steps_in_pro
                 t += call
             assert counter.python - python <= cap
             assert all(n <= cap for n in counter.compiled[compiled:]), counter.compiled
+
+
+def test_transient_state_round_trips_through_the_fmi3_front_end_and_damage_is_refused():
+    """The native transient FMU's state through FMI 3.0 (the FMI 2.0 front end's:
+    tests/test_native_transient.py): got while the field forms, steps, set back, the same
+    steps give the same doubles; serialized into a fresh instance, the same again. Bytes
+    with a flipped byte, cut short, or the FMI 2.0 FMU's state of the same field (another
+    instantiation token) are refused with Error naming why; the outputs stay, the
+    instance steps on."""
+    h = 2e-5  # the scene's communication step
+    with Instance(build("native", "fig12_transient"), "fmi2") as b:
+        assert _do_step(b, 0.0, h) == OK
+        foreign = b.serialize_state(b.get_state())
+    path = build("native3", "fig12_transient")
+    with open_fmu("native3", path) as a, open_fmu("native3", path) as fresh:
+
+        def steps(inst, n: int) -> None:
+            for _ in range(n):
+                assert inst.step(h) == OK, inst.messages[-1:]
+
+        steps(a, 20)
+        state, at = a.fmu.getFMUState(), a.time
+        steps(a, 10)
+        first = a.outputs()
+        a.fmu.setFMUState(state)
+        a.time = at
+        steps(a, 10)
+        assert a.outputs() == first
+        data = a.fmu.serializeFMUState(state)
+        fresh.fmu.setFMUState(fresh.fmu.deserializeFMUState(data))
+        fresh.time = at
+        steps(fresh, 10)
+        assert fresh.outputs() == first
+        flipped = bytearray(data)
+        flipped[len(data) // 2] ^= 0x10  # inside the field's tractions
+        cases = {
+            "flipped": (bytes(flipped), "checksum"),
+            "cut short": (data[:-9], "length"),
+            "fmi2": (foreign, "another FMU"),
+        }
+        for case, (raw, reason) in cases.items():
+            before = a.outputs()
+            with pytest.raises(FMICallException) as e:
+                a.fmu.deserializeFMUState(raw)
+            assert e.value.status == ERROR, case
+            assert reason in a.messages[-1][1], (case, a.messages[-1:])
+            assert a.outputs() == before
+            steps(a, 1)
+        a.fmu.freeFMUState(state)
+        assert all(s < FATAL for s, _ in a.messages)
