@@ -159,7 +159,8 @@ BENCHMARKS = [
     Benchmark(
         "native_transient", "bench_native",
         "fig12_transient: pythonfmu (compiled, Python) and native FMI 2.0 / 3.0 FMUs",
-        args=("--transient", "--steps", "350", "--repeats", "5", "--importer-steps", "3500"),
+        args=("--transient", "--steps", "350", "--repeats", "5", "--importer-steps", "350",
+              "--callgrind"),
         quick=("--transient", "--steps", "3", "--repeats", "1", "--importer-steps", "20"),
         blocks=("bench_native.py transient",), cheap=True,
     ),

@@ -35,7 +35,8 @@ library it carries (fmu_build.compiles) and the same pythonfmu FMU built without
     .venv/bin/python benchmarks/bench_native.py --transient [--steps N] [--repeats R]
         [--importer-steps M] [--write]
 
-(``python -m benchmarks native_transient``: N = 350, the whole case, R = 5, M = 3500)
+(``python -m benchmarks native_transient``: N = M = 350, the whole case, R = 5,
+with --callgrind)
 
 measures instead the communication step of fig12_transient (the body on the 32 x 16
 thin-layer field, phase "transient"; its case eta = 2.92, the scene's inputs, steps of
@@ -44,9 +45,14 @@ doStep, getReal of the scene's outputs; FMU2Slave, FMU3Slave for FMI 3.0) the py
 FMU (the field compiled, its fast path), the same pythonfmu FMU built without the
 compiled library (all in Python), the native FMI 2.0 and FMI 3.0 FMUs; and from the C
 importers without Python (tests/native_importer.c, native_importer3.c) the two native
-FMUs, the case repeated from its start state for N steps, the fastest of three runs.
-Each figure is also given as a ratio to the pythonfmu FMU's step through fmpy, the
-baseline; ``--write`` replaces TRANSIENT_BLOCK.
+FMUs, the case repeated from its start state for M steps, the fastest of three passes
+(a whole pass: on a loaded machine it carries more of the other processes' time than
+fmpy's rows, which take each step's fastest run). Each figure is
+also given as a ratio to the pythonfmu FMU's step through fmpy, the baseline. With
+``--callgrind`` the two native FMUs' steps from the C importers are also counted in
+machine instructions (valgrind's callgrind, bench_front_ends.py's count: the bench run
+of one case and of two, the difference over the 3 x 350 steps between them; the same
+count whatever else the machine runs). ``--write`` replaces TRANSIENT_BLOCK.
 """
 
 from __future__ import annotations
@@ -72,9 +78,11 @@ from fmu_build import c_importer, native_fmu, native_fmu3
 if __package__:  # python -m benchmarks
     from . import harness
     from .bench_cosim import Stepper, null_fmu
+    from .bench_front_ends import instructions_per_step
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
     from bench_cosim import Stepper, null_fmu  # type: ignore[no-redef]
+    from bench_front_ends import instructions_per_step  # type: ignore[no-redef]
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -325,12 +333,16 @@ TRANSIENT_CASE = "eta = 2.92"
 PYTHONFMU = "pythonfmu, compiled (fmpy)"  # the baseline of the transient report
 
 
-def transient_costs(steps: int, repeats: int, importer_steps: int) -> dict[str, float]:
+def transient_costs(
+    steps: int, repeats: int, importer_steps: int, callgrind: bool = False
+) -> tuple[dict[str, float], dict[str, float]]:
     """Seconds per communication step of fig12_transient's case TRANSIENT_CASE: through
     fmpy the pythonfmu FMU (compiled), the same built without the library (Python), the
     native FMI 2.0 and FMI 3.0 FMUs (their first ``steps`` steps, interleaved as
     step_costs); from the C importers the two native FMUs (1 / their steps per second,
-    timed in the same rounds)."""
+    the fastest of their passes in all rounds, which run between step_costs'). With
+    ``callgrind`` also the importers' instructions per
+    step (else an empty dict)."""
     import fmpy
 
     scene = load(ROOT / "scenarios" / "fig12_transient.toml")
@@ -376,7 +388,11 @@ def transient_costs(steps: int, repeats: int, importer_steps: int) -> dict[str, 
                 rates.setdefault(name, []).append(harness.importer_rate(args))
 
         cost = interleaved(runs, steps, repeats, between=importers)
-    return cost | {name: 1.0 / max(r) for name, r in rates.items()}
+        n = scene.n_steps  # one case against two: 3 x n steps between the counts
+        counts = {}
+        if callgrind:
+            counts = {k: instructions_per_step(a, work, n, 2 * n) for k, a in argv.items()}
+    return cost | {name: 1.0 / max(r) for name, r in rates.items()}, counts
 
 
 def _float_parameters_only(text: str, md) -> str:
@@ -390,13 +406,14 @@ def _float_parameters_only(text: str, md) -> str:
     return "\n".join(lines)
 
 
-def transient_report(cost: dict[str, float], args) -> str:
+def transient_report(cost: dict[str, float], counts: dict[str, float], args) -> str:
     scene = load(ROOT / "scenarios" / "fig12_transient.toml")
     h, n = scene.step, min(args.steps, scene.n_steps)
     base = cost[PYTHONFMU]
     lines = [
         f"Made by `benchmarks/bench_native.py --transient --steps {args.steps} --repeats "
-        f"{args.repeats} --importer-steps {args.importer_steps} --write` on "
+        f"{args.repeats} --importer-steps {args.importer_steps}"
+        f"{' --callgrind' if counts else ''} --write` on "
         f"{datetime.date.today()} ({harness.machine()}; the ratios are the result).",
         "",
         f"fig12_transient, case {TRANSIENT_CASE} (the body on the 32 x 16 field, steps of "
@@ -404,8 +421,11 @@ def transient_report(cost: dict[str, float], args) -> str:
         f"{len(scene.inputs)} inputs, doStep, getReal of the Real outputs): the first {n} "
         f"steps, mean of each step's fastest of {args.repeats} interleaved runs. From the C "
         f"importers (no Python): the case repeated from its start state for "
-        f"{args.importer_steps} steps, fastest of three runs, best of the {args.repeats} "
-        "rounds, timed in the same rounds. *Python*: the pythonfmu FMU built without the "
+        f"{args.importer_steps} steps, the fastest of three passes in each of {args.repeats} "
+        "rounds run between those of fmpy: a whole pass, where fmpy's figure takes each "
+        "step's fastest run, so on a loaded machine the importers' rows can come out slower; "
+        "the instruction counts below compare their front ends exactly. *Python*: the "
+        "pythonfmu FMU built without the "
         "compiled library (fmu_build.compiles), the adapter and the field in Python.",
         "",
         "| FMU (driven by) | us per step | wall s per simulated s | / pythonfmu, compiled |",
@@ -413,6 +433,17 @@ def transient_report(cost: dict[str, float], args) -> str:
     ]
     for k, v in cost.items():
         lines.append(f"| {k} | {1e6 * v:.1f} | {v / h:.1f} | {v / base:.3f} |")
+    if counts:
+        ref = counts["native FMI 2.0 (C importer)"]
+        lines += [
+            "",
+            "Instructions per step from the C importers (callgrind; setReal, doStep, getReal, "
+            "the case's 350 steps): "
+            + ", ".join(
+                f"{k.split(' (')[0]} {v:.4g} (ratio {v / ref:.4f})" for k, v in counts.items()
+            )  # fmt: skip
+            + ".",
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -509,14 +540,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--full-body-only", action="store_true")
     ap.add_argument("--spin", action="store_true", help="the contact FMU with spin only")
     ap.add_argument("--transient", action="store_true", help="fig12_transient's FMUs only")
+    ap.add_argument("--callgrind", action="store_true", help="with --transient: instructions")
     args = ap.parse_args(argv)
+    if args.callgrind and not args.transient:
+        ap.error("--callgrind is an option of --transient")
     if args.transient:
         try:
-            cost = transient_costs(args.steps, args.repeats, args.importer_steps)
+            cost, counts = transient_costs(
+                args.steps, args.repeats, args.importer_steps, args.callgrind
+            )
         except harness.ImporterError as e:
             print(f"bench_native: fig12_transient: {e}", file=sys.stderr)
             return 1
-        text = transient_report(cost, args)
+        text = transient_report(cost, counts, args)
         print(text)
         if args.write:
             harness.write_block(DOC, TRANSIENT_BLOCK, text)
