@@ -160,6 +160,14 @@ BENCHMARKS = [
         blocks=("bench_native.py spin",),
     ),
     Benchmark(
+        "native_transient", "bench_native",
+        "fig12_transient: pythonfmu (compiled, Python) and native FMI 2.0 / 3.0 FMUs",
+        args=("--transient", "--steps", "350", "--repeats", "5", "--importer-steps", "350",
+              "--callgrind"),
+        quick=("--transient", "--steps", "3", "--repeats", "1", "--importer-steps", "20"),
+        blocks=("bench_native.py transient",), cheap=True,
+    ),
+    Benchmark(
         "front_ends", "bench_front_ends",
         "FMI 2.0 and 3.0 front ends of the C core against a revision (callgrind)",
         args=("--base", "cc7bca5", "--repeats", "3", "--callgrind"),

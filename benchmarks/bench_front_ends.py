@@ -134,18 +134,21 @@ def _importer_runs(trees: dict[str, Path], work: Path, n: int) -> dict[tuple, li
     return runs
 
 
-def instructions_per_step(argv: list[str], work: Path) -> float:
+def instructions_per_step(
+    argv: list[str], work: Path, short: int = 2000, long: int = 12000
+) -> float:
     """Instructions of one step (setReal, doStep, getReal) of the importer's bench run
     ``argv`` (its last argument the step count), under callgrind: the bench runs 3 passes,
-    so 12000 steps less 2000 steps is 30000 steps with the start-up cancelled."""
+    so ``long`` steps less ``short`` steps is 3 (long - short) steps with the start-up
+    cancelled (by default 30000)."""
     counts = []
-    for n in (2000, 12000):
+    for n in (short, long):
         out = subprocess.run(
             ["valgrind", "--tool=callgrind", f"--callgrind-out-file={work / 'cg.out'}",
              *argv[:-1], str(n)], capture_output=True, text=True, check=True,
         ).stderr  # fmt: skip
         counts.append(int(out.split("Collected : ")[1].split()[0]))
-    return (counts[1] - counts[0]) / 30000
+    return (counts[1] - counts[0]) / (3 * (long - short))
 
 
 def main(argv: list[str] | None = None) -> int:

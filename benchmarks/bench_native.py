@@ -31,16 +31,41 @@ measures instead the full contact FMU with a spin input (the law marching its sp
 in every evaluation) as in 1.: the native FMU, the pythonfmu FMU with the compiled
 library it carries (fmu_build.compiles) and the same pythonfmu FMU built without it
 (numpy's march), in one run; ``--write`` replaces SPIN_BLOCK.
+
+    .venv/bin/python benchmarks/bench_native.py --transient [--steps N] [--repeats R]
+        [--importer-steps M] [--write]
+
+(``python -m benchmarks native_transient``: N = M = 350, the whole case, R = 5,
+with --callgrind)
+
+measures instead the communication step of fig12_transient (the body on the 32 x 16
+thin-layer field, phase "transient"; its case eta = 2.92, the scene's inputs, steps of
+20 us) in one run, the repeats interleaved run by run: through fmpy as 1. (setReal,
+doStep, getReal of the scene's outputs; FMU2Slave, FMU3Slave for FMI 3.0) the pythonfmu
+FMU (the field compiled, its fast path), the same pythonfmu FMU built without the
+compiled library (all in Python), the native FMI 2.0 and FMI 3.0 FMUs; and from the C
+importers without Python (tests/native_importer.c, native_importer3.c) the two native
+FMUs, the case repeated from its start state for M steps, the fastest of three passes
+(a whole pass: on a loaded machine it carries more of the other processes' time than
+fmpy's rows, which take each step's fastest run). Each figure is
+also given as a ratio to the pythonfmu FMU's step through fmpy, the baseline. With
+``--callgrind`` the two native FMUs' steps from the C importers are also counted in
+machine instructions (valgrind's callgrind, bench_front_ends.py's count: the bench run
+of one case and of two, the difference over the 3 x 350 steps between them; the same
+count whatever else the machine runs). ``--write`` replaces TRANSIENT_BLOCK.
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import platform
 import subprocess
 import sys
 import tempfile
+import time
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -48,14 +73,16 @@ import numpy as np
 import fmu_build
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load, runner
-from fmu_build import c_importer, native_fmu
+from fmu_build import c_importer, native_fmu, native_fmu3
 
 if __package__:  # python -m benchmarks
     from . import harness
     from .bench_cosim import Stepper, null_fmu
+    from .bench_front_ends import instructions_per_step
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
     from bench_cosim import Stepper, null_fmu  # type: ignore[no-redef]
+    from bench_front_ends import instructions_per_step  # type: ignore[no-redef]
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "fmu"
@@ -65,6 +92,7 @@ DOC = ROOT / "docs" / "performance.md"
 BLOCK = "bench_native.py"
 FULL_BLOCK = "bench_native.py full-body"
 SPIN_BLOCK = "bench_native.py spin"
+TRANSIENT_BLOCK = "bench_native.py transient"  # --transient: fig12_transient
 TRIVIAL_C = Path(__file__).with_name("trivial_fmu.c")
 
 
@@ -146,18 +174,59 @@ def step_costs(steps: int, repeats: int) -> dict[str, float]:
     return interleaved(runs, steps, repeats)
 
 
-def interleaved(runs: dict, steps: int, repeats: int) -> dict[str, float]:
-    """Seconds per step of each run (path, starts, inputs, outputs, input table, h):
-    the repeats interleaved run by run, the mean over the steps of each step's fastest."""
+class Stepper3:
+    """bench_cosim.Stepper for an FMI 3.0 FMU (fmpy's FMU3Slave, harness.Instance3): step
+    k sets the inputs (setFloat64), steps, reads the outputs (getFloat64)."""
+
+    def __init__(self, path: Path, name: str, starts, inputs, outputs, table, h):
+        self.inst = harness.Instance3(path, name, starts)
+        self.vin = [self.inst.vars[n].valueReference for n in inputs]
+        self.vout = [self.inst.vars[n].valueReference for n in outputs]
+        nrows = len(table[inputs[0]])
+        self.rows = [[float(table[n][k]) for n in inputs] for k in range(nrows)]
+        self.h = h
+
+    def step(self, k: int) -> float:
+        inst, fmu = self.inst, self.inst.fmu
+        t0 = time.perf_counter()
+        fmu.setFloat64(self.vin, self.rows[k])
+        status = inst.do_step(inst.time, self.h)
+        fmu.getFloat64(self.vout)
+        dt = time.perf_counter() - t0
+        if status != 0:
+            raise RuntimeError(f"fmi3DoStep answered {status}: {inst.messages[-1:]}")
+        inst.time += self.h
+        return dt
+
+    def close(self) -> None:
+        self.inst.close()
+
+
+def _is_fmi3(path: Path) -> bool:
+    import fmpy
+
+    return fmpy.read_model_description(str(path)).fmiVersion.startswith("3")
+
+
+def interleaved(
+    runs: dict, steps: int, repeats: int, between: Callable[[], None] | None = None
+) -> dict[str, float]:
+    """Seconds per step of each run (path, starts, inputs, outputs, input table, h; FMI
+    2.0 or 3.0): the repeats interleaved run by run, the mean over the steps of each
+    step's fastest. ``between``: called after each round of runs (more candidates
+    timed in the same rounds)."""
     times = {k: np.empty((repeats, steps)) for k in runs}
+    kinds = {k: Stepper3 if _is_fmi3(run[0]) else Stepper for k, run in runs.items()}
     for r in range(repeats):
         for name, (path, st, ins, outs, tab, h) in runs.items():
-            s = Stepper(path, name.replace(" ", "_"), st, ins, outs, tab, h)
+            s = kinds[name](path, name.replace(" ", "_"), st, ins, outs, tab, h)
             try:
                 for k in range(steps):
                     times[name][r, k] = s.step(k)
             finally:
                 s.close()
+        if between is not None:
+            between()
     return {k: float(np.mean(np.min(v, axis=0))) for k, v in times.items()}
 
 
@@ -260,6 +329,124 @@ def spin_report(cost: dict[str, float], args) -> str:
     return "\n".join(lines) + "\n"
 
 
+TRANSIENT_CASE = "eta = 2.92"
+PYTHONFMU = "pythonfmu, compiled (fmpy)"  # the baseline of the transient report
+
+
+def transient_costs(
+    steps: int, repeats: int, importer_steps: int, callgrind: bool = False
+) -> tuple[dict[str, float], dict[str, float]]:
+    """Seconds per communication step of fig12_transient's case TRANSIENT_CASE: through
+    fmpy the pythonfmu FMU (compiled), the same built without the library (Python), the
+    native FMI 2.0 and FMI 3.0 FMUs (their first ``steps`` steps, interleaved as
+    step_costs); from the C importers the two native FMUs (1 / their steps per second,
+    the fastest of their passes in all rounds, which run between step_costs'). With
+    ``callgrind`` also the importers' instructions per
+    step (else an empty dict)."""
+    import fmpy
+
+    scene = load(ROOT / "scenarios" / "fig12_transient.toml")
+    case = scene.case(TRANSIENT_CASE)
+    cfg = scene.config
+    compiles = fmu_build.compiles
+    fmu_build.compiles = lambda c: False  # the FMU without contact_fmu/native's library
+    try:
+        python_path = fmu_build.build(cfg, OUT / "python_path").path
+    finally:
+        fmu_build.compiles = compiles
+    native = {"2": native_fmu.build(cfg, OUT).path, "3": native_fmu3.build(cfg, OUT).path}
+    io = (runner.start_values(scene, case), scene.inputs,
+          [o for o in scene.outputs if o != "regime"], runner.input_table(scene, case),
+          scene.step)  # fmt: skip
+    runs = {
+        PYTHONFMU: (fmu_build.build(cfg, OUT).path, *io),
+        "pythonfmu, Python (fmpy)": (python_path, *io),
+        "native FMI 2.0 (fmpy)": (native["2"], *io),
+        "native FMI 3.0 (fmpy)": (native["3"], *io),
+    }
+    steps = min(steps, scene.n_steps)
+    rates: dict[str, list[float]] = {}
+    with tempfile.TemporaryDirectory() as work:
+        work = Path(work)
+        argv = {}
+        for v, path in native.items():
+            unzip = work / f"fmi{v}"
+            fmpy.extract(str(path), str(unzip))
+            md = fmpy.read_model_description(str(unzip))
+            spec = work / f"fmi{v}.txt"
+            spec.write_text(_float_parameters_only(c_importer.spec(md, scene, case), md))
+            ident = md.coSimulation.modelIdentifier
+            folder = f"{platform.machine()}-linux" if v == "3" else "linux64"
+            lib = str(unzip / "binaries" / folder / f"{ident}.so")
+            exe = str(harness.compile_importer(work, fmi3=v == "3"))
+            head = [exe, lib, md.guid] + ([ident] if v == "2" else [])
+            argv[f"native FMI {v}.0 (C importer)"] = [*head, "bench", str(spec),
+                                                      str(importer_steps)]  # fmt: skip
+
+        def importers() -> None:
+            for name, args in argv.items():
+                rates.setdefault(name, []).append(harness.importer_rate(args))
+
+        cost = interleaved(runs, steps, repeats, between=importers)
+        n = scene.n_steps  # one case against two: 3 x n steps between the counts
+        counts = {}
+        if callgrind:
+            counts = {k: instructions_per_step(a, work, n, 2 * n) for k, a in argv.items()}
+    return cost | {name: 1.0 / max(r) for name, r in rates.items()}, counts
+
+
+def _float_parameters_only(text: str, md) -> str:
+    """The importers' input with only the Real (Float64) parameters: they set doubles;
+    the grid nx, ny is an integer at its fixed start, the strings stay at theirs."""
+    real = {v.valueReference for v in md.modelVariables if v.type in ("Real", "Float64")}
+    lines = text.split("\n")
+    pairs = lines[2].split()[1:]
+    kept = [(a, b) for a, b in zip(pairs[::2], pairs[1::2], strict=True) if int(a) in real]
+    lines[2] = f"{len(kept)} " + " ".join(f"{a} {b}" for a, b in kept)
+    return "\n".join(lines)
+
+
+def transient_report(cost: dict[str, float], counts: dict[str, float], args) -> str:
+    scene = load(ROOT / "scenarios" / "fig12_transient.toml")
+    h, n = scene.step, min(args.steps, scene.n_steps)
+    base = cost[PYTHONFMU]
+    lines = [
+        f"Made by `benchmarks/bench_native.py --transient --steps {args.steps} --repeats "
+        f"{args.repeats} --importer-steps {args.importer_steps}"
+        f"{' --callgrind' if counts else ''} --write` on "
+        f"{datetime.date.today()} ({harness.machine()}; the ratios are the result).",
+        "",
+        f"fig12_transient, case {TRANSIENT_CASE} (the body on the 32 x 16 field, steps of "
+        f"{h:g} s: two internal SDIRK2 steps each). Through fmpy (setReal of the "
+        f"{len(scene.inputs)} inputs, doStep, getReal of the Real outputs): the first {n} "
+        f"steps, mean of each step's fastest of {args.repeats} interleaved runs. From the C "
+        f"importers (no Python): the case repeated from its start state for "
+        f"{args.importer_steps} steps, the fastest of three passes in each of {args.repeats} "
+        "rounds run between those of fmpy: a whole pass, where fmpy's figure takes each "
+        "step's fastest run, so on a loaded machine the importers' rows can come out slower; "
+        "the instruction counts below compare their front ends exactly. *Python*: the "
+        "pythonfmu FMU built without the "
+        "compiled library (fmu_build.compiles), the adapter and the field in Python.",
+        "",
+        "| FMU (driven by) | us per step | wall s per simulated s | / pythonfmu, compiled |",
+        "|---|---|---|---|",
+    ]
+    for k, v in cost.items():
+        lines.append(f"| {k} | {1e6 * v:.1f} | {v / h:.1f} | {v / base:.3f} |")
+    if counts:
+        ref = counts["native FMI 2.0 (C importer)"]
+        lines += [
+            "",
+            "Instructions per step from the C importers (callgrind; setReal, doStep, getReal, "
+            "the case's 350 steps): "
+            + ", ".join(
+                f"{k.split(' (')[0]} {v:.4g} (ratio {v / ref:.4f})" for k, v in counts.items()
+            )  # fmt: skip
+            + ".",
+        ]
+    return "\n".join(lines) + "\n"
+
+
 def importer_rates(n: int) -> dict[str, float]:
     """Steps per second of the native Fig. 13 FMU from the C importer, per method: the
     case eta = 3 repeated from its start state for n steps."""
@@ -352,7 +539,24 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--write", action="store_true")
     ap.add_argument("--full-body-only", action="store_true")
     ap.add_argument("--spin", action="store_true", help="the contact FMU with spin only")
+    ap.add_argument("--transient", action="store_true", help="fig12_transient's FMUs only")
+    ap.add_argument("--callgrind", action="store_true", help="with --transient: instructions")
     args = ap.parse_args(argv)
+    if args.callgrind and not args.transient:
+        ap.error("--callgrind is an option of --transient")
+    if args.transient:
+        try:
+            cost, counts = transient_costs(
+                args.steps, args.repeats, args.importer_steps, args.callgrind
+            )
+        except harness.ImporterError as e:
+            print(f"bench_native: fig12_transient: {e}", file=sys.stderr)
+            return 1
+        text = transient_report(cost, counts, args)
+        print(text)
+        if args.write:
+            harness.write_block(DOC, TRANSIENT_BLOCK, text)
+        return 0
     if args.spin:
         text = spin_report(spin_costs(args.steps, args.repeats), args)
         print(text)

@@ -3,8 +3,9 @@
 
     python benchmarks/bench_worst_step.py [--repeat N] [--write]
 
-Each FMU (the pythonfmu FMU, and the native one where it exists) is loaded through fmpy
-(contact_fmu.scenario.instance.Instance), driven with loads that keep its degrees of
+Each FMU (the pythonfmu FMU, the native one where it exists, and for fig12_transient also
+the native FMI 3.0 FMU) is loaded through fmpy (contact_fmu.scenario.instance.Instance;
+harness.Instance3 for FMI 3.0), driven with loads that keep its degrees of
 freedom moving (a lateral force and yaw moment where it integrates Eqs. 10-11), and one
 doStep of h = 10 * MAX_WORK * h_max is timed (the fastest of the repeats); it answers
 fmi2Warning (the budget lowered the accuracy), its note saying how many internal steps
@@ -20,15 +21,12 @@ import re
 import time
 from pathlib import Path
 
-from fmpy.fmi1 import FMICallException
-
 import fmu_build
 from contact_fmu import examples as ex
 from contact_fmu.fmu.body_model import MAX_WORK
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load
-from contact_fmu.scenario.instance import Instance
-from fmu_build import native_fmu
+from fmu_build import native_fmu, native_fmu3
 
 if __package__:  # python -m benchmarks
     from . import harness
@@ -63,6 +61,9 @@ def kinds() -> list[tuple[str, str, Path, dict, dict]]:
         out.append((label, "pythonfmu", fmu_build.build(cfg, OUT).path, starts, inputs))
         if native_fmu.unsupported(cfg) is None:
             out.append((label, "native", native_fmu.build(cfg, OUT).path, starts, inputs))
+        if name == "fig12_transient":  # the FMI 3.0 front end on the same core
+            path = native_fmu3.build(cfg, OUT).path
+            out.append((label, "native FMI 3.0", path, starts, inputs))
     return out
 
 
@@ -71,15 +72,12 @@ def worst(path: Path, starts: dict, inputs: dict, repeat: int) -> tuple[float, f
     start beyond the budget."""
     best, status, h, steps = float("inf"), -1, 0.0, "?"
     for _ in range(repeat):
-        with Instance(path, "worst", starts) as b:
+        with harness.open_fmu(path, "worst", starts) as b:
             for n, v in inputs.items():
                 b.set(n, v)
             h = 10.0 * MAX_WORK * b.get("h_max")
             t0 = time.perf_counter()
-            try:
-                status = b.fmu.fmi2DoStep(b.fmu.component, 0.0, h, 1)
-            except FMICallException as e:
-                status = int(e.status)
+            status = harness.do_step(b, 0.0, h)
             best = min(best, time.perf_counter() - t0)
             note = re.search(r"taken in (\d+) steps", b.messages[-1][1] if b.messages else "")
             steps = note.group(1) if note else "-"
