@@ -94,6 +94,9 @@ MIN_NY = 2
 MIN_SPEED_FRACTION = 0.1
 # Iterations of the scalar stage solve (Newton in a bracket; typically 3 to 5).
 MAX_STAGE_ITERATIONS = 200
+# The most columns one stage may roll the lattice by: beyond, the loads or the step drive
+# the body past what the field resolves (and the shift leaves a C long; field.c's limit).
+SHIFT_MAX = 1e9
 
 
 @dataclass(frozen=True)
@@ -434,6 +437,11 @@ class LayerField:
                 return StageField(theta, shift, ds, x, tx, ty, slip, inside, w, dT, J, T)
         k = self.law.k
         u = base.theta - ds / self.dx
+        if not (math.isfinite(u) and abs(math.floor(u)) <= SHIFT_MAX):  # as field.c
+            raise FloatingPointError(
+                f"the step would roll the traction field's lattice by more than {SHIFT_MAX:g} "
+                "columns (the loads or the step drive the body beyond what the field resolves)"
+            )
         shift = math.floor(u)
         theta = u - shift
         x = -self.X + (np.arange(self.nx) + theta) * self.dx

@@ -296,10 +296,8 @@ FIELD_NO_ROOT = Message(
 FIELD_SHIFT = Message(
     "the step would roll the traction field's lattice by more than {columns:g} columns (the "
     "loads or the step drive the body beyond what the field resolves)",
-    home=NATIVE,
-    # transient.LayerField states no such limit: there such a step fails with numpy's
-    # OverflowError (Python int too large to convert to C long), a cruder word for it
-    only="the Python field has no limit of its own (an OverflowError there)",
+    home="dynamics/thin_layer_field.py",
+    raised="FloatingPointError",
 )
 FIELD_NOT_FINITE = Message(
     "the traction field's step is not finite (the loads or the step drive it beyond the doubles)",

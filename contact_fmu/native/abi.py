@@ -392,6 +392,8 @@ CONSTANTS: tuple[tuple[str, str, str, str], ...] = (
     ("CF_FIELD_A21", "double", "dynamics.thin_layer_field.A21", ""),
     ("CF_FIELD_MIN_SPEED_FRACTION", "double", "dynamics.thin_layer_field.MIN_SPEED_FRACTION", ""),
     ("CF_FIELD_MAX_ITERATIONS", "int", "dynamics.thin_layer_field.MAX_STAGE_ITERATIONS", ""),
+    ("CF_FIELD_SHIFT_MAX", "double", "dynamics.thin_layer_field.SHIFT_MAX",
+     "(columns a stage may roll the lattice by)"),
 )  # fmt: skip
 
 

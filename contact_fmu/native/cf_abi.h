@@ -41,6 +41,8 @@
 #define CF_FIELD_A21 0.7071067811865476      /* dynamics.thin_layer_field.A21 */
 #define CF_FIELD_MIN_SPEED_FRACTION 0.1      /* dynamics.thin_layer_field.MIN_SPEED_FRACTION */
 #define CF_FIELD_MAX_ITERATIONS 200          /* dynamics.thin_layer_field.MAX_STAGE_ITERATIONS */
+/* dynamics.thin_layer_field.SHIFT_MAX (columns a stage may roll the lattice by) */
+#define CF_FIELD_SHIFT_MAX 1000000000.0
 
 /* The outputs of RollingBody.outputs() in the order of cf_body.out. */
 enum {

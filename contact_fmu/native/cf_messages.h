@@ -183,11 +183,10 @@
 #define CF_MSG_FIELD_NO_ROOT \
     "StageSolveError: no slip velocity satisfies the stage equation (target force %.6g N against " \
     "mu P = %.6g N)"
-/* FIELD_SHIFT: columns (g); the native FMUs only: the Python field has no limit of its own
- * (an OverflowError there) */
+/* FIELD_SHIFT: columns (g); dynamics/thin_layer_field.py */
 #define CF_MSG_FIELD_SHIFT \
-    "the step would roll the traction field's lattice by more than %g columns (the loads or the " \
-    "step drive the body beyond what the field resolves)"
+    "FloatingPointError: the step would roll the traction field's lattice by more than %g " \
+    "columns (the loads or the step drive the body beyond what the field resolves)"
 /* FIELD_NOT_FINITE: no argument; the native FMUs only: Python's field raises where a value
  * first overflows, with numpy's words */
 #define CF_MSG_FIELD_NOT_FINITE \

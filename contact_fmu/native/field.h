@@ -24,10 +24,6 @@ enum {
     CF_FIELD_BUDGET = 5     /* the stage solves need more evaluations than eval_limit */
 };
 
-/* Largest |shift| (columns) a stage may move the lattice by: far beyond any grid (a
- * shift of nx columns or more already empties it), small enough for any index. */
-#define CF_FIELD_SHIFT_MAX 1e9
-
 /* The structs of these calls, cf_field (the grid and law), cf_field_stage_in and
  * cf_field_stage_out (a stage's inputs and results), cf_field_body and
  * cf_field_body_state (the body and its state), are declared once in
