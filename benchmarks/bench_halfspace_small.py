@@ -94,7 +94,9 @@ def fresh_old(old, m, n=None):
     cache = getattr(prev, "_cerruti_reference", None)
     if cache is not None:
         cache.cache_clear()
-    return old.wheel_on_rail(n=(m, m) if n is None else n)
+    # the previous revision's int m is today's (m, m): before the one grid rule a pair
+    # spared an element in y as well, a grid of other elements
+    return old.wheel_on_rail(n=m if n is None else n)
 
 
 def crossover(m: int) -> None:

@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from contact_fmu.scenario.instance import Instance3
+
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 PERFORMANCE = DOCS / "performance.md"
@@ -247,129 +249,6 @@ def importer_rate(args: list[str]) -> float:
 
 
 # --- FMI 3.0 ---------------------------------------------------------------------------
-
-
-class Instance3:
-    """An FMI 3.0 co-simulation FMU through fmpy's FMU3Slave, the shape of
-    contact_fmu.scenario.instance.Instance (which drives FMI 2.0 only) as the benchmarks
-    use it: values set and got by name, ``step`` answering the FMI status, FMU states,
-    the log messages kept; ``do_step(t, h)`` the raw status of fmi3DoStep (Warning
-    included, which fmpy does not raise)."""
-
-    def __init__(
-        self,
-        path: str | Path,
-        name: str = "instance3",
-        start_values: dict[str, Any] | None = None,
-        initialise: bool = True,
-    ) -> None:
-        import shutil
-        import tempfile
-
-        import fmpy
-        from fmpy.fmi1 import FMICallException
-        from fmpy.fmi3 import FMU3Slave
-
-        self.dir = Path(tempfile.mkdtemp(prefix="fmu3-"))
-        self._rmtree = shutil.rmtree
-        fmpy.extract(str(path), str(self.dir))
-        self.md = fmpy.read_model_description(str(self.dir))
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.messages: list[tuple[int, str]] = []
-        self.fmu = FMU3Slave(
-            guid=self.md.guid,
-            unzipDirectory=str(self.dir),
-            modelIdentifier=self.md.coSimulation.modelIdentifier,
-            instanceName=name,
-        )
-        self.fmu.instantiate(loggingOn=True, logMessage=self._log)
-        self.time = 0.0
-        self.initialised = False
-        try:
-            self.fmu.enterInitializationMode(startTime=0.0)
-            for k, v in (start_values or {}).items():
-                self.set(k, v)
-            if initialise:
-                self.initialise()
-        except FMICallException:
-            self.close()
-            raise
-
-    def _log(self, env, status, category, message) -> None:
-        self.messages.append((int(status), message.decode(errors="replace")))
-
-    def initialise(self) -> None:
-        self.fmu.exitInitializationMode()
-        self.initialised = True
-
-    def set(self, name: str, value: Any) -> None:
-        v = self.vars[name]
-        if v.type == "Int32":
-            self.fmu.setInt32([v.valueReference], [int(value)])
-        elif v.type == "String":
-            self.fmu.setString([v.valueReference], [str(value)])
-        else:
-            self.fmu.setFloat64([v.valueReference], [float(value)])
-
-    def get(self, name: str) -> Any:
-        v = self.vars[name]
-        if v.type == "Int32":
-            return self.fmu.getInt32([v.valueReference])[0]
-        if v.type == "String":
-            return self.fmu.getString([v.valueReference])[0]
-        return self.fmu.getFloat64([v.valueReference])[0]
-
-    def outputs(self) -> dict[str, Any]:
-        return {n: self.get(n) for n, v in self.vars.items() if v.causality == "output"}
-
-    def do_step(self, t: float, h: float) -> int:
-        """fmi3DoStep from t by h: its status (fmpy raises above Warning: caught)."""
-        from ctypes import byref
-
-        from fmpy.fmi1 import FMICallException
-        from fmpy.fmi3 import fmi3Boolean, fmi3Float64
-
-        flags = [fmi3Boolean() for _ in range(3)]
-        last = fmi3Float64()
-        try:
-            status = self.fmu.fmi3DoStep(
-                self.fmu.component, t, h, fmi3Boolean(True), *map(byref, flags), byref(last)
-            )
-        except FMICallException as e:
-            return int(e.status)
-        return int(status)
-
-    def step(self, h: float, time: float | None = None) -> int:
-        """doStep from ``time`` (default: the instance's time) by h; the FMI status."""
-        t = self.time if time is None else time
-        status = self.do_step(t, h)
-        if status <= 1:
-            self.time = t + h
-        return status
-
-    def get_state(self) -> Any:
-        return (self.fmu.getFMUState(), self.time)
-
-    def set_state(self, state: Any) -> None:
-        s, self.time = state
-        self.fmu.setFMUState(s)
-
-    def free_state(self, state: Any) -> None:
-        self.fmu.freeFMUState(state[0])
-
-    def close(self) -> None:
-        try:
-            if self.initialised:  # terminate ends an initialised model only
-                self.fmu.terminate()
-        finally:
-            self.fmu.freeInstance()
-            self._rmtree(self.dir, ignore_errors=True)
-
-    def __enter__(self) -> Instance3:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 def open_fmu(

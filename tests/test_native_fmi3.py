@@ -19,20 +19,18 @@ import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
-from typing import Any
 
 import fmpy
 import native_c
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi3 import FMU3Slave
 
 from contact_fmu import examples as ex
 from contact_fmu.fmu import messages as words
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.laws.thin_layer import LayerContact
-from contact_fmu.scenario import load, runner
+from contact_fmu.scenario import instance, load, runner
 from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
 from fmu_build import __main__ as cli
 from fmu_build import model_description3, native_fmu, native_fmu3
@@ -107,67 +105,13 @@ def fmus():
     return get
 
 
-class Instance3:
-    """An FMI 3.0 instance through fmpy's FMU3Slave, the shape of scenario.Instance: set
-    and get by name, ``step`` returns the status, the log messages kept."""
+class Instance3(instance.Instance3):
+    """scenario.Instance3 with the tests' keywords (``start``, ``init``) and a strict
+    ``step``: a doStep through fmpy that must return no event, no termination and no
+    early return, with lastSuccessfulTime the instance layer's t + h (the same double)."""
 
     def __init__(self, path: Path, name: str = "i3", start: dict | None = None, init=True):
-        self.dir = Path(tempfile.mkdtemp(prefix="fmu3-"))
-        fmpy.extract(str(path), str(self.dir))
-        self.md = fmpy.read_model_description(str(self.dir))
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.messages: list[tuple[int, str]] = []
-        self.fmu = FMU3Slave(
-            guid=self.md.guid,
-            unzipDirectory=str(self.dir),
-            modelIdentifier=self.md.coSimulation.modelIdentifier,
-            instanceName=name,
-        )
-        self.fmu.instantiate(loggingOn=True, logMessage=self._log)
-        self.time = 0.0
-        self.initialised = False
-        try:
-            self.fmu.enterInitializationMode(startTime=0.0)
-            for k, v in (start or {}).items():
-                self.set(k, v)
-            if init:
-                self.fmu.exitInitializationMode()
-                self.initialised = True
-        except FMICallException:
-            self.close()
-            raise
-
-    def _log(self, env, status, category, message) -> None:
-        self.messages.append((int(status), message.decode(errors="replace")))
-
-    def set(self, name: str, value: Any) -> None:
-        v = self.vars[name]
-        if v.type == "String":
-            self.fmu.setString([v.valueReference], [str(value)])
-        else:
-            self.fmu.setFloat64([v.valueReference], [float(value)])
-
-    def get(self, name: str) -> Any:
-        v = self.vars[name]
-        if v.type == "Int32":
-            return self.fmu.getInt32([v.valueReference])[0]
-        if v.type == "String":
-            return self.fmu.getString([v.valueReference])[0]  # fmpy decodes FMI 3.0's
-        return self.fmu.getFloat64([v.valueReference])[0]
-
-    def outputs(self) -> dict[str, Any]:
-        """The scalar outputs (the FMI 2.0 FMU's): not the centre line's arrays."""
-        return {
-            n: self.get(n)
-            for n, v in self.vars.items()
-            if v.causality == "output" and not v.dimensions
-        }
-
-    def array(self, name: str) -> np.ndarray:
-        """An array output, its values in one call."""
-        v = self.vars[name]
-        n = math.prod(int(d.start) for d in v.dimensions)
-        return np.array(self.fmu.getFloat64([v.valueReference], nValues=n))
+        super().__init__(path, name, start, initialise=init)
 
     def step(self, h: float, time: float | None = None) -> int:
         t = self.time if time is None else time
@@ -179,20 +123,6 @@ class Instance3:
         assert last == t + h  # the instance layer's time: t + h, the same double
         self.time = last
         return OK
-
-    def close(self) -> None:
-        try:
-            if self.initialised:  # terminate ends an initialised model only (an error else)
-                self.fmu.terminate()
-        finally:
-            self.fmu.freeInstance()
-            shutil.rmtree(self.dir, ignore_errors=True)
-
-    def __enter__(self) -> Instance3:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 # ---- the model description, the binary ------------------------------------------------------
