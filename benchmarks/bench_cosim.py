@@ -27,7 +27,6 @@ All in one process and one run, so that ratios are fair on a shared, noisy machi
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import dataclasses
 import datetime
@@ -53,9 +52,8 @@ if __package__:  # python -m benchmarks
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
-DOC = ROOT / "docs" / "performance.md"
+ROOT, OUT = harness.ROOT, harness.OUT
+DOC = harness.PERFORMANCE
 BLOCK = "bench_cosim.py"  # the marker block it writes
 TARGET_RATIO = 1.5  # target: the thin-layer body FMU's step at most 1.5 x the trivial FMU's
 TARGET_RATE = 1e6  # target: vectorised creep-law evaluations per second
@@ -561,11 +559,10 @@ def markdown(steps_rows, law_rows, tp_rows, steps: int, repeats: int, scenes=Non
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = harness.parser(__doc__, str(DOC.relative_to(ROOT)))
     ap.add_argument("--steps", type=int, default=40)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--scenes", nargs="*", help="step cost of these scenes only")
-    ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
     args = ap.parse_args(argv)
     trivial = build_trivial(ROOT / "out" / "bench")
     s = step_costs(trivial, args.steps, args.repeats, args.scenes)

@@ -15,7 +15,6 @@ proportion). ``--write`` replaces the block BLOCK of docs/performance.md.
 
 from __future__ import annotations
 
-import argparse
 import datetime
 import subprocess
 import sys
@@ -31,9 +30,8 @@ else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
-DOC = ROOT / "docs" / "performance.md"
+ROOT, OUT = harness.ROOT, harness.OUT
+DOC = harness.PERFORMANCE
 BLOCK = "bench_fmu_states.py"  # the marker block it writes
 
 
@@ -104,9 +102,8 @@ def report(costs: dict[int, dict[str, float]], step: float) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = harness.parser(__doc__)
     ap.add_argument("--held", type=int, nargs="+", default=[100, 1000, 10000, 30000])
-    ap.add_argument("--write", action="store_true")
     args = ap.parse_args(argv)
     text = report(*measure(args.held))
     print(text)

@@ -15,7 +15,6 @@ place the table lives; docs/fmu.md links to it).
 
 from __future__ import annotations
 
-import argparse
 import datetime
 import importlib
 import sys
@@ -35,9 +34,8 @@ if __package__:  # python -m benchmarks
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
-DOC = ROOT / "docs" / "performance.md"
+ROOT, OUT = harness.ROOT, harness.OUT
+DOC = harness.PERFORMANCE
 BLOCK = "bench_fmu_step.py"  # the marker block it writes
 # Untimed runs before the timed ones: the first runs in a process are slower (caches,
 # lazy imports), measured up to 1.8x for the model stepped outside the FMU.
@@ -231,10 +229,9 @@ def cornering(rows: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__)
+    ap = harness.parser(__doc__, str(DOC.relative_to(ROOT)))
     ap.add_argument("--steps", type=int, default=40)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
     args = ap.parse_args(argv)
     rows = measure(args.steps, args.repeats)
     section = markdown(rows, args.steps, args.repeats)

@@ -27,7 +27,6 @@ instructions per step of each FMU.
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import subprocess
@@ -47,7 +46,7 @@ else:  # run as a script: benchmarks/ is first on sys.path
 DOC = harness.PERFORMANCE
 BLOCK = "bench_front_ends.py"  # the marker block it writes (with --callgrind)
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = harness.ROOT
 METHODS = ("quasistationary", "full")
 
 # run in a tree's own process: seconds per step of the adapter's C path
@@ -152,13 +151,12 @@ def instructions_per_step(
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = harness.parser(__doc__, "docs/performance.md")
     ap.add_argument("--base", default="HEAD", help="the revision to compare with")
     ap.add_argument("--steps", type=int, default=3000, help="steps of the adapter's C path")
     ap.add_argument("--importer-steps", type=int, default=20_000)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--callgrind", action="store_true", help="count instructions per step")
-    ap.add_argument("--write", action="store_true", help="update docs/performance.md")
     args = ap.parse_args(argv)
     if args.write and not args.callgrind:
         ap.error("--write needs --callgrind: the block gives instructions per step")

@@ -39,7 +39,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
@@ -314,14 +313,11 @@ def table_report(n: int, nodes: tuple[int, int, int], points: int, seed: int = 1
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    ap = harness.parser(__doc__, "docs/performance.md")
     ap.add_argument("--grids", type=int, nargs="+", default=None, help="default 16 32 64 128")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--dense-limit-mb", type=float, default=1500.0)
     ap.add_argument("--json", type=str, default=None)
-    ap.add_argument("--write", action="store_true", help="update docs/performance.md")
     ap.add_argument(
         "--table",
         type=int,

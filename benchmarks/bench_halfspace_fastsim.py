@@ -30,7 +30,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
 import platform  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -65,11 +64,10 @@ def cpu(f, repeat: int) -> float:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__)
+    ap = harness.parser(__doc__, "docs/halfspace.md")
     ap.add_argument("--grid", type=int, default=66)
     ap.add_argument("--points", type=int, default=12)
     ap.add_argument("--repeat", type=int, default=7)
-    ap.add_argument("--write", action="store_true", help="replace the block in docs/halfspace.md")
     args = ap.parse_args(argv)
     lines: list[str] = []
 

@@ -32,7 +32,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
 import datetime  # noqa: E402
 import json  # noqa: E402
 import platform  # noqa: E402
@@ -53,8 +52,7 @@ if __package__:  # python -m benchmarks
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
+ROOT, OUT = harness.ROOT, harness.OUT
 SCENES = ROOT / "scenarios"
 
 
@@ -240,14 +238,12 @@ def step_block(report: dict, command: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    ap = harness.parser(__doc__)
     ap.add_argument("--points", type=int, default=200, help="random points of the plane")
     ap.add_argument("--steps", type=int, default=200, help="communication steps timed")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--json", type=str, default=None)
     ap.add_argument("--no-timing", action="store_true", help="only the table's error")
-    ap.add_argument("--write", action="store_true", help="replace the blocks in docs/")
     ap.add_argument("--spec-override", nargs="*", default=[], metavar="KEY=JSON",
                     help="measure a variant of the declaration (e.g. stretch=3.0)")  # fmt: skip
     args = ap.parse_args(argv)

@@ -30,7 +30,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
@@ -222,13 +221,12 @@ def coupled(n: int, lengths: int) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__)
+    ap = harness.parser(__doc__)
     ap.add_argument("--grids", type=int, nargs="+", default=[16, 24, 32])
     ap.add_argument("--skip-coupled", action="store_true")
     ap.add_argument("--only-coupled", action="store_true")
     ap.add_argument("--coupled-lengths", type=int, default=30)
     ap.add_argument("--json", default=None)
-    ap.add_argument("--write", action="store_true", help="replace the cost block in docs/")
     a = ap.parse_args(argv)
     res: dict = {"machine": platform.platform()}
     if a.only_coupled:

@@ -46,9 +46,8 @@ if __package__:  # python -m benchmarks
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
-DOC = ROOT / "docs" / "reliability.md"
+ROOT, OUT = harness.ROOT, harness.OUT
+DOC = harness.RELIABILITY
 BLOCK = "bench_hunt_step.py"  # the marker block it writes
 NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
 LOAD_LIMIT = 1e9  # integrator.LOAD_LIMIT
@@ -175,11 +174,10 @@ def table(rows: list[tuple[str, str, dict]], args: argparse.Namespace) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = harness.parser(__doc__, str(DOC.relative_to(ROOT)))
     ap.add_argument("--instances", type=int, default=6)
     ap.add_argument("--calls", type=int, default=30)
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
     args = ap.parse_args(argv)
     rows = []
     for label, target, path in kinds():

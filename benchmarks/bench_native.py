@@ -57,7 +57,6 @@ count whatever else the machine runs). ``--write`` replaces TRANSIENT_BLOCK.
 
 from __future__ import annotations
 
-import argparse
 import datetime
 import platform
 import subprocess
@@ -84,9 +83,8 @@ else:  # run as a script: benchmarks/ is first on sys.path
     from bench_cosim import Stepper, null_fmu  # type: ignore[no-redef]
     from bench_front_ends import instructions_per_step  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
-DOC = ROOT / "docs" / "performance.md"
+ROOT, OUT = harness.ROOT, harness.OUT
+DOC = harness.PERFORMANCE
 # the marker blocks it writes: step cost, importer rate, size; the full body FMU (also
 # --full-body-only); the contact FMU with spin (--spin)
 BLOCK = "bench_native.py"
@@ -532,11 +530,10 @@ def report(cost: dict[str, float], rates: dict[str, float], size: dict[str, int]
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = harness.parser(__doc__)
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--importer-steps", type=int, default=200_000)
-    ap.add_argument("--write", action="store_true")
     ap.add_argument("--full-body-only", action="store_true")
     ap.add_argument("--spin", action="store_true", help="the contact FMU with spin only")
     ap.add_argument("--transient", action="store_true", help="fig12_transient's FMUs only")

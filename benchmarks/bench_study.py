@@ -29,10 +29,8 @@ import os
 for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_v] = "1"  # before numpy is imported: as in the Dask workers
 
-import argparse  # noqa: E402
 import datetime  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -47,9 +45,8 @@ if __package__:  # python -m benchmarks
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
-DOC = ROOT / "docs" / "performance.md"
+ROOT, OUT = harness.ROOT, harness.OUT
+DOC = harness.PERFORMANCE
 BLOCK = "bench_study.py"  # the marker block it writes
 STUDY = ROOT / "scenarios" / "studies" / "fig13_peak.toml"
 TABLE_GRID = 12
@@ -74,10 +71,9 @@ def _best(fn, repeats: int) -> tuple[float, object]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = harness.parser(__doc__, "docs/performance.md")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--write", action="store_true", help="update docs/performance.md")
     args = ap.parse_args(argv)
 
     scene = load(STUDY)

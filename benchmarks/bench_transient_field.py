@@ -30,7 +30,6 @@ import argparse  # noqa: E402
 import datetime  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 from contact_fmu.dynamics.body import Loads  # noqa: E402
 from contact_fmu.dynamics.thin_layer_field import LayerField  # noqa: E402
@@ -43,8 +42,8 @@ if __package__:  # python -m benchmarks
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-DOC = ROOT / "docs" / "performance.md"
+ROOT = harness.ROOT
+DOC = harness.PERFORMANCE
 BLOCK = "bench_transient_field.py"  # the marker block it writes
 SCENE = load(ROOT / "scenarios" / "fig12_transient.toml")
 CASE = SCENE.cases[1]  # eta = 2.92: the longest transient
@@ -152,11 +151,10 @@ def report(stages: dict, steps: dict, args: argparse.Namespace) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = harness.parser(__doc__)
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--stages", type=int, default=2000)
-    ap.add_argument("--write", action="store_true")
     args = ap.parse_args(argv)
     if native_field.library() is None:
         print("no compiled library (no C compiler, or CONTACT_FMU_NATIVE=0)", file=sys.stderr)

@@ -15,7 +15,6 @@ of docs/reliability.md.
 
 from __future__ import annotations
 
-import argparse
 import datetime
 import re
 import time
@@ -33,9 +32,8 @@ if __package__:  # python -m benchmarks
 else:  # run as a script: benchmarks/ is first on sys.path
     import harness  # type: ignore[no-redef]
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "fmu"
-DOC = ROOT / "docs" / "reliability.md"
+ROOT, OUT = harness.ROOT, harness.OUT
+DOC = harness.RELIABILITY
 BLOCK = "bench_worst_step.py"  # the marker block it writes
 MU_P = ex.mu * ex.P
 
@@ -85,9 +83,8 @@ def worst(path: Path, starts: dict, inputs: dict, repeat: int) -> tuple[float, f
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = harness.parser(__doc__, str(DOC.relative_to(ROOT)))
     ap.add_argument("--repeat", type=int, default=2)
-    ap.add_argument("--write", action="store_true", help=f"update {DOC.relative_to(ROOT)}")
     args = ap.parse_args(argv)
     lines = [
         f"Made by `python benchmarks/bench_worst_step.py --repeat {args.repeat} --write` on "

@@ -16,6 +16,7 @@ writes one (benchmarks/__main__.py lists them).
 
 from __future__ import annotations
 
+import argparse
 import datetime
 import math
 import os
@@ -32,6 +33,7 @@ from typing import Any
 from contact_fmu.scenario.instance import Instance3
 
 ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "out" / "fmu"  # where the benchmarks build their FMUs
 DOCS = ROOT / "docs"
 PERFORMANCE = DOCS / "performance.md"
 RELIABILITY = DOCS / "reliability.md"
@@ -200,6 +202,16 @@ def replace_block(text: str, name: str, body: str) -> str:
     head, rest = text.split(begin + "\n", 1)
     _, tail = rest.split(end, 1)
     return head + begin + "\n" + wrap_prose(body.strip("\n")) + "\n" + end + tail
+
+
+def parser(doc: str, pages: str = "docs/") -> argparse.ArgumentParser:
+    """A benchmark's argument parser: its module docstring as the help's description and
+    ``--write`` (replace its marker blocks in ``pages``)."""
+    ap = argparse.ArgumentParser(
+        description=doc, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument("--write", action="store_true", help=f"replace its tables in {pages}")
+    return ap
 
 
 def write_block(doc: Path, name: str, body: str) -> None:
