@@ -1375,7 +1375,7 @@ def test_sanitized_importer_runs_fig13_bad_inputs_and_random_extremes_cleanly(
     assert np.array_equal(_importer_run(exe, Path("-"), md, spec), expected)
     short = tmp_path / "params.txt"
     short.write_text(_spec(md, scenes["fig13"], scenes["fig13"].case("eta = 3"), rows=False))
-    counts = _fuzz(exe, md, short, 2, 2500)
+    counts = native_c.fuzz(exe, md, short, 2, 2500)
     assert counts["ok"] > 1700 and counts["discard"] > 170 and counts["refused"] > 100, counts
     args = [str(exe), "-", md.guid, "fuzz", "states", str(short), "3000"]
     proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
@@ -1404,18 +1404,6 @@ def test_memcheck_finds_no_error_in_the_shipped_binary(
     counts = {k: int(v) for k, v in zip(out[::2], out[1::2], strict=True)}
     assert counts["ok"] > 500 and counts["discard"] + counts["refused"] > 100, counts
     native_c.memcheck(*head, "states", str(short), "300")
-
-
-def _fuzz(exe: Path, md, spec: Path, seeds: int, calls: int, env=None) -> dict[str, int]:
-    counts: dict[str, int] = {}
-    for seed in range(seeds):
-        args = [str(exe), "-", md.guid, "fuzz", "fuzz", str(spec), str(seed), str(calls)]
-        proc = subprocess.run(args, capture_output=True, text=True, timeout=600, env=env)
-        assert proc.returncode == 0, proc.stderr[-3000:]
-        assert "runtime error" not in proc.stderr and "Sanitizer" not in proc.stderr
-        for k, v in dict(zip(*[iter(proc.stdout.split())] * 2, strict=True)).items():
-            counts[k] = counts.get(k, 0) + int(v)
-    return counts
 
 
 @pytest.mark.parametrize(
@@ -1491,7 +1479,7 @@ def test_sanitized_importer_runs_the_other_modes_through_random_extremes_cleanly
         pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
     calls = 600 if mode in ("cornering", "full_body_sdirk2") else 2000  # the spin march: slower
     env = {**os.environ, "FMU_RESOURCES": (unzip / "resources").as_uri()}
-    counts = _fuzz(exe, md, spec, 1, calls, env)
+    counts = native_c.fuzz(exe, md, spec, 1, calls, env)
     assert counts["ok"] > calls // 3 and counts["error"] > calls // 30, counts
     assert counts["refused"] > calls // 100, counts
 

@@ -18,6 +18,7 @@ import math
 import shutil
 from pathlib import Path
 
+import native_c
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
@@ -158,20 +159,7 @@ def test_sanitized_importer_runs_the_held_spin_fmu_through_random_extremes_clean
     path's state and grid) under the sanitized importer's random calls (extreme and
     non-finite values of every input, states got, set, serialized and damaged): no
     sanitizer report, no fmi2Fatal, no non-finite output served with fmi2OK."""
-    import subprocess
-
-    import fmpy
-    from test_native_fmu import _fuzz, _sanitized
-    from test_native_table_loads import _fuzz_spec
-
-    unzip = tmp_path / "fmu"
-    fmpy.extract(str(held["native"]), str(unzip))
-    md, spec = _fuzz_spec(unzip, tmp_path)
-    try:
-        exe = _sanitized(tmp_path, unzip)
-    except subprocess.CalledProcessError as e:  # pragma: no cover - gcc without libasan
-        pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
-    counts = _fuzz(exe, md, spec, 1, 600)
+    counts = native_c.sanitized_fuzz(held["native"], tmp_path, 600)
     assert counts["ok"] > 200 and counts["error"] + counts["discard"] > 20, counts
 
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import ctypes
 import math
-import os
 import re
 import shutil
 import subprocess
@@ -325,19 +324,6 @@ def test_a_load_outside_a_layered_tables_range_is_refused_in_the_same_words(fmus
 
 
 # ---- the sanitizers and memcheck on the blended table ---------------------------------------
-def _fuzz_spec(unzip: Path, tmp_path: Path):
-    """The extracted FMU's model description and the importer's spec: every input, every
-    Real output, no parameter."""
-    import fmpy
-
-    md = fmpy.read_model_description(str(unzip))
-    ins = [v.valueReference for v in md.modelVariables if v.causality == "input"]
-    outs = [v.valueReference for v in md.modelVariables
-            if v.causality == "output" and v.type == "Real"]  # fmt: skip
-    spec = tmp_path / "spec.txt"
-    spec.write_text(f"{len(ins)} {' '.join(map(str, ins))}\n{len(outs)} "
-                    f"{' '.join(map(str, outs))}\n0\n")  # fmt: skip
-    return md, spec
 
 
 @pytest.mark.parametrize("name", ["body", "contact"])
@@ -348,18 +334,7 @@ def test_sanitized_importer_runs_the_layered_table_through_random_extremes_clean
     beyond the range refused) under the sanitized importer's random calls (extreme and
     non-finite values of every input, states got, set, serialized and damaged): no
     sanitizer report, no fmi2Fatal, no non-finite output served with fmi2OK."""
-    import fmpy
-    from test_native_fmu import _fuzz, _sanitized
-
-    unzip = tmp_path / "fmu"
-    fmpy.extract(str(fmus[name]["native"]), str(unzip))
-    md, spec = _fuzz_spec(unzip, tmp_path)
-    try:
-        exe = _sanitized(tmp_path, unzip)
-    except subprocess.CalledProcessError as e:  # pragma: no cover - gcc without libasan
-        pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
-    env = {**os.environ, "FMU_RESOURCES": (unzip / "resources").as_uri()}
-    counts = _fuzz(exe, md, spec, 1, 1500, env)
+    counts = native_c.sanitized_fuzz(fmus[name]["native"], tmp_path, 1500, resources=True)
     assert counts["ok"] > 500 and counts["error"] + counts["discard"] > 50, counts
 
 
@@ -373,7 +348,7 @@ def test_memcheck_finds_no_error_in_the_layered_tables_binary(fmus, tmp_path, mo
 
     unzip = tmp_path / "fmu"
     fmpy.extract(str(fmus["body"]["native"]), str(unzip))
-    md, spec = _fuzz_spec(unzip, tmp_path)
+    md, spec = native_c.fuzz_spec(unzip, tmp_path)
     monkeypatch.setenv("FMU_RESOURCES", (unzip / "resources").as_uri())
     exe = str(_compile(tmp_path / "importer", str(IMPORTER), "-ldl"))
     ident = md.coSimulation.modelIdentifier

@@ -15,6 +15,7 @@ import dataclasses
 import shutil
 from pathlib import Path
 
+import native_c
 import numpy as np
 import pytest
 from fmpy.validation import validate_fmu
@@ -139,21 +140,9 @@ def test_sanitized_importer_runs_the_lateral_field_through_random_extremes_clean
     (extreme and non-finite values of every input, states got, set, serialized and
     damaged): no sanitizer report, no fmi2Fatal, no non-finite output served with
     fmi2OK."""
-    import subprocess
-
-    import fmpy
-    from test_native_fmu import _fuzz, _sanitized
-    from test_native_table_loads import _fuzz_spec
 
     _, paths = fmus("both")
-    unzip = tmp_path / "fmu"
-    fmpy.extract(str(paths["native"]), str(unzip))
-    md, spec = _fuzz_spec(unzip, tmp_path)
-    try:
-        exe = _sanitized(tmp_path, unzip)
-    except subprocess.CalledProcessError as e:  # pragma: no cover - gcc without libasan
-        pytest.skip(f"no sanitizer runtime: {e.stderr[-300:]}")
-    counts = _fuzz(exe, md, spec, 1, 400)
+    counts = native_c.sanitized_fuzz(paths["native"], tmp_path, 400)
     assert counts["ok"] > 100 and counts["error"] + counts["discard"] > 10, counts
 
 
