@@ -71,6 +71,8 @@ def body_mode() -> np.ndarray:
 
 
 def errors(t, run, body_mode) -> dict[str, float]:
+    """The largest differences of a coupled run's Tx, Vx and Omega_y at the times t from
+    the body-mode FMU's, interpolated (Tx_late: from 5e-4 s, after the start)."""
     ref = {k: np.interp(t, body_mode["time"], body_mode[k]) for k in ("Tx", "Vx", "Omega_y")}
     late = t >= 5e-4
     return {
