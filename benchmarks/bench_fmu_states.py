@@ -106,9 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--held", type=int, nargs="+", default=[100, 1000, 10000, 30000])
     args = ap.parse_args(argv)
     text = report(*measure(args.held))
-    print(text)
-    if args.write:
-        harness.write_block(DOC, BLOCK, text)
+    harness.publish(text, args.write, DOC, BLOCK)
     return 0
 
 

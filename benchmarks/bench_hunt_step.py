@@ -187,9 +187,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{label} ({target}): slowest {w['wall']:.3g} s, {w['status']}, "
               f"{w['count']}", flush=True)  # fmt: skip
     text = table(rows, args)
-    print(text)
-    if args.write:
-        harness.write_block(DOC, BLOCK, text)
+    harness.publish(text, args.write, DOC, BLOCK)
 
 
 if __name__ == "__main__":

@@ -172,17 +172,11 @@ def step_costs(steps: int, repeats: int) -> dict[str, float]:
     return interleaved(runs, steps, repeats)
 
 
-class Stepper3:
+class Stepper3(Stepper):
     """bench_cosim.Stepper for an FMI 3.0 FMU (fmpy's FMU3Slave, harness.Instance3): step
     k sets the inputs (setFloat64), steps, reads the outputs (getFloat64)."""
 
-    def __init__(self, path: Path, name: str, starts, inputs, outputs, table, h):
-        self.inst = harness.Instance3(path, name, starts)
-        self.vin = [self.inst.vars[n].valueReference for n in inputs]
-        self.vout = [self.inst.vars[n].valueReference for n in outputs]
-        nrows = len(table[inputs[0]])
-        self.rows = [[float(table[n][k]) for n in inputs] for k in range(nrows)]
-        self.h = h
+    INSTANCE = harness.Instance3
 
     def step(self, k: int) -> float:
         inst, fmu = self.inst, self.inst.fmu
@@ -195,9 +189,6 @@ class Stepper3:
             raise RuntimeError(f"fmi3DoStep answered {status}: {inst.messages[-1:]}")
         inst.time += self.h
         return dt
-
-    def close(self) -> None:
-        self.inst.close()
 
 
 def _is_fmi3(path: Path) -> bool:
@@ -550,15 +541,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"bench_native: fig12_transient: {e}", file=sys.stderr)
             return 1
         text = transient_report(cost, counts, args)
-        print(text)
-        if args.write:
-            harness.write_block(DOC, TRANSIENT_BLOCK, text)
+        harness.publish(text, args.write, DOC, TRANSIENT_BLOCK)
         return 0
     if args.spin:
         text = spin_report(spin_costs(args.steps, args.repeats), args)
-        print(text)
-        if args.write:
-            harness.write_block(DOC, SPIN_BLOCK, text)
+        harness.publish(text, args.write, DOC, SPIN_BLOCK)
         return 0
     if not args.full_body_only:
         try:
@@ -567,13 +554,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"bench_native: {e}", file=sys.stderr)
             return 1
         text = report(step_costs(args.steps, args.repeats), rates, sizes(), args)
-        print(text)
-        if args.write:
-            harness.write_block(DOC, BLOCK, text)
+        harness.publish(text, args.write, DOC, BLOCK)
     text = full_report(full_body_costs(args.steps, args.repeats), args)
-    print(text)
-    if args.write:
-        harness.write_block(DOC, FULL_BLOCK, text)
+    harness.publish(text, args.write, DOC, FULL_BLOCK)
     return 0
 
 

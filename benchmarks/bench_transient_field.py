@@ -160,9 +160,7 @@ def main(argv: list[str] | None = None) -> int:
         print("no compiled library (no C compiler, or CONTACT_FMU_NATIVE=0)", file=sys.stderr)
         return 1
     text = report(stage_cost(args.repeats, args.stages), step_cost(args.repeats, args.steps), args)
-    print(text)
-    if args.write:
-        harness.write_block(DOC, BLOCK, text)
+    harness.publish(text, args.write, DOC, BLOCK)
     return 0
 
 

@@ -214,6 +214,14 @@ def parser(doc: str, pages: str = "docs/") -> argparse.ArgumentParser:
     return ap
 
 
+def publish(text: str, write: bool, doc: Path, name: str) -> None:
+    """Print a benchmark's table; with ``write`` (its --write) also make it the block
+    ``name`` of the page ``doc``."""
+    print(text)
+    if write:
+        write_block(doc, name, text)
+
+
 def write_block(doc: Path, name: str, body: str) -> None:
     """Replace the block ``name`` of the page ``doc`` by ``body`` (see replace_block)."""
     doc.write_text(replace_block(doc.read_text(), name, body))
