@@ -389,6 +389,18 @@ typedef struct {
     int *evals;
 } stage_problem;
 
+/* the stage's field at the state sp->yy = (Vx, vx, Vy, Omega_z): the travel over the
+ * stage ds0 + h gamma Vx and the creepages' kinematics */
+static int stage_at(stage_problem *sp) {
+    const double *yy = sp->yy;
+    sp->in.ds = sp->ds0 + sp->hg * yy[0];
+    sp->in.vx = yy[1];
+    sp->in.vy = yy[2];
+    sp->in.phi = yy[3];
+    sp->in.Vx = yy[0];
+    return cf_field_stage(sp->f, &sp->in, sp->out);
+}
+
 /* state(u) and evaluate(u): the stage's field at vx = u; r, d: the residual and its
  * derivative (m_h + dTx/dvx) */
 static int evaluate(stage_problem *sp, double u, double *r, double *d) {
@@ -398,12 +410,7 @@ static int evaluate(stage_problem *sp, double u, double *r, double *d) {
     yy[1] = u;
     yy[2] = b->ry * yy[0];
     yy[3] = b->rz * yy[0];
-    sp->in.ds = sp->ds0 + sp->hg * yy[0];
-    sp->in.vx = yy[1];
-    sp->in.vy = yy[2];
-    sp->in.phi = yy[3];
-    sp->in.Vx = yy[0];
-    const int rc = cf_field_stage(sp->f, &sp->in, sp->out);
+    const int rc = stage_at(sp);
     if (rc != CF_FIELD_OK) return rc;
     *r = sp->m_h * (u - sp->u_hat) + sp->out->T[0] - sp->target;
     *d = sp->m_h + sp->out->dTx_dvx;
@@ -450,12 +457,7 @@ static int evaluate_vector(stage_problem *sp, const double *u, double *r, double
     yy[0] = sp->Vx_base + (b->m_slip / b->M) * (u[0] - sp->uh[0]);
     if (!b->dyn_vy) yy[2] = b->ry * yy[0]; /* BodyState._apply_ratios */
     if (!b->dyn_spin) yy[3] = b->rz * yy[0];
-    sp->in.ds = sp->ds0 + sp->hg * yy[0];
-    sp->in.vx = yy[1];
-    sp->in.vy = yy[2];
-    sp->in.phi = yy[3];
-    sp->in.Vx = yy[0];
-    const int rc = cf_field_stage(sp->f, &sp->in, sp->out);
+    const int rc = stage_at(sp);
     if (rc != CF_FIELD_OK) return rc;
     for (int i = 0; i < sp->n; i++) {
         r[i] = sp->m[i] * (u[i] - sp->uh[i]) / sp->hg + sp->out->T[sp->act[i]] - sp->targets[i];
