@@ -1,5 +1,6 @@
 """The examples users copy run as written: the Python blocks of docs/python.md (the
-numerical API) and of README.md (the FMU in fmpy)."""
+numerical API), docs/halfspace.md (the half-space solver as CONTACT users call it) and
+README.md (the FMU in fmpy)."""
 
 from __future__ import annotations
 
@@ -24,6 +25,28 @@ def test_numerical_api_example_runs(capsys):
     out = capsys.readouterr().out.split()
     # the example prints the contact ellipse (a1 ~ 2.6 mm) and a finished trajectory
     assert float(out[0]) > 0 and float(out[4]) == 0.05
+
+
+def test_halfspace_page_examples_run(monkeypatch):
+    """docs/halfspace.md's blocks (constructors, solve, creepages_for, plots, FASTSIM,
+    Carter's line contact, CONTACT's sign conventions) run as written. Checked from
+    their results: creepages_for's solution carries the prescribed forces (Fx, Fy) =
+    (20, 5) kN to its tolerance rtol = 1e-8 of mu P = 30 kN, and CONTACT's forces on
+    the wheel are the opposite of the forces on the substrate."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    monkeypatch.chdir(ROOT)
+    page = ROOT / "docs" / "halfspace.md"
+    blocks = python_blocks(page)
+    assert len(blocks) == 2, "docs/halfspace.md: the API block and the FASTSIM block"
+    ns: dict = {}
+    for code in blocks:
+        exec(compile(code, str(page), "exec"), ns)
+    mu_P = 0.3 * 1e5
+    s, Fx, Fy = ns["s"], ns["Fx"], ns["Fy"]
+    assert abs(s.Tx - 20e3) <= 1e-8 * mu_P and abs(s.Ty - 5e3) <= 1e-8 * mu_P
+    assert (Fx, Fy) == (-s.Tx, -s.Ty)
 
 
 def test_readme_fmpy_example_runs(capsys, monkeypatch):
