@@ -43,6 +43,10 @@ def kinds() -> list[tuple[str, str, Path, dict, dict]]:
     cfgs = {n: load(ROOT / "scenarios" / f"{n}.toml").config
             for n in ("fig13", "cornering", "rail_traction", "fig12_transient")}  # fmt: skip
     cfgs["full"] = ModelConfig.full("body")
+    held = {"vy": "ratio", "spin": "ratio", "inputs": ["P", "Fx_ex", "My_ex"],
+            "starts": {"vy_ratio": 0.002, "spin_ratio": 1.0}}  # fmt: skip
+    cfgs["held"] = ModelConfig.from_dict(cfgs["full"].to_dict() | {"name": "full_body_held_spin"}
+                                         | held)  # fmt: skip
     lateral = {"Fx_ex": 0.2 * MU_P, "Fy_ex": 0.3 * MU_P, "Mz_ex": 1e-3}
     cases = [
         ("fig13 (scalar step)", "fig13", {}, {}),
@@ -51,6 +55,7 @@ def kinds() -> list[tuple[str, str, Path, dict, dict]]:
         ("full body, quasistationary, Eqs. 10-11", "full", {"method": "quasistationary"},
          lateral),
         ("cornering (spin law)", "cornering", {}, {}),
+        ("full body, spin held at a ratio of Vx", "held", {}, {"Fx_ex": 0.2 * MU_P}),
         ("fig12_transient (field 32 x 16)", "fig12_transient", {}, {}),
     ]  # fmt: skip
     out = []

@@ -230,19 +230,15 @@ class RollingBody(BodyState, EvalBudget):
     def _native_kernel(self) -> native.Kernel | None:
         """The compiled twin of this stepper's path (contact_fmu/native), where it
         covers it: either scheme and a law with ``native_constants`` (thin layer,
-        half-space table), and either vx the only unknown with vy held at a ratio and no
-        spin (``_lobatto_scalar``, ``_sdirk_scalar``: the Python path's doubles for the
+        half-space table), and either vx the only unknown with vy and the spin held at
+        ratios (``_lobatto_scalar``, ``_sdirk_scalar``: the Python path's doubles for the
         thin layer without lateral slip, the same to rounding else) or Vy and/or Omega_z
         as unknowns, either method (``_lobatto_vector``, ``_sdirk_vector`` and the
         quasistationary regime: the same to the stage tolerance)."""
         law_constants = getattr(type(self.law), "native_constants", None)
         if law_constants is None:
             return None
-        scalar = (
-            len(self._idx) == 1
-            and self.lateral.vy_ratio is not None
-            and self.lateral.spin_ratio == 0.0
-        )
+        scalar = len(self._idx) == 1 and self.lateral.vy_ratio is not None
         vector = len(self._idx) > 1
         lib = native.library() if scalar or vector else None
         if lib is None:

@@ -27,9 +27,10 @@ from .ranges import within_range
 
 # The work of one doStep is bounded by the parameter max_work (variables.py), counted in
 # work units: an internal step costs WORK_SCALAR (vx the only unknown: compiled, 1 to 3
-# us here) or WORK_VECTOR (Vy and/or Omega_z as unknowns, Eqs. 10-11: each stage solve
-# evaluates the law on its spin grid, 0.3 ms compiled, up to 7 ms where a hostile step
-# takes many Newton iterations; 30 ms where Python solves it), the transient field's
+# us here) or WORK_VECTOR (Vy and/or Omega_z as unknowns, Eqs. 10-11, or a held spin on
+# the thin-layer law: each stage solve evaluates the law on its spin grid, 0.3 ms
+# compiled, up to 7 ms where a hostile step takes many Newton iterations; 30 ms where
+# Python solves it), the transient field's
 # one nx ny WORK_PER_CELL (0.6 us per cell compiled here, 15 us in Python). Beyond the
 # budget h_max is enlarged for that step (the scheme stays stable; only the accuracy of
 # the slow dynamics drops), so that one doStep cannot take unbounded time: at the
@@ -58,6 +59,14 @@ def substeps(h: float, h_max: float, cap: int = MAX_SUBSTEPS) -> int:
     """ceil(h / h_max), at least 1, at most ``cap``."""
     n = math.ceil(h / h_max * (1.0 - SUBSTEP_SLACK))
     return min(max(n, 1), cap)
+
+
+def marches_spin(stepper: Any) -> bool:
+    """Whether the stepper's law marches its spin grid in every evaluation: a held spin
+    ratio on the thin-layer law (the law with ``native_strips``)."""
+    lateral = getattr(stepper, "lateral", None)
+    spin = lateral is not None and bool(lateral.spin_ratio)
+    return spin and hasattr(getattr(stepper, "law", None), "native_strips")
 
 
 def step_cap(max_work: float, work: float) -> int:
@@ -94,8 +103,10 @@ class BodyModel:
         self.h_max = h_max
         self.P = P
         self.max_work = max_work
-        # Vy and/or Omega_z as stage unknowns: the vector path (native CF_VECTOR)
-        vector = len(getattr(stepper, "_idx", ())) > 1
+        # Vy and/or Omega_z as stage unknowns (native CF_DYN_VY, CF_DYN_SPIN), or a held
+        # spin on the thin-layer law: each evaluation marches the spin grid (CF_HELD_SPIN
+        # without CF_TABLE; the table's spin is a lookup)
+        vector = len(getattr(stepper, "_idx", ())) > 1 or marches_spin(stepper)
         self.work = WORK_VECTOR if vector else WORK_SCALAR
         self.cap = step_cap(max_work, self.work)
         # the work of one evaluation of the law where Python solves the stages
@@ -134,6 +145,8 @@ class BodyModel:
         is covered, else None. Same results as ``step`` + ``outputs``."""
         kernel = getattr(self.stepper, "_kernel", None)
         if kernel is None or isinstance(kernel, native.VectorKernel):  # cf_body_step: scalar
+            return None
+        if self.stepper.lateral.spin_ratio:  # cf_body_outputs' adhesion has no spin march
             return None
         constants = {
             "v_creep_floor": V_CREEP_FLOOR,

@@ -310,12 +310,13 @@ VARIABLES: tuple[Var, ...] = (
         "max_work",
         "1",
         "Most work of one communication step, in work units (1 to 1e9): an internal step "
-        "costs 1 (vx the only unknown), 200 (Vy and/or Omega_z as unknowns, Eqs. 10-11) or "
+        "costs 1 (vx the only unknown), 200 (Vy and/or Omega_z as unknowns, Eqs. 10-11, or "
+        "a held spin on the thin-layer law's spin grid) or "
         '2 nx ny (phase "transient"); a step that needs more is taken in fewer, longer '
         "internal steps (fmi2Warning), at least one (the transient field: fmi2Discard if "
         "one exceeds it). Where Python solves the stages, each evaluation of the law counts "
-        "too (3, 25 with Eqs. 10-11, nx ny / 8 on the field): a step beyond the budget is "
-        "discarded",
+        "too (3, 25 with Eqs. 10-11 or the spin grid, nx ny / 8 on the field): a step "
+        "beyond the budget is discarded",
         {"body": PARAMETER},
         10_000.0,
         min=1.0,

@@ -271,9 +271,20 @@ class Kernel:
         return self._params
 
     def _path(self, p: Params, rb: Any) -> None:
-        """The fields of this kernel's path: the held lateral ratio, the method."""
+        """The fields of this kernel's path: the held lateral and spin ratios, the
+        method, and with a held spin the thin-layer law's spin grid (the law keeps it)."""
         p.ry = rb.lateral.vy_ratio
+        p.rz = rb.lateral.spin_ratio
         p.quasistationary = self._qs
+        self._strips(p, rb)
+
+    @staticmethod
+    def _strips(p: Params, rb: Any) -> None:
+        """The law's spin grid for stepper.c's march (none where the law has none, and at
+        lift-off: P = 0, no grid, no law: the free step)."""
+        strips = getattr(rb.law, "native_strips", None)
+        lifted = getattr(rb.law, "lifted", False)
+        p.strips = None if strips is None or lifted else ctypes.addressof(strips())
 
     def advance(self, rb: Any, h: float, loads: Any, n: int) -> bool:
         """Advance rb's state by h in n steps under held ``loads`` (dynamics.Loads);
@@ -323,9 +334,7 @@ class VectorKernel(Kernel):
         p.dyn_vy, p.dyn_spin = int(lateral.dynamic_vy), int(lateral.dynamic_spin)
         p.Iz = rb.body.Iz if rb.body.Iz is not None else 0.0
         p.quasistationary = self._qs
-        strips = getattr(rb.law, "native_strips", None)
-        lifted = getattr(rb.law, "lifted", False)  # P = 0: no grid, no law (free step)
-        p.strips = None if strips is None or lifted else ctypes.addressof(strips())
+        self._strips(p, rb)
 
     def advance(self, rb: Any, h: float, loads: Any, n: int) -> bool:
         self.write(rb)

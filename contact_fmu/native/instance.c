@@ -920,7 +920,8 @@ static cf_status fmu_step(Inst *I, double t, double h) {
     b.P = P, b.Fx_ex = c->val[R_FX_EX], b.My_ex = c->val[R_MY_EX];
     /* the budget max_work in internal steps of this path (body_model.step_cap): at
      * least 1 (max_work <= 1e9: the cap fits an int) */
-    const double work = CF_DYN_VY || CF_DYN_SPIN ? CF_WORK_VECTOR : CF_WORK_SCALAR;
+    const double work =
+        CF_DYN_VY || CF_DYN_SPIN || (CF_HELD_SPIN && !CF_TABLE) ? CF_WORK_VECTOR : CF_WORK_SCALAR;
     const double steps = floor(c->val[R_MAX_WORK] / work);
     b.max_substeps = steps >= 1.0 ? (int)fmin(steps, (double)INT_MAX) : 1;
     cf_vpath vector = {&vw, c->val[R_FY_EX], c->val[R_MZ_EX], NULL, NULL, NULL};
