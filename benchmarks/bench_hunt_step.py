@@ -58,6 +58,14 @@ def kinds() -> list[tuple[str, str, Path]]:
     cfgs = {n: load(ROOT / "scenarios" / f"{n}.toml").config
             for n in ("fig13", "rail_traction", "cornering", "fig12_transient")}  # fmt: skip
     cfgs["full body"] = ModelConfig.full("body")
+    held = {
+        "name": "full_body_held_spin",
+        "vy": "ratio",
+        "spin": "ratio",
+        "inputs": ["P", "Fx_ex", "My_ex"],
+        "starts": {"vy_ratio": 0.002, "spin_ratio": 1.0},
+    }
+    cfgs["full body, held spin"] = ModelConfig.from_dict(cfgs["full body"].to_dict() | held)
     out = []
     for name, cfg in cfgs.items():
         out.append((name, "pythonfmu", fmu_build.build(cfg, OUT).path))
