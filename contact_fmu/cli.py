@@ -5,7 +5,8 @@ contact-fmu run scenarios/fig13.toml     build the scene's FMU (cached), simulat
                                          the references; exit 1 on a mismatch
 contact-fmu run --all                    every scene of scenarios/
 contact-fmu run --native scenarios/x.toml  the same through the native FMU (C only;
-                                         a scene it does not cover is an error)
+                                         a scene it does not cover is an error);
+                                         --fmi3: its FMI 3.0 build
 contact-fmu references scenarios/x.toml  a scene's references from their independent
                                          source (no FMU involved), under
                                          out/references/; --overwrite rewrites the
@@ -71,18 +72,26 @@ def _load_warning_once(path: Path):
 
 
 def run_scene(
-    path: Path, out: Path, rebuild: bool = False, make_plot: bool = True, native: bool = False
+    path: Path,
+    out: Path,
+    rebuild: bool = False,
+    make_plot: bool = True,
+    native: bool = False,
+    fmi3: bool = False,
 ) -> bool:
     """Build, simulate, write and compare one scene; True when it matches its references.
-    ``native``: through the native FMU (fmu_build.native_fmu)."""
+    ``native``: through the native FMU (fmu_build.native_fmu); ``fmi3``: its FMI 3.0
+    build (fmu_build.native_fmu3)."""
     import fmu_build
-    from fmu_build import native_fmu
+    from fmu_build import native_fmu, native_fmu3
 
     from .scenario import runner
 
     scene = _load_warning_once(path)
     t0 = time.perf_counter()
-    if native:
+    if fmi3:
+        built = native_fmu3.build(scene.config, out / "fmu", force=rebuild)
+    elif native:
         built = native_fmu.build(scene.config, out / "fmu", force=rebuild)
     else:
         built = fmu_build.build(scene.config, out / "fmu", force=rebuild)
@@ -139,7 +148,12 @@ def _run(args: argparse.Namespace) -> int:
     for path in _scene_paths(args):
         try:
             ok = run_scene(
-                path, args.out, args.rebuild, make_plot=not args.no_plot, native=args.native
+                path,
+                args.out,
+                args.rebuild,
+                make_plot=not args.no_plot,
+                native=args.native or args.fmi3,
+                fmi3=args.fmi3,
             )
         except (ScenarioError, OSError, RuntimeError, ValueError) as e:
             where = "" if str(path) in str(e) else f"{path}: "  # a scene's errors name it
@@ -359,6 +373,9 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--rebuild", action="store_true", help="ignore the FMU cache")
     run.add_argument("--no-plot", action="store_true", help="skip the PNG")
     run.add_argument("--native", action="store_true", help="through the native FMU (C only)")
+    run.add_argument(
+        "--fmi3", action="store_true", help="through the native FMU's FMI 3.0 build (C only)"
+    )
     run.set_defaults(func=_run)
 
     refs = sub.add_parser(
