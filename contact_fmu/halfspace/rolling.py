@@ -222,7 +222,10 @@ class RollingPatch:
     nx): fraction of an element between its centre and the leading edge (1 inside,
     (0, 1] in the leading elements; None: 1); kappa: Kalker's difference parameter
     (pressure coupling, 0: quasi-identical bodies); backend "fft" or "dense" (the same
-    solver with an explicit influence matrix, for benchmarks); coarsen: builds the
+    solver with an explicit influence matrix, for benchmarks); ellipse: the semi-axes
+    (a1, a2) (m) of the elliptic contact the pressure samples (``ellipse_patch``; the
+    FASTSIM start's calibration by Kalker's creep coefficients, ``flexibilities``;
+    None: any other contact); coarsen: builds the
     same problem on a grid of about half the elements per side over the same potential
     contact area, for the backend given (nested iteration, ``solve_rolling``; None:
     none, as for the coarsest level).
@@ -240,6 +243,7 @@ class RollingPatch:
     backend: str = "fft"
     use_closure: bool = False
     operator: BlockConvolution | None = None
+    ellipse: tuple[float, float] | None = None
     coarsen: Callable[[str], RollingPatch] | None = field(default=None, repr=False, compare=False)
     solves: int = field(default=0, repr=False, compare=False)  # direct-path solves so far
 
@@ -514,9 +518,17 @@ class RollingPatch:
 
     @cached_property
     def flexibilities(self) -> tuple[float, float, float]:
-        """FASTSIM flexibilities (L_x, L_y, L_phi) (m/Pa) that reproduce this patch's linear
-        theory: the march tau_I = tau_I+ + W_I/L has the same force per unit creepage as the
-        full-adhesion solution (three linear solves, cached)."""
+        """FASTSIM flexibilities (L_x, L_y, L_phi) (m/Pa) of the start's march tau_I =
+        tau_I+ + W_I/L: the march's full-adhesion force per unit creepage (with L = 1)
+        over the linear theory's. On an elliptic contact (``ellipse``) without layers
+        the linear theory is Kalker's, G c^2 C11, G c^2 C22, G c^3 C23 (Table E3
+        interpolated, ``kalker_coefficients``): no linear solve (it took half of a first
+        solve: an LU of K on the direct path, three GMRES solves on the iterative one).
+        Otherwise the patch's own (three full-adhesion solves: by the LU of K on the
+        direct path, by GMRES on the iterative one). The two differ by the grid's
+        discretisation error of the linear theory (2-7 % on 11 x 11, 1-3 % on 35 x 35);
+        the start is only Newton's initial guess, and it takes as many Newton steps from
+        either (docs/develop/design-decisions.md)."""
         C = self.contact
         dx = self.grid.dx
         ones, zero = np.where(C, dx, 0.0), np.zeros(self.grid.shape)
@@ -526,7 +538,15 @@ class RollingPatch:
         spin = np.stack([np.where(C, -Y * dx, 0.0), np.where(C, X * dx, 0.0)])
         loads = ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin))
         fs = march(np.stack([W[a] for a, W in loads]), C).sum(axis=(1, 2))
-        if self.direct:  # the three solves at once by the dense LU, only their sums kept
+        coefficients = self.kalker_coefficients
+        if coefficients is not None:
+            # the linear theory's force sums tau over the elements: F/dA
+            a1, a2 = self.ellipse  # type: ignore[misc]
+            c2 = a1 * a2
+            C11, C22, C23 = coefficients
+            scale = self.G * c2 / self.grid.area
+            exact = [scale * C11, scale * C22, scale * math.sqrt(c2) * C23]
+        elif self.direct:  # the three solves at once by the dense LU, only their sums kept
             exact = [
                 t[a].sum()
                 for (a, _), t in zip(
@@ -536,6 +556,19 @@ class RollingPatch:
         else:
             exact = [self.solve_adhesion(W, rtol=1e-6)[0][a].sum() for a, W in loads]
         return tuple(float(f) / float(e) for f, e in zip(fs, exact, strict=True))
+
+    @cached_property
+    def kalker_coefficients(self) -> tuple[float, float, float] | None:
+        """Kalker's (C11, C22, C23) (-) of this patch's ellipse (``flexibilities``), or
+        None: no ellipse, layers (k > 0), or a/b or nu beyond Table E3."""
+        if self.ellipse is None or self.k > 0.0:
+            return None
+        from .fastsim import AOB_MAX, AOB_MIN, kalker_coefficients  # fastsim imports rolling
+
+        aob = self.ellipse[0] / self.ellipse[1]
+        if not (AOB_MIN <= aob <= AOB_MAX and 0.0 <= self.nu <= 0.5):
+            return None
+        return kalker_coefficients(aob, self.nu)
 
     def fastsim_guess(self, xi: float, eta: float, phi: float) -> FloatArray:
         """Kalker's simplified theory on this grid with ``flexibilities``: the march from the
@@ -1048,7 +1081,9 @@ def ellipse_patch(
         def coarsen(bk: str) -> RollingPatch:
             return ellipse_patch(a1, a2, n // 2, pressure, mu, G, nu, k, kappa, ny // 2, bk, P)
 
-    return RollingPatch(grid, p, mu, G, nu, k, theta, kappa, backend, coarsen=coarsen)
+    return RollingPatch(
+        grid, p, mu, G, nu, k, theta, kappa, backend, ellipse=(a1, a2), coarsen=coarsen
+    )
 
 
 def normalise_load(p: FloatArray, grid: Grid, P: float) -> FloatArray:
