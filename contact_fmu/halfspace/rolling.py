@@ -353,6 +353,11 @@ class RollingPatch:
         return int(self.contact.sum()) <= DIRECT_MAX_ELEMENTS and self.backend == "fft"
 
     @cached_property
+    def difference_kernel(self) -> direct.DifferenceKernel:
+        """K's entries as shifted entries of one kernel (direct.py; small grids)."""
+        return direct.DifferenceKernel(self.op, self.contact, self.k_extra)
+
+    @cached_property
     def dense_contact_operator(self) -> FloatArray:
         """K on the contact as a dense (2 m, 2 m) matrix (direct.py; small grids)."""
         return direct.contact_operator(self)
@@ -368,7 +373,9 @@ class RollingPatch:
 
     @cached_property
     def dense_contact_inverse(self) -> FloatArray:
-        """K^-1 on the contact (the slip form of the direct path's Newton steps, direct.py)."""
+        """K^-1 on the contact (the slip form of the direct path's Newton steps, direct.py).
+        The start's calibration (``flexibilities``) is then redone from it."""
+        self.__dict__.pop("flexibilities", None)
         return sla.inv(self.dense_contact_operator)
 
     # ---- operators ---------------------------------------------------------------------
@@ -524,11 +531,14 @@ class RollingPatch:
         the linear theory is Kalker's, G c^2 C11, G c^2 C22, G c^3 C23 (Table E3
         interpolated, ``kalker_coefficients``): no linear solve (it took half of a first
         solve: an LU of K on the direct path, three GMRES solves on the iterative one).
-        Otherwise the patch's own (three full-adhesion solves: by the LU of K on the
+        Otherwise, and once the direct path has built K^-1 (a patch's second solve:
+        ``dense_contact_inverse`` drops this cache), the patch's own linear theory by
+        three full-adhesion solves (products with K^-1, else by the LU of K on the
         direct path, by GMRES on the iterative one). The two differ by the grid's
         discretisation error of the linear theory (2-7 % on 11 x 11, 1-3 % on 35 x 35);
-        the start is only Newton's initial guess, and it takes as many Newton steps from
-        either (docs/develop/design-decisions.md)."""
+        the start is only Newton's initial guess (the solutions agree to the Newton
+        tolerance), and the exact one lets the direct path's later solves reuse one
+        factorisation more often (chord steps; docs/develop/design-decisions.md)."""
         C = self.contact
         dx = self.grid.dx
         ones, zero = np.where(C, dx, 0.0), np.zeros(self.grid.shape)
@@ -539,7 +549,7 @@ class RollingPatch:
         loads = ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin))
         fs = march(np.stack([W[a] for a, W in loads]), C).sum(axis=(1, 2))
         coefficients = self.kalker_coefficients
-        if coefficients is not None:
+        if coefficients is not None and "dense_contact_inverse" not in self.__dict__:
             # the linear theory's force sums tau over the elements: F/dA
             a1, a2 = self.ellipse  # type: ignore[misc]
             c2 = a1 * a2
@@ -660,6 +670,7 @@ def solve_rolling(
     W = patch.rhs(xi, eta, phi)
     auto_direct = patch.direct and (patch.solves == 0 or int(C.sum()) <= DIRECT_REPEAT_MAX_ELEMENTS)
     if method == "direct" or (method == "auto" and auto_direct):
+        direct.inverse(patch)  # before the start: its calibration then uses K^-1
         guess = tau0 if tau0 is not None else patch.fastsim_guess(xi, eta, phi)
         tau, S, slip, newton = direct.newton(patch, W, guess, tol, maxit, SMALL_TRACTION)
         return _solution(patch, tau, S, slip, newton, 0, ())
