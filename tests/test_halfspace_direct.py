@@ -86,20 +86,19 @@ def test_direct_path_warm_start_and_full_adhesion():
 
 @pytest.mark.parametrize(
     "m, x, form",
-    [(11, 0.1, "slip"), (11, 0.25, "rows"), (11, 0.25, "kernel"), (19, 0.25, "single")],
+    [(11, 0.1, "slip"), (11, 0.25, "kernel"), (19, 0.25, "single")],
 )
 def test_reduced_newton_steps_solve_the_full_jacobian(m, x, form):
     """Both reduced forms of a direct Newton step (the adhesion and slip-tangential
     unknowns, or the slip elements' components through K^-1) solve the full generalised
     Jacobian J dtau = -F, J = I - P (I - r K), to round-off, on partial-slip states (a
     perturbed iterate; few elements slipping selects the slip form, most the reduced
-    one). The reduced form's matrix gathered from rows of K ("rows") or from the
-    difference kernel ("kernel"; from 200 unknowns on factorised in single precision
-    and refined in double, "single": 19 x 19 elements, 255 in contact) gives the same
-    step. J is well conditioned here (cond 9 and 17): LAPACK in double leaves about
-    1e-15 of the step's largest component, the refinement stops once the next
-    correction is estimated below direct.REFINE_TOL = 1e-12 of it (measured 2e-13);
-    1e-11 covers both."""
+    one). The reduced form's matrix is gathered from the difference kernel, from 200
+    unknowns on factorised in single precision and refined in double ("single": 19 x
+    19 elements, 255 in contact). J is well conditioned here (cond 9 and 17): LAPACK
+    in double leaves about 1e-15 of the step's largest component, the refinement stops
+    once the next correction is estimated below direct.REFINE_TOL = 1e-12 of it
+    (measured 2e-13); 1e-11 covers both."""
     from contact_fmu.halfspace import direct
 
     c = wheel_on_rail(n=(m, m))
@@ -116,10 +115,9 @@ def test_reduced_newton_steps_solve_the_full_jacobian(m, x, form):
     slip = nz > g
     assert 0.05 < slip.mean() < 0.95
     F = t - z * np.tile(np.where(slip, g / nz, 1.0), 2)
-    if form in ("slip", "rows"):
-        jac = direct._Jacobian(K, Kinv, r, z[:n], z[n:], nz, g, slip)
-    else:  # the first solve's: no K^-1, the matrix from the kernel
-        jac = direct._Jacobian(K, None, r, z[:n], z[n:], nz, g, slip, p.difference_kernel)
+    # the slip form through K^-1 (later solves), or the first solve's reduced form
+    Kinv = Kinv if form == "slip" else None
+    jac = direct._Jacobian(K, Kinv, r, z[:n], z[n:], nz, g, slip, p.difference_kernel)
     assert jac.slip_form == (form == "slip")
     assert jac.single == (form == "single")
     # the full J: P = f (I - zhat zhat^T) in the slip elements, I in the adhesion ones

@@ -2,22 +2,24 @@
 
 Below a few hundred unknowns the iterative path of ``rolling.coulomb_newton`` (GMRES
 with the FFT block preconditioner) costs its Python overhead per iteration, not its
-arithmetic. Here the steady-rolling operator K restricted to the contact (2 m x 2 m
-for m contact elements, component-major) is formed once per patch by applying
-``RollingPatch.apply_K`` to unit tractions, and every Newton step of the same
-semismooth method (same fixed-point form, same backtracking, same convergence test)
-solves its generalised Jacobian
+arithmetic. Here every entry of the steady-rolling operator K restricted to the
+contact (2 m x 2 m for m contact elements, component-major) is read from one
+difference kernel (``DifferenceKernel``): K itself (``contact_operator``, once per
+patch) and every Newton matrix. Each Newton step of the same semismooth method (same
+fixed-point form, same backtracking, same convergence test) solves its generalised
+Jacobian
 
     J = I - P (I - r K),   P = I (adhesion),  P = (g/|z|) (I - zhat zhat^T) (slip),
 
-by LAPACK (dgetrf), in the smaller of two reduced forms (``_Jacobian``): the
-unknowns the step couples (2 nH + nS for nH adhering and nS slipping elements), or,
-when fewer than two thirds of the elements slip, the slip elements' components of
-r K dtau through K^-1 (cached per patch; 2 nS). While the slip set stays the same the
-last factorisation is reused (chord steps, accepted when they halve |F|; otherwise a
-fresh step). The matrices are gathered into per-thread scratch memory. The initial
-guess is the caller's (solve_rolling: the calibrated FASTSIM march, as on the
-iterative path). Converged solutions agree with the iterative path to the Newton
+by LAPACK, in the smaller of two reduced forms (``_Jacobian``): the unknowns the step
+couples (2 nH + nS for nH adhering and nS slipping elements; from SINGLE_MIN unknowns
+on factorised in single precision and refined in double), or, when fewer than two
+thirds of the elements slip, the slip elements' components of r K dtau through K^-1
+(cached per patch from its second solve on; 2 nS). While the slip set stays the same
+the last factorisation is reused (chord steps, accepted when they halve |F|;
+otherwise a fresh step). The matrices are gathered into per-thread scratch memory.
+The initial guess is the caller's (solve_rolling: the calibrated FASTSIM march, as on
+the iterative path). Converged solutions agree with the iterative path to the Newton
 tolerance (tests/test_halfspace_direct.py).
 """
 
@@ -181,7 +183,7 @@ def newton(
         nz = np.hypot(zx, zy)
         slip = nz > g
         scale = np.where(slip, g / np.where(slip, nz, 1.0), 1.0)
-        F = t - z * np.tile(scale, 2)
+        F = (t.reshape(2, m) - z.reshape(2, m) * scale).reshape(2 * m)
         return F, s, zx, zy, nz, slip
 
     t = np.concatenate([tau0[0][C], tau0[1][C]])
@@ -256,13 +258,15 @@ def _workspace(size: int) -> tuple[FloatArray, FloatArray, FloatArray]:
 
 class _Jacobian:
     """The generalised Jacobian J = I - P (I - r K) of one Newton iterate, factorised
-    (LAPACK dgetrf) in the smaller of two reduced forms, so that ``direction`` solves
-    J dtau = -F for any F (the chord steps of ``newton`` reuse it).
+    (LAPACK) in the smaller of two reduced forms, so that ``direction`` solves J dtau =
+    -F for any F (the chord steps of ``newton`` reuse it).
 
     Reduced form (2 nH + nS unknowns): in a slip element the row along zhat is local
     (zhat^T P = 0: dtau_n = -F_n), so the system keeps both components of the adhesion
     elements and the tangential one (that = (-zhat_y, zhat_x)) of the slip elements,
-    whose row is (1 - f) that^T + f r that^T K, f = g/|z|.
+    whose row is (1 - f) that^T + f r that^T K, f = g/|z|. Its matrix is gathered
+    from the difference kernel (``_gather``); from SINGLE_MIN unknowns on it is
+    factorised in single precision and its solves refined in double (``_solve``).
 
     Slip form (2 nS unknowns, when few elements slip): in u = r K dtau the adhesion
     rows read u_H = -F_H, so with M = (r K)^-1 (K^-1 cached per patch) only the
@@ -271,7 +275,7 @@ class _Jacobian:
     -that^T F; unknowns in the same local basis (u = u_n zhat + u_t that), so that the
     matrix is diagonally dominant like K^-1; dtau = M u.
 
-    Both matrices are gathered rows first (whole rows of K or K^-1), then columns."""
+    Its matrix is gathered rows first (whole rows of K^-1), then columns."""
 
     def __init__(
         self,
@@ -283,7 +287,7 @@ class _Jacobian:
         nz: FloatArray,
         g: FloatArray,
         slip: NDArray[np.bool_],
-        kernel: DifferenceKernel | None = None,
+        kernel: DifferenceKernel,
     ) -> None:
         m = len(g)
         self.K, self.Kinv, self.r, self.m, self.slip = K, Kinv, r, m, slip
@@ -319,36 +323,13 @@ class _Jacobian:
             A[:, k:] += Cy
             A[k + np.arange(k), k + np.arange(k)] += r * f
             self.S = np.concatenate([iS, m + iS])
-        elif kernel is not None:
+        else:
             iH = np.flatnonzero(~slip)
             self.H = np.concatenate([iH, m + iH])
             n = 2 * len(iH) + k
             self.single = n >= SINGLE_MIN
             self.unit = kernel.unit if self.single else 1.0  # the matrix's scale
             A = self._gather(kernel, iH, iS, tx, ty, f, r, bA)
-        else:
-            iH = np.flatnonzero(~slip)
-            H = np.concatenate([iH, m + iH])
-            nH2 = len(H)
-            n = nH2 + k
-            R = bR[: n * 2 * m].reshape(n, 2 * m)  # adhesion rows, then f that^T K
-            Tx = bT[: k * 2 * m].reshape(k, 2 * m)
-            np.take(K, H, axis=0, out=R[:nH2])
-            np.take(K, iS, axis=0, out=Tx)
-            np.multiply(Tx, (f * tx)[:, None], out=R[nH2:])
-            np.take(K, m + iS, axis=0, out=Tx)
-            np.multiply(Tx, (f * ty)[:, None], out=Tx)
-            R[nH2:] += Tx
-            A = bA[: n * n].reshape(n, n, order="F")
-            np.take(R, H, axis=1, out=A[:, :nH2])
-            Cx = bT[: n * k].reshape(n, k)
-            np.take(R, iS, axis=1, out=Cx)
-            np.multiply(Cx, tx, out=A[:, nH2:])
-            np.take(R, m + iS, axis=1, out=Cx)
-            np.multiply(Cx, ty, out=Cx)
-            A[:, nH2:] += Cx
-            A[nH2 + np.arange(k), nH2 + np.arange(k)] += (1.0 - f) / r
-            self.H = H
         if n == 0:  # full adhesion in the slip form: dtau = -(r K)^-1 F
             self.lu = self.piv = None
             return
