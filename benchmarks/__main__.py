@@ -116,7 +116,7 @@ BENCHMARKS = [
     Benchmark(
         "halfspace_small", "bench_halfspace_small",
         "small grids, first and repeat solves, against a previous revision and CONTACT",
-        args=("--repeat", "7", "--baseline", "bba5fcf", "--curve", "32", "--crossover", "21",
+        args=("--repeat", "7", "--baseline", "091ab49", "--curve", "32", "--crossover", "21",
               "23", "25"),
         quick=("--grids", "11", "--repeat", "1", "--curve", "0"),
         blocks=("bench_halfspace_small.py",), cheap=True, call=_small,
