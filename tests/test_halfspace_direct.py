@@ -23,14 +23,18 @@ def _patches():
     w19 = wheel_on_rail(n=(19, 19))  # 255 elements: near the limit of repeated direct solves
     lc = ex.contact()
     layer = ellipse_patch(lc.a1, lc.a2, 12, lc.pressure, lc.mu, lc.a1 / lc.k, 0.3, k=lc.k, P=lc.P)
+    # 176 elements: Newton matrices of 200 and more unknowns, single precision with layers
+    layer16 = ellipse_patch(lc.a1, lc.a2, 16, lc.pressure, lc.mu, lc.a1 / lc.k, 0.3, k=lc.k, P=lc.P)
     steel, alu = Material(210e9, 0.3), Material(70e9, 0.33)
     dissimilar = HalfSpaceContact(1000.0, 0.02, 0.02, steel, alu, 0.3, n=12)
     return {"railway 11 x 11": (w.patch, w), "railway 19 x 19": (w19.patch, w19),
-            "layers": (layer, None),
+            "layers": (layer, None), "layers 16 x 16": (layer16, None),
             "dissimilar": (dissimilar.patch, dissimilar)}  # fmt: skip
 
 
-@pytest.mark.parametrize("name", ["railway 11 x 11", "railway 19 x 19", "layers", "dissimilar"])
+@pytest.mark.parametrize(
+    "name", ["railway 11 x 11", "railway 19 x 19", "layers", "layers 16 x 16", "dissimilar"]
+)
 def test_direct_and_iterative_paths_agree(name):
     patch, c = _patches()[name]
     # "auto" takes the direct path on every solve
