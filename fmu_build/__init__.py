@@ -166,12 +166,18 @@ def compiles(cfg: ModelConfig) -> bool:
 
 def carries_core(cfg: ModelConfig) -> bool:
     """Whether the FMU carries its model's C core (instance.c with model.c, stepper.c,
-    field.c and the model's cf_model.h: every model the native FMU builds,
-    ``native_fmu.unsupported``), to which the adapter delegates every FMI call
-    (fmu/slave_core.py). Linux only: the core is compiled here, for linux64."""
+    field.c and the model's cf_model.h), to which the adapter delegates every FMI call
+    (fmu/slave_core.py): every model the native FMU builds (``native_fmu.unsupported``)
+    but the transient field, whose grid (the parameters nx, ny) the pythonfmu FMU lets
+    the user set and the native core holds at the build's size. Linux only: the core is
+    compiled here, for linux64."""
     from . import native_fmu  # it imports this package
 
-    return sys.platform.startswith("linux") and native_fmu.unsupported(cfg) is None
+    return (
+        sys.platform.startswith("linux")
+        and not cfg.transient
+        and native_fmu.unsupported(cfg) is None
+    )
 
 
 def _compile_core(cfg: ModelConfig, dest: Path, fmu_guid: str) -> None:

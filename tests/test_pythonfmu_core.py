@@ -122,7 +122,10 @@ def test_the_core_path_answers_every_call_as_the_python_path(tmp_path, name):
     power against C's z z z: tests/test_native_field.py): within TRAJ_RTOL = 1e-9 of each
     output's largest magnitude over the run (measured: below 1e-15)."""
     cfg = _scene(name)
-    assert native_fmu.unsupported(cfg) is None  # every one of them carries its core
+    # a core of every one of them (the FMU of fig12_transient carries none: its grid is
+    # the user's to set; the core at the scene's grid still answers as the adapter)
+    assert native_fmu.unsupported(cfg) is None
+    assert fmu_build.carries_core(cfg) == (not cfg.transient)
     folder = resources(cfg, tmp_path)
     with_core, python = Delegating(cfg, folder), Delegating(cfg, folder, with_core=False)
     calls, outputs = _calls(cfg, name), reals(cfg)
@@ -281,15 +284,13 @@ def test_states_of_one_path_are_refused_by_the_other_naming_it(fmus, monkeypatch
             assert r.step(H) == OK
 
 
-def test_core_off_by_either_variable_and_no_core_run_the_python_path(fmus, tmp_path):
+def test_core_off_by_either_variable_and_no_core_run_the_python_path(fmus):
     """CONTACT_FMU_CORE=0 or CONTACT_FMU_NATIVE=0 when the instance is made, or an FMU
-    that carries no core (a model the native FMU does not cover: a transient field of
-    more cells than it holds), run the Python path: its state format; with neither
-    variable the core's (a fresh process each: the loaders keep what they loaded)."""
-    d = _scene("fig12_transient").to_dict()
-    big = ModelConfig.from_dict(d | {"starts": d["starts"] | {"nx": 128, "ny": 64}})
-    assert native_fmu.unsupported(big) is not None
-    no_core = fmu_build.build(big, tmp_path / "out")
+    that carries no core (fig12_transient: the pythonfmu FMU lets the user set the
+    field's grid, which the native core holds at the build's size), run the Python path:
+    its state format; with neither variable the core's (a fresh process each: the
+    loaders keep what they loaded)."""
+    no_core = fmu_build.build(_scene("fig12_transient"), OUT)
     with zipfile.ZipFile(no_core.path) as z:
         assert not any(n.endswith(core.LIBRARY) for n in z.namelist())
     code = (
@@ -307,3 +308,19 @@ def test_core_off_by_either_variable_and_no_core_run_the_python_path(fmus, tmp_p
         out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True,
                              text=True, env=clean | env, cwd=ROOT)  # fmt: skip
         assert out.stdout.split()[-1:] == [expected], (env, out.stderr[-2000:])
+
+
+def test_a_core_that_cannot_start_leaves_the_python_path_with_a_warning(tmp_path):
+    """A core whose creep-force table is gone from the instance's resources cannot
+    instantiate: the adapter logs why as a warning (the core's words, the file named)
+    and runs its Python path, which answers as the core would."""
+    cfg = _scene("rail_traction")
+    folder = resources(cfg, tmp_path)
+    (folder / "contact_fmu" / "native" / core.TABLE).unlink()
+    d = Delegating.__new__(Delegating)
+    cls = type("Model", (ContactSlave,), {"CONFIG": cfg.to_dict()})
+    d.s = cls(instance_name="adapter", resources=str(folder))
+    assert d.s._core_calls is None
+    (status, text), *_ = [(m.status.value, m.msg) for m in d.s.log_queue]
+    assert status == 1 and text.startswith("the FMU's C core cannot start (")
+    assert "table.bin" in text and text.endswith("): the adapter's Python path runs")

@@ -364,6 +364,9 @@ CORE_REFUSED = Message(
     "the C core refused the call (status {status:d}; its reason logged before)",
     only="pythonfmu's binary alone (no shim) cannot answer fmi2Error",
 )
+CORE_UNUSABLE = Message(
+    "the FMU's C core cannot start ({why}): the adapter's Python path runs", only=_TWO_PATHS
+)
 CORE_RELEASED = Message(
     "called after the instance's C core was freed (fmi2FreeInstance, fmi2Reset)",
     only=_TWO_PATHS,

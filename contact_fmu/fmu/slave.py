@@ -162,8 +162,11 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         self._core_calls: slave_core.CoreCalls | None = None
         found = slave_core.find(self.resources)
         if found is not None:
-            self._core_calls = slave_core.CoreCalls(self, *found)
-            self._core_calls.attach(self)
+            try:
+                self._core_calls = slave_core.CoreCalls(self, *found)
+                self._core_calls.attach(self)
+            except RuntimeError as e:  # it cannot start here: the Python path runs
+                self.log(words.CORE_UNUSABLE(why=e), Fmi2Status.warning)
 
     # ---- registration ------------------------------------------------------------------
     def _fmi_variable(self, v: fv.Var) -> Any:

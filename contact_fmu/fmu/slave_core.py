@@ -95,7 +95,8 @@ def find(resources: str | None) -> tuple[ctypes.CDLL, str, Path] | None:
 
 class CoreCalls:
     """The FMI calls of one ContactSlave, forwarded to its core instance. It holds the
-    slave weakly: the slave's own attributes name these methods."""
+    slave weakly: the slave's own attributes name these methods. RuntimeError with the
+    core's reason where the core refuses to instantiate (its table unreadable)."""
 
     def __init__(self, slave: Any, lib: ctypes.CDLL, guid: str, where: Path) -> None:
         ref = weakref.ref(slave)
@@ -103,14 +104,25 @@ class CoreCalls:
         self._lib = lib
         self._binding: Any = None
 
+        # what cf_instantiate logs is the reason it refuses (a table it cannot read):
+        # kept for the RuntimeError, after which the slave runs its Python path
+        starting: list[str] | None = []
+
         def log(status: int, text: str, category: str) -> None:
             s = ref()
-            if s is not None:
+            if starting is not None:
+                starting.append(text)
+            elif s is not None:
                 s._log_status(status, text, category or None)
 
-        self.core: core.Core | None = core.Core(
-            lib, guid, log, name=slave.instance_name, resources=where.as_uri(), categories=True
-        )
+        try:
+            self.core: core.Core | None = core.Core(
+                lib, guid, log, name=slave.instance_name, resources=where.as_uri(),
+                categories=True,
+            )  # fmt: skip
+        except RuntimeError as e:
+            raise RuntimeError("; ".join(starting) or str(e)) from None
+        starting = None
 
     def attach(self, slave: Any) -> None:
         """The slave's FMI methods become these (on the instance, in place of the class's)."""

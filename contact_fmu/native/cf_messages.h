@@ -266,6 +266,9 @@
 /* CORE_REFUSED: status (d); contact_fmu/fmu: pythonfmu's binary alone (no shim) cannot
  * answer fmi2Error */
 #define CF_MSG_CORE_REFUSED "the C core refused the call (status %d; its reason logged before)"
+/* CORE_UNUSABLE: why (text); contact_fmu/fmu: the pythonfmu FMU alone runs either its C
+ * core or its Python path */
+#define CF_MSG_CORE_UNUSABLE "the FMU's C core cannot start (%s): the adapter's Python path runs"
 /* CORE_RELEASED: no argument; contact_fmu/fmu: the pythonfmu FMU alone runs either its C
  * core or its Python path */
 #define CF_MSG_CORE_RELEASED \

@@ -8,9 +8,9 @@ that one model; ``Core`` instantiates it and calls it as fmi2.c does: value refe
 as in the model description (the configuration's variables in order), statuses
 ``CF_STATUS_*`` (FMI 2.0's numbers), every message through ``log(status, text)``.
 
-This is the piece the pythonfmu adapter delegates to where a model is compiled (the
-remaining steps are in docs/develop/architecture.md); tests drive it against the
-adapter's Python path, the reference implementation, in one process.
+The pythonfmu adapter delegates to it where its FMU carries the model's core
+(fmu/slave_core.py); tests drive it against the adapter's Python path, the reference
+implementation, in one process.
 """
 
 from __future__ import annotations
