@@ -161,8 +161,8 @@ class CoreCalls:
         fmi = native.fmi_module()
         if s is None or s._cell is None or self.core is None or fmi is None:
             return
-        if not hasattr(fmi, "bind_core"):
-            return
+        if self._binding is not None:  # a cell sent again: the new one
+            self._binding.close()
         lib = self._lib
         self._binding = fmi.bind_core(
             self.core, self._py_do_step, self._py_set_real, self._py_get_real,
