@@ -155,6 +155,12 @@ BENCHMARKS = [
         blocks=("bench_native.py", "bench_native.py full-body"),
     ),
     Benchmark(
+        "native_core", "bench_native",
+        "pythonfmu FMU on its C core against its Python path (and native): fig13, full body",
+        args=("--core",), quick=("--core", "--steps", "3", "--repeats", "1"),
+        blocks=("bench_native.py core",),
+    ),
+    Benchmark(
         "native_spin", "bench_native", "contact FMU with spin, native and pythonfmu",
         args=("--spin",), quick=("--spin", "--steps", "3", "--repeats", "1"),
         blocks=("bench_native.py spin",),

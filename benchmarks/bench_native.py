@@ -32,6 +32,13 @@ in every evaluation) as in 1.: the native FMU, the pythonfmu FMU with the compil
 library it carries (fmu_build.compiles) and the same pythonfmu FMU built without it
 (numpy's march), in one run; ``--write`` replaces SPIN_BLOCK.
 
+    .venv/bin/python benchmarks/bench_native.py --core [--steps 300] [--repeats 5] [--write]
+
+measures instead the pythonfmu FMU delegating to the C core it carries against the same
+FMU on its Python path (CONTACT_FMU_CORE=0 when each instance is made), with the native
+FMU beside them, as in 1.: Fig. 13 with each method and the full body FMU (Lobatto
+IIIC) as in 4.; ``--write`` replaces CORE_BLOCK.
+
     .venv/bin/python benchmarks/bench_native.py --transient [--steps N] [--repeats R]
         [--importer-steps M] [--write]
 
@@ -58,6 +65,7 @@ count whatever else the machine runs). ``--write`` replaces TRANSIENT_BLOCK.
 from __future__ import annotations
 
 import datetime
+import os
 import platform
 import subprocess
 import sys
@@ -66,10 +74,12 @@ import time
 import zipfile
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 import fmu_build
+from contact_fmu.fmu import slave_core
 from contact_fmu.fmu.config import ModelConfig
 from contact_fmu.scenario import load, runner
 from fmu_build import c_importer, native_fmu, native_fmu3
@@ -86,11 +96,12 @@ else:  # run as a script: benchmarks/ is first on sys.path
 ROOT, OUT = harness.ROOT, harness.OUT
 DOC = harness.PERFORMANCE
 # the marker blocks it writes: step cost, importer rate, size; the full body FMU (also
-# --full-body-only); the contact FMU with spin (--spin)
+# --full-body-only); the contact FMU with spin (--spin); the pythonfmu FMU's paths (--core)
 BLOCK = "bench_native.py"
 FULL_BLOCK = "bench_native.py full-body"
 SPIN_BLOCK = "bench_native.py spin"
 TRANSIENT_BLOCK = "bench_native.py transient"  # --transient: fig12_transient
+CORE_BLOCK = "bench_native.py core"  # --core: the pythonfmu FMU's two paths
 TRIVIAL_C = Path(__file__).with_name("trivial_fmu.c")
 
 
@@ -197,15 +208,38 @@ def _is_fmi3(path: Path) -> bool:
     return fmpy.read_model_description(str(path)).fmiVersion.startswith("3")
 
 
+class CoreOffStepper(Stepper):
+    """bench_cosim.Stepper of a pythonfmu FMU on its Python path: its instance made with
+    CONTACT_FMU_CORE=0 (fmu/slave_core.py), the C core it carries left unused."""
+
+    def __init__(self, *args: Any) -> None:
+        old = os.environ.get(slave_core.CORE_ENV)
+        os.environ[slave_core.CORE_ENV] = "0"
+        try:
+            super().__init__(*args)
+        finally:
+            if old is None:
+                del os.environ[slave_core.CORE_ENV]
+            else:
+                os.environ[slave_core.CORE_ENV] = old
+
+
+PYTHON_PATH = "Python path"  # the runs of CoreOffStepper (by this in their name)
+
+
 def interleaved(
     runs: dict, steps: int, repeats: int, between: Callable[[], None] | None = None
 ) -> dict[str, float]:
     """Seconds per step of each run (path, starts, inputs, outputs, input table, h; FMI
-    2.0 or 3.0): the repeats interleaved run by run, the mean over the steps of each
-    step's fastest. ``between``: called after each round of runs (more candidates
-    timed in the same rounds)."""
+    2.0 or 3.0; a pythonfmu FMU on its Python path where the name says PYTHON_PATH): the
+    repeats interleaved run by run, the mean over the steps of each step's fastest.
+    ``between``: called after each round of runs (more candidates timed in the same
+    rounds)."""
     times = {k: np.empty((repeats, steps)) for k in runs}
-    kinds = {k: Stepper3 if _is_fmi3(run[0]) else Stepper for k, run in runs.items()}
+    kinds = {
+        k: Stepper3 if _is_fmi3(run[0]) else CoreOffStepper if PYTHON_PATH in k else Stepper
+        for k, run in runs.items()
+    }
     for r in range(repeats):
         for name, (path, st, ins, outs, tab, h) in runs.items():
             s = kinds[name](path, name.replace(" ", "_"), st, ins, outs, tab, h)
@@ -236,6 +270,61 @@ def full_body_costs(steps: int, repeats: int) -> dict[str, float]:
     runs = {f"{t} {sch}": (p, {"scheme": sch}, list(table), outputs, table, FULL_BODY_H)
             for sch in ("lobatto3c", "sdirk2") for t, p in paths.items()}  # fmt: skip
     return interleaved(runs, steps, repeats)
+
+
+def core_costs(steps: int, repeats: int) -> dict[str, float]:
+    """Seconds per step of the pythonfmu FMU delegating to its C core (fmu/slave_core.py,
+    fmi.c's CoreBinding) and of the same FMU on its Python path (CONTACT_FMU_CORE=0: the
+    adapter's Python calls around the compiled step, slave_fast.py and fmi.c's Binding),
+    with the native FMU beside them: Fig. 13 (case eta = 3) with each method and the full
+    body FMU (Lobatto IIIC) as full_body_costs, interleaved as step_costs."""
+    scene, cfgs = fig13_configs()
+    case = scene.case("eta = 3")
+    table = runner.input_table(scene, case)
+    io = (runner.start_values(scene, case), scene.inputs,
+          [o for o in scene.outputs if o != "regime"], table, scene.step)  # fmt: skip
+    runs = {}
+    for m, cfg in cfgs.items():
+        python = fmu_build.build(cfg, OUT).path
+        runs[f"fig13 {m}: pythonfmu, C core"] = (python, *io)
+        runs[f"fig13 {m}: pythonfmu, {PYTHON_PATH}"] = (python, *io)
+        runs[f"fig13 {m}: native"] = (native_fmu.build(cfg, OUT).path, *io)
+    cfg = ModelConfig.full("body")
+    s = np.sin(np.arange(steps + 1) / 20.0)
+    full = {"P": np.full(steps + 1, 1000.0), "Fx_ex": np.full(steps + 1, 90.0),
+            "Fy_ex": 90.0 * s, "My_ex": np.zeros(steps + 1), "Mz_ex": 0.015 * s}  # fmt: skip
+    outputs = [v.name for v in cfg.variables if v.causality["body"] == "output"]
+    io = ({"scheme": "lobatto3c"}, list(full), [o for o in outputs if o != "regime"], full,
+          FULL_BODY_H)  # fmt: skip
+    python = fmu_build.build(cfg, OUT).path
+    runs["full body: pythonfmu, C core"] = (python, *io)
+    runs[f"full body: pythonfmu, {PYTHON_PATH}"] = (python, *io)
+    runs["full body: native"] = (native_fmu.build(cfg, OUT).path, *io)
+    return interleaved(runs, steps, repeats)
+
+
+def core_report(cost: dict[str, float], args) -> str:
+    lines = [
+        f"Made by `benchmarks/bench_native.py --core --steps {args.steps} --repeats "
+        f"{args.repeats} --write` on {datetime.date.today()} ({harness.machine()}; the "
+        "ratios are the result).",
+        "",
+        "The pythonfmu FMU delegating every FMI call to the C core it carries "
+        "(fmu/slave_core.py; doStep, setReal and getReal through fmi.c's CoreBinding) "
+        "against the same FMU on its Python path (CONTACT_FMU_CORE=0: the adapter's calls "
+        "around the compiled step), and the native FMU, through fmpy's FMU2Slave (setReal, "
+        f"doStep, getReal): Fig. 13, case eta = 3, and the full body FMU (Lobatto IIIC, "
+        f"loads swept, steps of {FULL_BODY_H:.1e} s), the first {args.steps} steps, mean of "
+        f"each step's fastest of {args.repeats} interleaved runs:",
+        "",
+        "| FMU | us per step | / Python path | / native |",
+        "|---|---|---|---|",
+    ]
+    for k, v in cost.items():
+        model = k.split(":")[0]
+        py, nat = cost[f"{model}: pythonfmu, {PYTHON_PATH}"], cost[f"{model}: native"]
+        lines.append(f"| {k} | {1e6 * v:.2f} | {v / py:.2f} | {v / nat:.2f} |")
+    return "\n".join(lines) + "\n"
 
 
 def full_report(full: dict[str, float], args) -> str:
@@ -529,6 +618,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--spin", action="store_true", help="the contact FMU with spin only")
     ap.add_argument("--transient", action="store_true", help="fig12_transient's FMUs only")
     ap.add_argument("--callgrind", action="store_true", help="with --transient: instructions")
+    ap.add_argument("--core", action="store_true", help="the pythonfmu FMU's two paths only")
     args = ap.parse_args(argv)
     if args.callgrind and not args.transient:
         ap.error("--callgrind is an option of --transient")
@@ -542,6 +632,10 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         text = transient_report(cost, counts, args)
         harness.publish(text, args.write, DOC, TRANSIENT_BLOCK)
+        return 0
+    if args.core:
+        text = core_report(core_costs(args.steps, args.repeats), args)
+        harness.publish(text, args.write, DOC, CORE_BLOCK)
         return 0
     if args.spin:
         text = spin_report(spin_costs(args.steps, args.repeats), args)

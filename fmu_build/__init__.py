@@ -34,6 +34,7 @@ import fmpy
 
 from contact_fmu import native
 from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.native import core
 
 from . import documentation, model_description, script, sources, tables
 
@@ -94,6 +95,8 @@ def roots(cfg: ModelConfig) -> list[str]:
     r = ["fmu.slave", cfg.model_module]
     if cfg.law_module:
         r.append(cfg.law_module)
+    if carries_core(cfg):
+        r.append("native.core")
     return r
 
 
@@ -116,6 +119,12 @@ def identity(cfg: ModelConfig) -> tuple[str, list[str]]:
         h.update(own.name.encode() + b"\0" + own.read_bytes() + b"\0")
     for doc in documentation.sources(cfg):  # the licence, the scene's figure
         h.update(doc.name.encode() + b"\0" + doc.read_bytes() + b"\0")
+    if carries_core(cfg):  # the core's C files and its header's maker (native_fmu.py)
+        from . import native_fmu
+
+        for name in native_fmu.CORE:
+            h.update(name.encode() + b"\0" + (native_fmu.NATIVE_DIR / name).read_bytes())
+        h.update(Path(native_fmu.__file__).read_bytes() + Path(core.__file__).read_bytes())
     return h.hexdigest(), modules
 
 
@@ -153,6 +162,46 @@ def compiles(cfg: ModelConfig) -> bool:
     if cfg.mode == "body":
         return True
     return cfg.mode == "contact" and cfg.contact_law == "layer" and "Omega_z" in cfg.inputs
+
+
+def carries_core(cfg: ModelConfig) -> bool:
+    """Whether the FMU carries its model's C core (instance.c with model.c, stepper.c,
+    field.c and the model's cf_model.h), to which the adapter delegates every FMI call
+    (fmu/slave_core.py): every model the native FMU builds (``native_fmu.unsupported``)
+    but the transient field, whose grid (the parameters nx, ny) the pythonfmu FMU lets
+    the user set and the native core holds at the build's size. Linux only: the core is
+    compiled here, for linux64."""
+    from . import native_fmu  # it imports this package
+
+    return (
+        sys.platform.startswith("linux")
+        and not cfg.transient
+        and native_fmu.unsupported(cfg) is None
+    )
+
+
+def _compile_core(cfg: ModelConfig, dest: Path, fmu_guid: str) -> None:
+    """The model's core (``core.LIBRARY``, its GUID in ``core.GUID_FILE``) and, for a
+    creep-force table, the table resource it reads (``table.bin``) into ``dest`` (the
+    vendored contact_fmu/native); left out, with a note, where it cannot be compiled
+    (the FMU then runs the adapter's Python path: the same answers)."""
+    from . import native_fmu
+
+    work = Path(tempfile.mkdtemp(prefix=".core-", dir=dest))
+    try:
+        for name in native_fmu.CORE:
+            shutil.copyfile(native_fmu.NATIVE_DIR / name, work / name)
+        (work / native_fmu.HEADER).write_text(native_fmu.header(cfg, fmu_guid))
+        native_fmu.compile_binary(work, dest / core.LIBRARY, core.FLAGS, native_fmu.CORE)
+        (dest / core.GUID_FILE).write_text(fmu_guid)
+        if cfg.has_table:
+            (dest / core.TABLE).write_bytes(native_fmu.table_bytes(cfg))
+    except (OSError, subprocess.CalledProcessError, native_fmu.NativeUnsupportedError) as e:
+        for name in (core.LIBRARY, core.GUID_FILE, core.TABLE):
+            (dest / name).unlink(missing_ok=True)
+        print(f"fmu_build: C core left out ({e}): the adapter's Python path", file=sys.stderr)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
 
 
 def _compile_native(dest: Path, fmi: bool) -> None:
@@ -197,6 +246,8 @@ def build(
         sources.vendor(modules, stage / package, cfg.data_files, compiles(cfg))
         if "native" in modules and compiles(cfg):
             _compile_native(stage / package / "native", fmi=cfg.mode == "body")
+        if "native.core" in modules and carries_core(cfg):
+            _compile_core(cfg, stage / package / "native", info.guid)
         for rel in cfg.generated_files:
             shutil.copyfile(tables.ensure(cfg, table_cache), stage / package / rel)
         script_file = stage / f"{module}.py"

@@ -133,19 +133,20 @@ def test_body_fmu_carries_the_compiled_stepper_and_loads_it(built, tmp_path):
     stepper, and the FMI calls' extension for this interpreter); the vendored loader
     finds both (and would compile nothing on the target); the full contact FMU, whose law
     marches its spin input's grid in the stepper's library, carries the library but not
-    the extension (its FMI calls stay in Python); a contact FMU without spin, which runs
-    no compiled code, carries the loader's Python alone, no library and no C source, and
-    the rigid-body FMU no native part at all."""
+    the extension (its FMI calls go to the C core by ctypes); a contact FMU without spin
+    and the rigid-body FMU, which step no compiled kernel, carry the loaders' Python and
+    their C core alone, no kernel and no C source. Every one of them carries its model's
+    C core (instance.c for its cf_model.h: native/_core.so and its GUID, the native FMU's
+    models all), to which the adapter delegates (tests/test_pythonfmu_core.py)."""
     lib, ext = f"native/{native.library_name()}", f"native/{native.fmi_name()}"
     carried = {"native/stepper.c", "native/fmi.c", "native/cf_core.h", "native/cf_abi.h"}
-    assert carried | {"native/abi.py", lib, ext} <= _vendored(built["fig13"])
+    the_core = {"native/core.py", "native/_core.so", "native/_core.guid"}
+    assert carried | the_core | {"native/abi.py", lib, ext} <= _vendored(built["fig13"])
     contact = _vendored(built["full_contact"])
-    assert {"native/stepper.c", lib} <= contact and ext not in contact
-    assert {f for f in _vendored(built["sweep"]) if f.startswith("native/")} == {
-        "native/__init__.py",
-        "native/abi.py",  # the loader's structs
-    }
-    assert not any(f.startswith("native/") for f in _vendored(built["full_rigid_body"]))
+    assert {"native/stepper.c", lib} | the_core <= contact and ext not in contact
+    loaders = {"native/__init__.py", "native/abi.py"}  # the loader's structs
+    for name in ("sweep", "full_rigid_body"):
+        assert {f for f in _vendored(built[name]) if f.startswith("native/")} == loaders | the_core
     fmpy.extract(str(built["fig13"].path), str(tmp_path))
     code = (
         f"import sys; sys.path.insert(0, {str(tmp_path / 'resources')!r}); "

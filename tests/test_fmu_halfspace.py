@@ -174,10 +174,10 @@ def test_fmu_ships_its_table_tagged_with_its_declaration(built, tmp_path):
 def test_fmu_reads_its_own_table_not_the_build_cache(built, tmp_path):
     """An FMU of the rail declaration under a name of its own (its own content key, so
     nothing of it is imported yet in this process), built with a table cache that is
-    deleted afterwards. An extraction whose table is removed from the resources refuses
-    to initialise (fmi2Error, the file named); a second, intact extraction of the same
-    FMU then runs, reading its own table (not the first extraction's, not the cache), and
-    gives the outputs of the rail_creep FMU."""
+    deleted afterwards. An extraction whose tables are removed from the resources (the C
+    core's and the Python path's) refuses to initialise (fmi2Error, the files named); a
+    second, intact extraction of the same FMU then runs, reading its own table (not the
+    first extraction's, not the cache), and gives the outputs of the rail_creep FMU."""
     base = SCENES["rail_creep"].config
     cfg = ModelConfig.from_dict({**base.to_dict(), "name": "rail_creep_own_table"})
     cache = tmp_path / "tables"
@@ -190,6 +190,7 @@ def test_fmu_reads_its_own_table_not_the_build_cache(built, tmp_path):
     unzipped = tmp_path / "unzipped"
     fmpy.extract(str(own.path), str(unzipped))
     (unzipped / "resources" / own.package / TABLE).unlink()
+    (unzipped / "resources" / own.package / "native" / "table.bin").unlink()  # the core's
     inst = Instance(own.path, "no_table", unzip_dir=unzipped, initialise=False)
     try:
         set_creepage(inst, 0.002)
@@ -197,6 +198,9 @@ def test_fmu_reads_its_own_table_not_the_build_cache(built, tmp_path):
             inst.initialise()
         assert e.value.status == ERROR
         text = " ".join(m for _, m in inst.messages)
+        # the C core cannot read its table (a warning: the Python path runs), nor then
+        # can the Python path its own
+        assert "C core cannot start" in text and "table.bin" in text, text
         assert "cannot initialise the model" in text and "creep_table.npz" in text, text
         assert all(s < FATAL for s, _ in inst.messages)
     finally:

@@ -222,8 +222,8 @@ FALLBACK = {
 
 @pytest.mark.parametrize("kind", FALLBACK)
 def test_compiled_library_that_cannot_load_falls_back_to_python_with_a_warning(tmp_path, kind):
-    """A damaged compiled stepper (or one needing a newer C library) killed the FMU;
-    now the Python path takes over, with a warning at initialisation. The Python path
+    """A damaged compiled stepper and C core (or ones needing a newer C library) killed
+    the FMU; now the Python path takes over, with a warning at initialisation. The Python path
     gives the compiled one's doubles for the body step (module docstring of
     contact_fmu.native), and for the spin law's strip march the same to the bounds of
     tests/test_native.py (7e-13 of mu P: the march's sums in another order)."""
@@ -231,8 +231,10 @@ def test_compiled_library_that_cannot_load_falls_back_to_python_with_a_warning(t
     inputs, out = FALLBACK[kind]
     fmpy.extract(str(path), str(tmp_path))
     libs = list(tmp_path.glob("resources/cfmu_*/native/_stepper_*.so"))
-    assert libs
-    libs[0].write_bytes(b"not an ELF file")
+    cores = list(tmp_path.glob("resources/cfmu_*/native/_core.so"))  # fmu/slave_core.py
+    assert libs and cores
+    for lib in (libs[0], cores[0]):
+        lib.write_bytes(b"not an ELF file")
     runs = []
     for unzip in (tmp_path, None):  # one process each: the two share the FMU's modules
         proc = run_isolated(
@@ -258,12 +260,16 @@ def test_compiled_library_that_cannot_load_falls_back_to_python_with_a_warning(t
         assert float(t1) != 0.0 and abs(float(t1) - float(t2)) <= 7e-13 * MU_P
 
 
-def test_host_without_scipy_fails_loudly():
+@pytest.mark.parametrize("core", ["1", "0"])
+def test_host_without_scipy_fails_loudly(core):
     """A host Python without scipy answered OK at initialisation and Discard at the
-    first doStep (fmpy simulate then exited 0 with two rows)."""
+    first doStep (fmpy simulate then exited 0 with two rows). The FMU's C core needs no
+    scipy: with it the FMU simulates; on its Python path (CONTACT_FMU_CORE=0) it fails
+    loudly."""
     proc = run_isolated(
         f"""
-        import sys
+        import os, sys
+        os.environ["CONTACT_FMU_CORE"] = {core!r}
         sys.modules["scipy"] = None  # a host environment without scipy
         import fmpy
         try:
@@ -275,7 +281,8 @@ def test_host_without_scipy_fails_loudly():
         """
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert proc.stdout.splitlines()[-1].startswith("raised"), proc.stdout
+    expected = "simulated" if core == "1" else "raised"
+    assert proc.stdout.splitlines()[-1].startswith(expected), proc.stdout
 
 
 def test_own_state_with_a_bad_input_into_an_instance_of_other_parameters():

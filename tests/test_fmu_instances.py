@@ -153,14 +153,16 @@ def test_plain_fmpy_instance_freed_before_initialisation_then_two_simulations():
 
 
 def test_instance_after_a_first_one_that_could_not_import_its_model():
-    """The first instance made on a host that lacks scipy (its model cannot be imported:
-    fmi2Error at exitInitializationMode, naming it) and freed; the host then finds scipy
-    (an embedding tool that sets its paths late). The next instance imports what the
-    first could not from its own folder, not the deleted one, and steps with fmi2OK."""
+    """The first instance made on a host that lacks scipy, on the Python path (its model
+    cannot be imported: fmi2Error at exitInitializationMode, naming it) and freed; the
+    host then finds scipy (an embedding tool that sets its paths late). The next instance
+    imports what the first could not from its own folder, not the deleted one, and steps
+    with fmi2OK."""
     built = fig13()
     result = run_fresh(
         f"""
-        import sys
+        import os, sys
+        os.environ["CONTACT_FMU_CORE"] = "0"  # the Python path: the C core needs no scipy
         sys.modules["scipy"] = None  # a host without scipy
         import json, os, shutil
         import fmpy

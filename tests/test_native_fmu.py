@@ -842,10 +842,11 @@ def _fnv1a(data: bytes) -> int:
 def _tampered(data: bytes, old: dict[str, float], new: dict[str, float]) -> bytes:
     """State bytes of either target with the values of ``old`` replaced by ``new`` and
     the envelope made whole again (length and checksum recomputed): a content that no
-    setter admits in an intact envelope. pythonfmu: the pickled state's values and
-    outputs (its classes are the loaded FMU's, in sys.modules); native: every double of
-    the instance's core that holds the old value (the value, its copy by role, the
-    model's state and outputs)."""
+    setter admits in an intact envelope. pythonfmu on its Python path: the pickled
+    state's values and outputs (its classes are the loaded FMU's, in sys.modules);
+    native, and the pythonfmu FMU on its C core (inside the shim's envelope): every
+    double of the instance's core that holds the old value (the value, its copy by role,
+    the model's state and outputs)."""
     import pickle
     import struct
     import zlib
@@ -855,6 +856,10 @@ def _tampered(data: bytes, old: dict[str, float], new: dict[str, float]) -> byte
         glen = int.from_bytes(data[m + 4 : m + 8], "little")
         head = m + 8 + glen + 8 + 4
         payload = data[head:]
+        if payload.startswith(b"cfmuSTAT"):  # the C core's state (fmu/slave_core.py)
+            payload = _tampered(payload, old, new)
+            size = len(payload).to_bytes(8, "little") + zlib.crc32(payload).to_bytes(4, "little")
+            return data[: m + 8 + glen] + size + payload
         assert payload.startswith(PYTHONFMU_STATE)
         owner, _, body = payload[len(PYTHONFMU_STATE) :].partition(b"\n")
         state = pickle.loads(body)
@@ -885,17 +890,23 @@ def _tampered(data: bytes, old: dict[str, float], new: dict[str, float]) -> byte
     ],
     ids=["mu nan", "P -1", "Vx inf", "Vx nan"],
 )
+@pytest.mark.parametrize("core", ["core on", "CONTACT_FMU_CORE=0"])
 def test_a_state_whose_content_no_setter_admits_is_refused_and_nothing_changes(
-    fig13, change, reason
+    fig13, change, reason, core, monkeypatch
 ):
     """An FMU state is checked whole, not only its envelope: bytes whose length and
     checksum are intact but whose content holds mu = NaN or P = -1 (values the setters
     refuse, not recorded as held bad) or an output Vx = inf or NaN are refused with
     fmi2Error naming the reason in the words of the pythonfmu FMU's check (the native
-    FMU at deserialisation, the pythonfmu FMU at setFMUstate); the outputs are
-    unchanged and the instance steps on."""
+    FMU at deserialisation, the pythonfmu FMU on its C core at setFMUstate, where the
+    core reads the bytes, and on its Python path, CONTACT_FMU_CORE=0, in Python); the
+    outputs are unchanged and the instance steps on."""
     from fmpy.fmi1 import FMICallException
 
+    if core != "core on":
+        if "-native-" in fig13.name:
+            pytest.skip("the native FMU has no Python path")
+        monkeypatch.setenv("CONTACT_FMU_CORE", "0")
     with body(fig13) as b:
         steps(b, 2)
         old = {n: b.get(n) for n in change}

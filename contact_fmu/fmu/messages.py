@@ -347,6 +347,30 @@ STATE_COULOMB = Message(
     "its outputs break Coulomb's bound: abs(T) = {T!r} N > mu P = {muP!r} N", only=_PY_STATE
 )
 STATE_NOT_A_VARIABLE = Message("{name!r}, not a variable of this FMU", only=_PY_STATE)
+# the pythonfmu FMU's two paths (fmu/slave_core.py): its C core where carried, its
+# Python path with CONTACT_FMU_CORE=0 or CONTACT_FMU_NATIVE=0; their states refuse each other
+_TWO_PATHS = "the pythonfmu FMU alone runs either its C core or its Python path"
+STATE_OF_CORE = Message(
+    "a state of this FMU's C core; this instance runs its Python path "
+    "(CONTACT_FMU_CORE=0 or CONTACT_FMU_NATIVE=0 when it was made)",
+    only=_TWO_PATHS,
+)
+STATE_OF_PYTHON = Message(
+    "a state of this FMU's Python path (saved with CONTACT_FMU_CORE=0 or "
+    "CONTACT_FMU_NATIVE=0); this instance runs its C core",
+    only=_TWO_PATHS,
+)
+CORE_REFUSED = Message(
+    "the C core refused the call (status {status:d}; its reason logged before)",
+    only="pythonfmu's binary alone (no shim) cannot answer fmi2Error",
+)
+CORE_UNUSABLE = Message(
+    "the FMU's C core cannot start ({why}): the adapter's Python path runs", only=_TWO_PATHS
+)
+CORE_RELEASED = Message(
+    "called after the instance's C core was freed (fmi2FreeInstance, fmi2Reset)",
+    only=_TWO_PATHS,
+)
 STATE_FLAGS = Message(
     "its phase and flags ({phase:d}, {built:d}, {dirty:d}, {tried:d}) are not this FMU's",
     home=NATIVE,

@@ -54,6 +54,9 @@ __asm__(".symver dlerror,dlerror@GLIBC_2.2.5");
 #define CF_CELL_VR 2147483647u
 /* Where fmu_build puts pythonfmu's binary, under the resources folder. */
 #define CF_INNER "/pythonfmu/linux64/libpythonfmu-export.so"
+/* The text sent through CF_CELL_VR when the adapter's Python object goes (kept in step
+ * with slave_core.RELEASE). */
+#define CF_RELEASE "release"
 #define CF_MAGIC "contact_fmu state\n"
 #define CF_FORMAT 1u
 #define CF_MAX_STATES 4096
@@ -238,6 +241,15 @@ static fmi2Status send_cell(shim *s) {
     return s->api.SetString(s->inner, &vr, 1, &value);
 }
 
+/* Tell the adapter that its Python object is about to go (fmi2FreeInstance, fmi2Reset):
+ * it frees what it holds outside Python (its C core, fmu/slave_core.py) now, not when
+ * the object is collected. */
+static void send_release(shim *s) {
+    fmi2String value = CF_RELEASE;
+    fmi2ValueReference vr = CF_CELL_VR;
+    s->api.SetString(s->inner, &vr, 1, &value);
+}
+
 static fmi2Status worst(fmi2Status a, int b) {
     return b > (int)a && b <= (int)fmi2Pending ? (fmi2Status)b : a;
 }
@@ -297,6 +309,7 @@ FMI2_Export void fmi2FreeInstance(fmi2Component c) {
     if (s == NULL) return;
     cb = s->cb;
     for (size_t i = 0; i < s->n_states; i++) s->api.FreeFMUstate(s->inner, &s->states[i]);
+    send_release(s);
     s->api.FreeInstance(s->inner);
     set_debug(s, fmi2False, 0, NULL);
     cf_free(&cb, s->states);
@@ -380,6 +393,7 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c) {
     if (s == NULL) return fmi2Error;
     s->cell = fmi2OK;
     s->phase = s->init_failed = 0;
+    send_release(s);
     st = s->api.Reset(s->inner); /* a new Python object: it needs the cell again */
     if (st <= fmi2Warning) st = worst(st, send_cell(s));
     return worst(st, s->cell);

@@ -60,6 +60,7 @@ from pythonfmu import (
 from pythonfmu.enums import Fmi2Status
 
 from . import messages as words
+from . import slave_core
 from . import variables as fv
 from .call_state import TIME_RTOL, CallState
 from .config import ModelConfig
@@ -91,6 +92,7 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
     """Rolling/sliding contact after Spector & Batra (1995); the model follows CONFIG."""
 
     CONFIG: ClassVar[dict[str, Any]] = {}
+    CELL_VR: ClassVar[int] = CELL_VR
     author = "contact_fmu"
     license = "MIT"
 
@@ -156,6 +158,15 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
             and self._causality[v.name] == fv.INPUT
             and v.name not in cfg.fixed
         }
+        # the FMU's C core, where it carries one: every FMI call goes to it (slave_core.py)
+        self._core_calls: slave_core.CoreCalls | None = None
+        found = slave_core.find(self.resources)
+        if found is not None:
+            try:
+                self._core_calls = slave_core.CoreCalls(self, *found)
+                self._core_calls.attach(self)
+            except RuntimeError as e:  # it cannot start here: the Python path runs
+                self.log(words.CORE_UNUSABLE(why=e), Fmi2Status.warning)
 
     # ---- registration ------------------------------------------------------------------
     def _fmi_variable(self, v: fv.Var) -> Any:
@@ -194,6 +205,10 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
         if cell is not None and status.value > cell.value:
             cell.value = status.value
 
+    def _log_status(self, status: int, msg: str, category: str | None = None) -> None:
+        """``log`` with the status as a number (FMI 2.0's: slave_core.py's core)."""
+        self.log(msg, Fmi2Status(status), category)
+
     def _refuse(self, msg: str) -> None:
         """An error the current call must answer: fmi2Error through the shim; under
         pythonfmu's binary alone (no shim: Windows, or built without a C compiler) an
@@ -211,9 +226,14 @@ class ContactSlave(FastPathMixin, FmuStateMixin, Fmi2Slave):
             self._refuse(words.GUARDED(call=call, vrs=list(vrs), why=describe(e)))
             return [0] * len(vrs) if call.startswith("get") else None
 
+    def _take_cell(self, text: str) -> None:
+        """The shim's cell, from its text "status cell <address>" (pythonfmu_shim.c)."""
+        self._cell = ctypes.c_int.from_address(int(text.rsplit(" ", 1)[1], 16))
+
     def set_string(self, vrs: list[int], values: list[str]) -> None:
         if len(vrs) == 1 and vrs[0] == CELL_VR:  # the shim's cell (pythonfmu_shim.c)
-            self._cell = ctypes.c_int.from_address(int(values[0].rsplit(" ", 1)[1], 16))
+            if values[0] != slave_core.RELEASE:  # nothing to free on the Python path
+                self._take_cell(values[0])
             return
         self._guarded("setString", super().set_string, vrs, values)
 

@@ -72,6 +72,8 @@ class FmuStateMixin:
         reason, with nothing applied."""
         if isinstance(state, state_bytes.Unreadable):
             return state.reason
+        if isinstance(state, bytes):  # the C core's (slave_core.py): not this path's
+            return words.STATE_OF_CORE()
         if not isinstance(state, dict) or set(state) != _STATE_FIELDS:
             return words.STATE_FIELDS()
         t, values, out, dirty = state["time"], state["values"], state["out"], state["dirty"]
@@ -169,11 +171,20 @@ class FmuStateMixin:
                 self._fast_push()
 
     @staticmethod
-    def _fmu_state_to_bytes(state: dict[str, Any]) -> bytes:
+    def _fmu_state_to_bytes(state: dict[str, Any] | bytes) -> bytes:
+        """The Python path's state in state_bytes's format; the C core's state is its
+        bytes already (slave_core.py)."""
+        if isinstance(state, bytes):
+            return state
         return state_bytes.dumps(state, _PACKAGE)
 
     @staticmethod
-    def _fmu_state_from_bytes(data: bytes) -> dict[str, Any] | state_bytes.Unreadable:
+    def _fmu_state_from_bytes(data: bytes) -> dict[str, Any] | state_bytes.Unreadable | bytes:
+        """The Python path's state, or Unreadable; bytes of the C core as they are
+        (checked by the instance that sets them: the core, or refused by the Python
+        path naming the core)."""
+        if bytes(data[: len(state_bytes.CORE_MAGIC)]) == state_bytes.CORE_MAGIC:
+            return bytes(data)
         return state_bytes.loads(data, _PACKAGE)
 
 

@@ -19,6 +19,9 @@ from typing import Any, NamedTuple
 from . import messages as words
 
 MAGIC = b"contact_fmu FMU state 1\n"
+# the first bytes of a state of the FMU's C core (native/instance.c's MAGIC: slave_core.py,
+# slave_state.py)
+CORE_MAGIC = b"cfmuSTAT"
 # numpy's pickle entry points for arrays, dtypes and scalars (numpy 1.x and 2.x names)
 _NUMPY = {
     (m, n)

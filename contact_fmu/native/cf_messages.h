@@ -253,6 +253,26 @@
 /* STATE_NOT_A_VARIABLE: name (repr); contact_fmu/fmu: the pythonfmu FMU's state format
  * (the native FMU's is its C core, whole) */
 #define CF_MSG_STATE_NOT_A_VARIABLE "%s, not a variable of this FMU"
+/* STATE_OF_CORE: no argument; contact_fmu/fmu: the pythonfmu FMU alone runs either its C
+ * core or its Python path */
+#define CF_MSG_STATE_OF_CORE \
+    "a state of this FMU's C core; this instance runs its Python path (CONTACT_FMU_CORE=0 or " \
+    "CONTACT_FMU_NATIVE=0 when it was made)"
+/* STATE_OF_PYTHON: no argument; contact_fmu/fmu: the pythonfmu FMU alone runs either its C
+ * core or its Python path */
+#define CF_MSG_STATE_OF_PYTHON \
+    "a state of this FMU's Python path (saved with CONTACT_FMU_CORE=0 or CONTACT_FMU_NATIVE=0); " \
+    "this instance runs its C core"
+/* CORE_REFUSED: status (d); contact_fmu/fmu: pythonfmu's binary alone (no shim) cannot
+ * answer fmi2Error */
+#define CF_MSG_CORE_REFUSED "the C core refused the call (status %d; its reason logged before)"
+/* CORE_UNUSABLE: why (text); contact_fmu/fmu: the pythonfmu FMU alone runs either its C
+ * core or its Python path */
+#define CF_MSG_CORE_UNUSABLE "the FMU's C core cannot start (%s): the adapter's Python path runs"
+/* CORE_RELEASED: no argument; contact_fmu/fmu: the pythonfmu FMU alone runs either its C
+ * core or its Python path */
+#define CF_MSG_CORE_RELEASED \
+    "called after the instance's C core was freed (fmi2FreeInstance, fmi2Reset)"
 /* STATE_FLAGS: phase (d), built (d), dirty (d), tried (d); the native FMUs only: the
  * pythonfmu FMU's state holds no phase (pythonfmu keeps it) */
 #define CF_MSG_STATE_FLAGS "its phase and flags (%d, %d, %d, %d) are not this FMU's"

@@ -8,9 +8,9 @@ that one model; ``Core`` instantiates it and calls it as fmi2.c does: value refe
 as in the model description (the configuration's variables in order), statuses
 ``CF_STATUS_*`` (FMI 2.0's numbers), every message through ``log(status, text)``.
 
-This is the piece the pythonfmu adapter delegates to where a model is compiled (the
-remaining steps are in docs/develop/architecture.md); tests drive it against the
-adapter's Python path, the reference implementation, in one process.
+The pythonfmu adapter delegates to it where its FMU carries the model's core
+(fmu/slave_core.py); tests drive it against the adapter's Python path, the reference
+implementation, in one process.
 """
 
 from __future__ import annotations
@@ -23,6 +23,9 @@ from pathlib import Path
 SOURCES = ("instance.c", "model.c", "stepper.c", "field.c")
 FLAGS = ("-DCF_KERNEL_EXPORT",)  # export the cf_* functions (stepper.h's CF_HIDDEN)
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)  # cf_status
+# In a pythonfmu FMU (fmu_build): the core library, its GUID (the FMU's) and the
+# creep-force table it reads, next to this file
+LIBRARY, GUID_FILE, TABLE = "_core.so", "_core.guid", "table.bin"
 
 _LOG = ctypes.CFUNCTYPE(
     None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p
@@ -76,6 +79,8 @@ _SIGNATURES = {
     "cf_get_integer": (ctypes.c_int, [ctypes.c_void_p, _U, ctypes.c_size_t, _I]),
     "cf_set_integer": (ctypes.c_int, [ctypes.c_void_p, _U, ctypes.c_size_t, _I]),
     "cf_get_string": (ctypes.c_int, [ctypes.c_void_p, _U, ctypes.c_size_t, _S]),
+    "cf_get_boolean": (ctypes.c_int, [ctypes.c_void_p, _U, ctypes.c_size_t]),
+    "cf_set_boolean": (ctypes.c_int, [ctypes.c_void_p, _U, ctypes.c_size_t]),
     "cf_set_string": (ctypes.c_int, [ctypes.c_void_p, _U, ctypes.c_size_t, _S]),
     "cf_do_step": (ctypes.c_int, [ctypes.c_void_p, ctypes.c_double, ctypes.c_double]),
     "cf_time": (ctypes.c_double, [ctypes.c_void_p]),
@@ -105,16 +110,19 @@ def load(path: str | Path) -> ctypes.CDLL:
 
 class Core:
     """One instance of a core library: the FMI calls by value reference, their statuses,
-    the messages to ``log(status, text)`` (all of them, whatever the status)."""
+    the messages to ``log(status, text)`` (all of them, whatever the status; with
+    ``categories``, ``log(status, text, category)``: the model description's
+    LogCategories, instance.c's)."""
 
     def __init__(
         self,
         lib: ctypes.CDLL,
         guid: str,
-        log: Callable[[int, str], None],
+        log: Callable[..., None],
         name: str = "core",
         resources: str = "",
         api: str = "fmi2",
+        categories: bool = False,
     ) -> None:
         self._inst = None
         self._lib = lib
@@ -122,7 +130,10 @@ class Core:
         libc = _libc()
 
         def on_log(env: int, instance: bytes, status: int, category: bytes, text: bytes) -> None:
-            log(status, text.decode(errors="replace"))
+            if categories:
+                log(status, text.decode(errors="replace"), category.decode(errors="replace"))
+            else:
+                log(status, text.decode(errors="replace"))
 
         # the callbacks live as long as this object (ctypes calls them from C)
         self._callbacks = _Callbacks(
@@ -198,6 +209,15 @@ class Core:
         texts = (ctypes.c_char_p * n)(*(v.encode() for v in values))
         return self._lib.cf_set_string(self._inst, (ctypes.c_uint * n)(*vrs), n, texts)
 
+    def get_boolean(self, vrs: Sequence[int]) -> int:
+        """The model has no Boolean: every value reference is refused (logged)."""
+        n = len(vrs)
+        return self._lib.cf_get_boolean(self._inst, (ctypes.c_uint * n)(*vrs), n)
+
+    def set_boolean(self, vrs: Sequence[int]) -> int:
+        n = len(vrs)
+        return self._lib.cf_set_boolean(self._inst, (ctypes.c_uint * n)(*vrs), n)
+
     def get_string(self, vrs: Sequence[int]) -> tuple[int, list[str]]:
         n = len(vrs)
         out = (ctypes.c_char_p * n)()
@@ -219,6 +239,19 @@ class Core:
             return status, buf.raw
         finally:
             self._lib.cf_free_state(self._inst, ctypes.byref(st))
+
+    def check_state(self, data: bytes) -> int:
+        """Whether ``data`` deserializes (cf_deserialize; refused bytes logged), nothing
+        set."""
+        st = ctypes.c_void_p()
+        status = self._lib.cf_deserialize(self._inst, data, len(data), ctypes.byref(st))
+        self._lib.cf_free_state(self._inst, ctypes.byref(st))
+        return status
+
+    @property
+    def address(self) -> int:
+        """The instance's address (cf_inst *), for a binding that calls it from C."""
+        return self._inst or 0
 
     def set_state(self, data: bytes) -> int:
         """The state of ``data`` (cf_deserialize, cf_set_state): refused bytes change

@@ -331,14 +331,205 @@ fail:
     return NULL;
 }
 
+/* ---- CoreBinding: the per-step calls of a pythonfmu FMU that carries its model's C core
+ *
+ * Where the FMU carries the core (instance.c for its model: fmu/slave_core.py), every FMI
+ * call goes to it; do_step, set_real and get_real, per step, go here: one C call each to
+ * cf_do_step, cf_set_real, cf_get_real of the core library at the addresses given (no
+ * Python frame, no argument converted by ctypes). The call's status goes into the shim's
+ * cell (the worse of the cell's and the core's: the FMU's answer, pythonfmu_shim.c); the
+ * core logs its messages through its own callback (to the adapter's log) before it
+ * returns. do_step answers True up to Warning, False from Discard on. Arguments that are
+ * not lists of numbers, and every call after close(), go to the adapter's own methods. */
+typedef int (*core_step_fn)(void *, double, double);
+typedef int (*core_get_fn)(void *, const unsigned *, size_t, double *);
+typedef int (*core_set_fn)(void *, const unsigned *, size_t, const double *);
+
+typedef struct {
+    PyObject_HEAD
+    PyObject *owner;                     /* keeps the core instance alive */
+    PyObject *py_step, *py_set, *py_get; /* the adapter's own methods */
+    core_step_fn step;
+    core_get_fn get;
+    core_set_fn set;
+    void *inst; /* cf_inst *, NULL once closed */
+    int *cell;  /* the shim's status cell */
+    PyObject *weakrefs;
+} CoreBinding;
+
+static int core_traverse(CoreBinding *b, visitproc visit, void *arg) {
+    Py_VISIT(b->owner);
+    Py_VISIT(b->py_step);
+    Py_VISIT(b->py_set);
+    Py_VISIT(b->py_get);
+    return 0;
+}
+
+static int core_clear(CoreBinding *b) {
+    Py_CLEAR(b->owner);
+    Py_CLEAR(b->py_step);
+    Py_CLEAR(b->py_set);
+    Py_CLEAR(b->py_get);
+    b->inst = NULL;
+    return 0;
+}
+
+static void core_dealloc(CoreBinding *b) {
+    PyObject_GC_UnTrack(b);
+    if (b->weakrefs != NULL) PyObject_ClearWeakRefs((PyObject *)b);
+    core_clear(b);
+    Py_TYPE(b)->tp_free((PyObject *)b);
+}
+
+static void raise_cell(const CoreBinding *b, int status) {
+    if (status > *b->cell) *b->cell = status;
+}
+
+static PyObject *core_do_step(CoreBinding *b, PyObject *const *args, Py_ssize_t nargs) {
+    if (b->inst == NULL || nargs != 2) return PyObject_Vectorcall(b->py_step, args, nargs, NULL);
+    double t = PyFloat_AsDouble(args[0]), h = PyFloat_AsDouble(args[1]);
+    if (PyErr_Occurred()) {
+        PyErr_Clear();
+        return PyObject_Vectorcall(b->py_step, args, nargs, NULL);
+    }
+    int status = b->step(b->inst, t, h);
+    if (PyErr_Occurred()) return NULL; /* the log callback failed */
+    raise_cell(b, status);
+    return PyBool_FromLong(status <= 1);
+}
+
+/* n value references of a list, or -1 (anything but non-negative ints below 2^32) */
+static int vrs_of(PyObject *list, unsigned *vr, Py_ssize_t n) {
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *x = PyList_GET_ITEM(list, i);
+        unsigned long k = PyLong_Check(x) ? PyLong_AsUnsignedLong(x) : (unsigned long)-1;
+        if (PyErr_Occurred() || k > 0xFFFFFFFFul) {
+            PyErr_Clear();
+            return -1;
+        }
+        vr[i] = (unsigned)k;
+    }
+    return 0;
+}
+
+#define CF_CORE_STACK 32
+
+static PyObject *core_set_real(CoreBinding *b, PyObject *const *args, Py_ssize_t nargs) {
+    if (b->inst == NULL || nargs != 2 || !PyList_Check(args[0]) || !PyList_Check(args[1]) ||
+        PyList_GET_SIZE(args[0]) != PyList_GET_SIZE(args[1]) ||
+        PyList_GET_SIZE(args[0]) > CF_CORE_STACK)
+        return PyObject_Vectorcall(b->py_set, args, nargs, NULL);
+    Py_ssize_t n = PyList_GET_SIZE(args[0]);
+    unsigned vr[CF_CORE_STACK];
+    double v[CF_CORE_STACK];
+    if (vrs_of(args[0], vr, n)) return PyObject_Vectorcall(b->py_set, args, nargs, NULL);
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *x = PyList_GET_ITEM(args[1], i);
+        if (!PyFloat_CheckExact(x)) return PyObject_Vectorcall(b->py_set, args, nargs, NULL);
+        v[i] = PyFloat_AS_DOUBLE(x);
+    }
+    int status = b->set(b->inst, vr, (size_t)n, v);
+    if (PyErr_Occurred()) return NULL;
+    raise_cell(b, status);
+    Py_RETURN_NONE;
+}
+
+static PyObject *core_get_real(CoreBinding *b, PyObject *const *args, Py_ssize_t nargs) {
+    if (b->inst == NULL || nargs != 1 || !PyList_Check(args[0]) ||
+        PyList_GET_SIZE(args[0]) > CF_CORE_STACK)
+        return PyObject_Vectorcall(b->py_get, args, nargs, NULL);
+    Py_ssize_t n = PyList_GET_SIZE(args[0]);
+    unsigned vr[CF_CORE_STACK];
+    double v[CF_CORE_STACK];
+    if (vrs_of(args[0], vr, n)) return PyObject_Vectorcall(b->py_get, args, nargs, NULL);
+    for (Py_ssize_t i = 0; i < n; i++) v[i] = 0.0;
+    int status = b->get(b->inst, vr, (size_t)n, v);
+    if (PyErr_Occurred()) return NULL;
+    raise_cell(b, status);
+    PyObject *res = PyList_New(n);
+    if (res == NULL) return NULL;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *x = PyFloat_FromDouble(v[i]);
+        if (x == NULL) {
+            Py_DECREF(res);
+            return NULL;
+        }
+        PyList_SET_ITEM(res, i, x);
+    }
+    return res;
+}
+
+static PyObject *core_close(CoreBinding *b, PyObject *unused) {
+    (void)unused;
+    b->inst = NULL;
+    Py_RETURN_NONE;
+}
+
+static PyMethodDef core_methods[] = {
+    {"do_step", (PyCFunction)(void (*)(void))core_do_step, METH_FASTCALL, "doStep"},
+    {"set_real", (PyCFunction)(void (*)(void))core_set_real, METH_FASTCALL, "setReal"},
+    {"get_real", (PyCFunction)(void (*)(void))core_get_real, METH_FASTCALL, "getReal"},
+    {"close", (PyCFunction)core_close, METH_NOARGS, "no more calls into the core"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject CoreBindingType = {
+    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "contact_fmu_fmi.CoreBinding",
+    .tp_basicsize = sizeof(CoreBinding),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC,
+    .tp_doc = "do_step, set_real, get_real of a pythonfmu FMU on its C core",
+    .tp_traverse = (traverseproc)core_traverse,
+    .tp_clear = (inquiry)core_clear,
+    .tp_dealloc = (destructor)core_dealloc,
+    .tp_methods = core_methods,
+    .tp_weaklistoffset = offsetof(CoreBinding, weakrefs),
+};
+
+/* bind_core(owner, py_step, py_set, py_get, do_step, set_real, get_real, inst, cell):
+ * the functions' (cf_do_step, cf_set_real, cf_get_real), the instance's and the cell's
+ * addresses as ints (none 0). */
+static PyObject *bind_core(PyObject *mod, PyObject *args) {
+    (void)mod;
+    PyObject *owner, *py_step, *py_set, *py_get, *a[5];
+    if (!PyArg_ParseTuple(args, "OOOOOOOOO", &owner, &py_step, &py_set, &py_get, &a[0], &a[1],
+                          &a[2], &a[3], &a[4]))
+        return NULL;
+    void *p[5];
+    for (int i = 0; i < 5; i++) {
+        p[i] = address(a[i]);
+        if (p[i] == NULL) {
+            if (!PyErr_Occurred()) PyErr_SetString(PyExc_ValueError, "bind_core: a NULL address");
+            return NULL;
+        }
+    }
+    CoreBinding *b = PyObject_GC_New(CoreBinding, &CoreBindingType);
+    if (b == NULL) return NULL;
+    b->owner = Py_NewRef(owner);
+    b->py_step = Py_NewRef(py_step);
+    b->py_set = Py_NewRef(py_set);
+    b->py_get = Py_NewRef(py_get);
+    /* POSIX: function pointers from data pointers (ctypes' addresses) */
+    *(void **)&b->step = p[0];
+    *(void **)&b->set = p[1];
+    *(void **)&b->get = p[2];
+    b->inst = p[3];
+    b->cell = (int *)p[4];
+    b->weakrefs = NULL;
+    PyObject_GC_Track(b);
+    return (PyObject *)b;
+}
+
 static PyMethodDef module_methods[] = {
     {"bind", bind, METH_VARARGS, "A Binding of an adapter to its compiled step"},
+    {"bind_core", bind_core, METH_VARARGS, "A CoreBinding of an adapter to its C core"},
     {NULL, NULL, 0, NULL},
 };
 
 static int exec_module(PyObject *m) {
     if (PyType_Ready(&BindingType) < 0) return -1;
     if (PyModule_AddObjectRef(m, "Binding", (PyObject *)&BindingType) < 0) return -1;
+    if (PyType_Ready(&CoreBindingType) < 0) return -1;
+    if (PyModule_AddObjectRef(m, "CoreBinding", (PyObject *)&CoreBindingType) < 0) return -1;
 #define INTERN(v, s) \
     if ((v) == NULL && ((v) = PyUnicode_InternFromString(s)) == NULL) return -1
     INTERN(s_time, "time");
