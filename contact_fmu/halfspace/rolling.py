@@ -136,6 +136,16 @@ MIN_STEP = 1.0 / 64.0
 # solve on at 293 (direct only even again from n = 20).
 DIRECT_MAX_ELEMENTS = 320
 DIRECT_REPEAT_MAX_ELEMENTS = 260
+# The start's calibration (RollingPatch.flexibilities) on an elliptic contact without
+# layers: the patch's own linear theory (the LU of K) up to this many contact elements,
+# Kalker's creep coefficients above; by the patch's size, never by the solves before it,
+# so that a table built in chunks gives the serial build's doubles. Measured (CPU ms,
+# median of 7, 11 x 11 of 79 elements, benchmarks/bench_halfspace_small.py): Kalker's
+# start 1.91 first and 0.93 later cold solves longitudinal, 1.41 and 0.59 combined with
+# spin; the exact start 1.80 and 0.67, 1.72 and 0.61 (Newton reuses one factorisation
+# more often from it; its LU of 158 unknowns is cheap); on 19 x 19 (255 elements) the LU
+# took a third of a first solve.
+EXACT_START_MAX_ELEMENTS = 100
 # Nested iteration (docs/halfspace.md): ellipse_patch grids of n elements per side get a
 # coarse level of n/2 while n/2 >= NESTED_MIN_N, recursively. A 16 x 16 level costs
 # about what it saves (measured: 32 x 32 15-20 % slower nested from 16 x 16, 64 x 64 no
@@ -373,9 +383,7 @@ class RollingPatch:
 
     @cached_property
     def dense_contact_inverse(self) -> FloatArray:
-        """K^-1 on the contact (the slip form of the direct path's Newton steps, direct.py).
-        The start's calibration (``flexibilities``) is then redone from it."""
-        self.__dict__.pop("flexibilities", None)
+        """K^-1 on the contact (the slip form of the direct path's Newton steps, direct.py)."""
         return sla.inv(self.dense_contact_operator)
 
     # ---- operators ---------------------------------------------------------------------
@@ -527,18 +535,18 @@ class RollingPatch:
     def flexibilities(self) -> tuple[float, float, float]:
         """FASTSIM flexibilities (L_x, L_y, L_phi) (m/Pa) of the start's march tau_I =
         tau_I+ + W_I/L: the march's full-adhesion force per unit creepage (with L = 1)
-        over the linear theory's. On an elliptic contact (``ellipse``) without layers
-        the linear theory is Kalker's, G c^2 C11, G c^2 C22, G c^3 C23 (Table E3
-        interpolated, ``kalker_coefficients``): no linear solve (it took half of a first
-        solve: an LU of K on the direct path, three GMRES solves on the iterative one).
-        Otherwise, and once the direct path has built K^-1 (a patch's second solve:
-        ``dense_contact_inverse`` drops this cache), the patch's own linear theory by
-        three full-adhesion solves (products with K^-1, else by the LU of K on the
-        direct path, by GMRES on the iterative one). The two differ by the grid's
+        over the linear theory's. On an elliptic contact (``ellipse``) without layers of
+        more than EXACT_START_MAX_ELEMENTS contact elements the linear theory is
+        Kalker's, G c^2 C11, G c^2 C22, G c^3 C23 (Table E3 interpolated,
+        ``kalker_coefficients``): no linear solve (it took a third of a first solve on
+        19 x 19: an LU of K on the direct path, three GMRES solves on the iterative one).
+        Otherwise the patch's own linear theory by three full-adhesion solves (products
+        with K^-1 where the direct path has built it, else by the LU of K on the direct
+        path, by GMRES on the iterative one). The two differ by the grid's
         discretisation error of the linear theory (2-7 % on 11 x 11, 1-3 % on 35 x 35);
         the start is only Newton's initial guess (the solutions agree to the Newton
-        tolerance), and the exact one lets the direct path's later solves reuse one
-        factorisation more often (chord steps; docs/develop/design-decisions.md)."""
+        tolerance). Which one a patch uses depends on the patch alone, not on the solves
+        before: a table built in chunks (Dask) gives the serial build's doubles."""
         C = self.contact
         dx = self.grid.dx
         ones, zero = np.where(C, dx, 0.0), np.zeros(self.grid.shape)
@@ -549,7 +557,7 @@ class RollingPatch:
         loads = ((0, np.stack([ones, zero])), (1, np.stack([zero, ones])), (1, spin))
         fs = march(np.stack([W[a] for a, W in loads]), C).sum(axis=(1, 2))
         coefficients = self.kalker_coefficients
-        if coefficients is not None and "dense_contact_inverse" not in self.__dict__:
+        if coefficients is not None and int(C.sum()) > EXACT_START_MAX_ELEMENTS:
             # the linear theory's force sums tau over the elements: F/dA
             a1, a2 = self.ellipse  # type: ignore[misc]
             c2 = a1 * a2
