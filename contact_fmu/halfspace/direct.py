@@ -185,7 +185,8 @@ def newton(
         zx, zy = z[:m], z[m:]
         nz = np.hypot(zx, zy)
         slip = nz > g
-        scale = np.where(slip, g / np.where(slip, nz, 1.0), 1.0)
+        # g/|z| in slip, exactly 1 (g/g, g > 0 on the contact) in adhesion
+        scale = g / np.maximum(nz, g)
         F = (t.reshape(2, m) - z.reshape(2, m) * scale).reshape(2 * m)
         return F, s, zx, zy, nz, slip
 
