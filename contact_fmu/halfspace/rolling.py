@@ -597,13 +597,15 @@ class RollingPatch:
         # projection on |tau| <= g: the factor g/max(|tau|, g) (1 within the bound;
         # outside the contact 0/tiny, the traction there being zero anyway)
         gbound = np.maximum(gT, np.finfo(float).tiny)
+        # the columns from the last with contact back to the first (the others carry
+        # no traction; the run starts from zero beyond the last)
+        cols = np.flatnonzero(Cf.any(axis=1))
         tauT = np.zeros((self.grid.nx, 2, self.grid.ny))
         t = np.zeros((2, self.grid.ny))
-        for i in range(self.grid.nx - 1, -1, -1):
-            t += WT[i]
+        for i in range(cols[-1], cols[0] - 1, -1) if len(cols) else ():
+            t = np.add(t, WT[i], out=tauT[i])  # each column in place in the result
             t *= Cf[i]  # zero outside the contact: the run restarts
             t *= gT[i] / np.maximum(np.hypot(t[0], t[1]), gbound[i])
-            tauT[i] = t
         return np.ascontiguousarray(tauT.transpose(1, 2, 0))
 
 
