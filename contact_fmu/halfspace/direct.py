@@ -103,14 +103,17 @@ class DifferenceKernel:
     elements (m/Pa), in the order of np.nonzero(contact)."""
 
     def __init__(self, op: Any, contact: NDArray[np.bool_], k_extra: FloatArray) -> None:
-        T = op.torus
+        T = op.torus[(0, 0, 1), (0, 1, 1)]  # the blocks xx, xy, yy (a copy)
         if op.local:
-            T = T.copy()
-            T[0, 0, 0, 0] += op.local
-            T[1, 1, 0, 0] += op.local
-        diff = T - np.roll(T, -1, axis=-1)
-        self.D = op.offsets(np.stack([diff[0, 0], diff[0, 1], diff[1, 1]])).reshape(3, -1)
+            T[0, 0, 0] += op.local
+            T[2, 0, 0] += op.local
+        # at the offsets within the grid (``op.offsets``), minus the torus one element
+        # ahead (np.roll by -1 along x, read only there)
         ny, nx = op.grid.ny, op.grid.nx
+        Ly, Lx = T.shape[-2:]
+        oy = (np.arange(-(ny - 1), ny) % Ly)[:, None]
+        ox = np.arange(-(nx - 1), nx) % Lx
+        self.D = (T[:, oy, ox] - T[:, oy, (ox + 1) % Lx]).reshape(3, -1)
         jj, ii = np.nonzero(contact)
         w = 2 * nx - 1
         self.source = jj * w + ii
@@ -182,7 +185,8 @@ def newton(
         zx, zy = z[:m], z[m:]
         nz = np.hypot(zx, zy)
         slip = nz > g
-        scale = np.where(slip, g / np.where(slip, nz, 1.0), 1.0)
+        # g/|z| in slip, exactly 1 (g/g, g > 0 on the contact) in adhesion
+        scale = g / np.maximum(nz, g)
         F = (t.reshape(2, m) - z.reshape(2, m) * scale).reshape(2 * m)
         return F, s, zx, zy, nz, slip
 
@@ -329,7 +333,10 @@ class _Jacobian:
             n = 2 * len(iH) + k
             self.single = n >= SINGLE_MIN
             self.unit = kernel.unit if self.single else 1.0  # the matrix's scale
-            A = self._gather(kernel, iH, iS, tx, ty, f, r, bA)
+            if self.single:
+                A = self._gather(kernel, iH, iS, tx, ty, f, r, bA)
+            else:
+                A = self._from_K(iS, tx, ty, f, bA, bT)
         if n == 0:  # full adhesion in the slip form: dtau = -(r K)^-1 F
             self.lu = self.piv = None
             return
@@ -401,6 +408,41 @@ class _Jacobian:
         diag = np.concatenate([kern.extra[iH], kern.extra[iH], f * kern.extra[iS] + (1.0 - f) / r])
         AT[d, d] += (diag * self.unit).astype(dt)
         return AT.T
+
+    def _from_K(
+        self,
+        iS: NDArray[np.int_],
+        tx: FloatArray,
+        ty: FloatArray,
+        f: FloatArray,
+        buffer: FloatArray,
+        scratch: FloatArray,
+    ) -> FloatArray:
+        """The reduced-form matrix (class docstring) in double precision from the dense
+        K, (n, n) Fortran-ordered in ``buffer``: the unknowns' columns K E (whole
+        columns of K: the adhesion elements' two, the slip elements' K_x t_x + K_y t_y),
+        then their rows (the adhesion elements' two, the slip elements' f (t_x (K E)_x
+        + t_y (K E)_y)), and (1 - f)/r on the slip rows' diagonal. The same products
+        in the same order as ``_gather``: equal to it entry by entry without layers (to
+        rounding with them: K's diagonal holds the layer term). A dozen array operations
+        instead of its two dozen: at a hundred unknowns (double precision, below
+        SINGLE_MIN) their overhead is what the matrix costs."""
+        K, m, H = self.K, self.m, self.H
+        nH2 = len(H)
+        n = nH2 + len(iS)
+        KE = scratch[: 2 * m * n].reshape(2 * m, n)
+        K.take(H, axis=1, out=KE[:, :nH2])
+        np.multiply(K.take(iS, axis=1), tx, out=KE[:, nH2:])
+        KE[:, nH2:] += K.take(m + iS, axis=1) * ty
+        A = buffer[: n * n].reshape(n, n, order="F")
+        KE.take(H, axis=0, out=A[:nH2])
+        np.multiply(KE.take(iS, axis=0), (f * tx)[:, None], out=A[nH2:])
+        A[nH2:] += KE.take(m + iS, axis=0) * (f * ty)[:, None]
+        # the slip rows' diagonal (1 - f)/r (K's diagonal holds the leading elements'
+        # extra layer term already: f that^T that k_extra in the slip rows)
+        d = np.arange(nH2, n)
+        A[d, d] += (1.0 - f) / self.r
+        return A
 
     def _reduced(self, x: FloatArray) -> FloatArray:
         """The reduced-form matrix times x, in double precision from K (the residual of

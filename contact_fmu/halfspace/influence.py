@@ -97,7 +97,10 @@ class Grid:
 
     @cached_property
     def _mesh(self) -> tuple[FloatArray, FloatArray]:
-        X, Y = np.meshgrid(self.x, self.y)
+        # np.meshgrid's values, without its broadcasting machinery (a tenth of the cost)
+        X, Y = np.empty(self.shape), np.empty(self.shape)
+        X[...] = self.x
+        Y[...] = self.y[:, None]
         X.flags.writeable = False
         Y.flags.writeable = False
         return X, Y
@@ -173,17 +176,20 @@ def cerruti_grid_kernels(
     # the corners x_k - dx/2 for k = x0 .. max + 1, likewise in y
     xc = (np.arange(x0, int(kx.max()) + 2) - 0.5) * dx
     yc = (np.arange(y0, int(ky.max()) + 2) - 0.5) * dy
-    Xc, Yc = np.meshgrid(xc, yc)
-    rows, cols = (ky - y0)[:, None], (kx - x0)[None, :]
-
-    def corner_sum(Fc: FloatArray) -> FloatArray:
-        # F(X + hx, Y + hy) - F(X - hx, Y + hy) - F(X + hx, Y - hy) + F(X - hx, Y - hy)
-        s = Fc[1:, 1:] - Fc[1:, :-1] - Fc[:-1, 1:] + Fc[:-1, :-1]
-        return s[rows, cols]
-
-    i_yy = corner_sum(_x_asinh_y_over_x(Xc, Yc))  # int y^2/r^3
-    i_xx = corner_sum(_x_asinh_y_over_x(Yc, Xc))  # int x^2/r^3
-    i_xy = corner_sum(-np.hypot(Xc, Yc))  # int x y/r^3
+    # the corners as a row and a column: each antiderivative broadcasts to the corner
+    # grid (the same values as on np.meshgrid's arrays)
+    Xc, Yc = xc[None, :], yc[:, None]
+    Fc = np.stack(
+        [
+            _x_asinh_y_over_x(Xc, Yc),  # int y^2/r^3
+            _x_asinh_y_over_x(Yc, Xc),  # int x^2/r^3
+            -np.hypot(Xc, Yc),  # int x y/r^3
+        ]
+    )
+    # the three corner sums at once, F(X + hx, Y + hy) - F(X - hx, Y + hy) - F(X + hx,
+    # Y - hy) + F(X - hx, Y - hy), at the offsets asked for
+    s = Fc[:, 1:, 1:] - Fc[:, 1:, :-1] - Fc[:, :-1, 1:] + Fc[:, :-1, :-1]
+    i_yy, i_xx, i_xy = s.take(ky - y0, axis=1).take(kx - x0, axis=2)
     i_1 = i_xx + i_yy
     c = 1.0 / (np.pi * G)
     a_xx = c * ((1.0 - nu) * i_1 + nu * i_xx)

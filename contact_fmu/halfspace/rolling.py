@@ -598,22 +598,23 @@ class RollingPatch:
         Wy = (eta / Ly + phi * X / Lp) * dx + self.pressure_slip[1] / Ly
         # columns as contiguous rows, the load masked by the contact once: the march
         # runs a few ufuncs per column (it is a tenth of an 11 x 11 first solve)
+        # (both components of a column at once: a handful of ufuncs per column)
         Cf = self.contact.T.astype(float)
-        WxT, WyT, gT = (Wx.T * Cf), (Wy.T * Cf), np.ascontiguousarray(self.g.T)
-        tauT = np.zeros((2, self.grid.nx, self.grid.ny))
-        tx = np.zeros(self.grid.ny)
-        ty = np.zeros(self.grid.ny)
-        tiny = np.finfo(float).tiny
-        for i in range(self.grid.nx - 1, -1, -1):
-            tx = (tx + WxT[i]) * Cf[i]  # zero outside the contact: the run restarts
-            ty = (ty + WyT[i]) * Cf[i]
-            # projection on |tau| <= g: the factor g/max(|tau|, g) (1 within the bound;
-            # outside the contact 0/tiny, the traction there being zero anyway)
-            f = gT[i] / np.maximum(np.hypot(tx, ty), np.maximum(gT[i], tiny))
-            tx *= f
-            ty *= f
-            tauT[0, i], tauT[1, i] = tx, ty
-        return np.ascontiguousarray(tauT.transpose(0, 2, 1))
+        WT = np.stack([Wx.T * Cf, Wy.T * Cf], axis=1)  # (nx, 2, ny)
+        gT = np.ascontiguousarray(self.g.T)
+        # projection on |tau| <= g: the factor g/max(|tau|, g) (1 within the bound;
+        # outside the contact 0/tiny, the traction there being zero anyway)
+        gbound = np.maximum(gT, np.finfo(float).tiny)
+        # the columns from the last with contact back to the first (the others carry
+        # no traction; the run starts from zero beyond the last)
+        cols = np.flatnonzero(Cf.any(axis=1))
+        tauT = np.zeros((self.grid.nx, 2, self.grid.ny))
+        t = np.zeros((2, self.grid.ny))
+        for i in range(cols[-1], cols[0] - 1, -1) if len(cols) else ():
+            t = np.add(t, WT[i], out=tauT[i])  # each column in place in the result
+            t *= Cf[i]  # zero outside the contact: the run restarts
+            t *= gT[i] / np.maximum(np.hypot(t[0], t[1]), gbound[i])
+        return np.ascontiguousarray(tauT.transpose(1, 2, 0))
 
 
 def march(q: FloatArray, H: BoolArray) -> FloatArray:
