@@ -164,6 +164,24 @@ def test_block_growth_fails_memory():
     assert not c["memory"].ok
 
 
+@pytest.mark.parametrize("steps", [64, 100, 200])
+def test_memory_limit_lies_between_the_free_lists_fill_and_a_leak_of_one_object_per_step(
+    steps,
+):
+    """Over the measured window (the second half of the run at h/4: 2 steps for each of
+    the case's steps) a leak of one object per step adds one block per step and fails;
+    the free lists' fill measured on the eta cases, up to 201 blocks over 400 steps,
+    passes where the window is that long (a 128-step window cannot tell it from a leak:
+    its limit is below the window's steps)."""
+    T = 100.0 + 50.0 * np.sin(np.linspace(0, 3, steps))
+    v = 1e-3 + 5e-4 * np.sin(np.linspace(0, 3, steps))
+    window = 2 * steps
+    leak = _checks(_runs(T, v, blocks=(1000, 1000 + window)))["memory"]
+    assert not leak.ok and leak.limit < window
+    if window >= 400:
+        assert _checks(_runs(T, v, blocks=(1000, 1201)))["memory"].ok
+
+
 # ---- the lateral cases' checks (Vy, Omega_z integrated; the law with spin) ----------
 LATERAL = dict(
     group="lateral",
