@@ -172,7 +172,8 @@ def test_guid_follows_the_creep_force_table(scenes, monkeypatch):
     before = native_fmu.identity(cfg)
     key, law = tables.key(cfg), native_fmu._table_law(cfg)
     monkeypatch.setattr(native_fmu, "_table_law", lambda c: law)  # the same header
-    monkeypatch.setattr(tables, "key", lambda c: "0" + key[1:])  # another table's data
+    other = ("1" if key[0] == "0" else "0") + key[1:]  # another table's data (its key)
+    monkeypatch.setattr(tables, "key", lambda c: other)
     assert native_fmu.identity(cfg) != before
 
 
