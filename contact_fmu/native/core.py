@@ -240,14 +240,6 @@ class Core:
         finally:
             self._lib.cf_free_state(self._inst, ctypes.byref(st))
 
-    def check_state(self, data: bytes) -> int:
-        """Whether ``data`` deserializes (cf_deserialize; refused bytes logged), nothing
-        set."""
-        st = ctypes.c_void_p()
-        status = self._lib.cf_deserialize(self._inst, data, len(data), ctypes.byref(st))
-        self._lib.cf_free_state(self._inst, ctypes.byref(st))
-        return status
-
     @property
     def address(self) -> int:
         """The instance's address (cf_inst *), for a binding that calls it from C."""
