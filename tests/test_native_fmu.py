@@ -33,6 +33,7 @@ from contact_fmu import examples as ex
 from contact_fmu import native
 from contact_fmu.dynamics.body import Body
 from contact_fmu.fmu.config import ModelConfig
+from contact_fmu.fmu.state_bytes import CORE_MAGIC
 from contact_fmu.laws.thin_layer import LayerContact
 from contact_fmu.scenario import load, runner
 from contact_fmu.scenario.instance import DISCARD, ERROR, FATAL, OK, Instance
@@ -857,7 +858,7 @@ def _tampered(data: bytes, old: dict[str, float], new: dict[str, float]) -> byte
         glen = int.from_bytes(data[m + 4 : m + 8], "little")
         head = m + 8 + glen + 8 + 4
         payload = data[head:]
-        if payload.startswith(b"cfmuSTAT"):  # the C core's state (fmu/slave_core.py)
+        if payload.startswith(CORE_MAGIC):  # the C core's state (fmu/slave_core.py)
             payload = _tampered(payload, old, new)
             size = len(payload).to_bytes(8, "little") + zlib.crc32(payload).to_bytes(4, "little")
             return data[: m + 8 + glen] + size + payload
@@ -869,7 +870,7 @@ def _tampered(data: bytes, old: dict[str, float], new: dict[str, float]) -> byte
         payload = PYTHONFMU_STATE + owner + b"\n" + pickle.dumps(state, protocol=5)
         size = len(payload).to_bytes(8, "little") + zlib.crc32(payload).to_bytes(4, "little")
         return data[: m + 8 + glen] + size + payload
-    assert data.startswith(b"cfmuSTAT")
+    assert data.startswith(CORE_MAGIC)  # instance.c's MAGIC, as state_bytes declares it
     glen = int.from_bytes(data[12:16], sys.byteorder)
     start = 16 + glen + 8
     payload = data[start:-8]

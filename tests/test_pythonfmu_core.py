@@ -297,7 +297,8 @@ def test_core_off_by_either_variable_and_no_core_run_the_python_path(fmus):
         "import sys; from contact_fmu.scenario.instance import Instance\n"
         "with Instance(sys.argv[1], 'x') as i:\n"
         "    data = i.serialize_state(i.get_state())\n"
-        "print('core' if b'cfmuSTAT' in data else 'python')\n"
+        "from contact_fmu.fmu.state_bytes import CORE_MAGIC\n"
+        "print('core' if CORE_MAGIC in data else 'python')\n"
     )
     cases = [(fmus["fig13"], {}, "core"), (fmus["fig13"], {slave_core.CORE_ENV: "0"}, "python"),
              (fmus["fig13"], {"CONTACT_FMU_NATIVE": "0"}, "python"),
