@@ -256,17 +256,23 @@ def interleaved(
 FULL_BODY_H = 2.5e-4  # s: 3 internal steps of the default h_max (1e-4 s)
 
 
-def full_body_costs(steps: int, repeats: int) -> dict[str, float]:
-    """Seconds per step of the full body FMU, native and pythonfmu, per scheme (the full
-    method): Fx_ex = 0.3 mu P, Fy_ex = 0.3 mu P sin(k/20), Mz_ex = 5e-5 mu P sin(k/20)
-    (N m; mu P = 300 N at the defaults), interleaved as step_costs."""
+def full_body_run(steps: int) -> tuple[ModelConfig, dict[str, Any], list[str]]:
+    """The full body FMU's configuration, input table and Real outputs for ``steps``
+    steps (the full method): Fx_ex = 0.3 mu P, Fy_ex = 0.3 mu P sin(k/20), Mz_ex = 5e-5
+    mu P sin(k/20) (N m; mu P = 300 N at the defaults)."""
     cfg = ModelConfig.full("body")
-    paths = {"native": native_fmu.build(cfg, OUT).path, "pythonfmu": fmu_build.build(cfg, OUT).path}
     s = np.sin(np.arange(steps + 1) / 20.0)
     table = {"P": np.full(steps + 1, 1000.0), "Fx_ex": np.full(steps + 1, 90.0),
              "Fy_ex": 90.0 * s, "My_ex": np.zeros(steps + 1), "Mz_ex": 0.015 * s}  # fmt: skip
     outputs = [v.name for v in cfg.variables if v.causality["body"] == "output"]
-    outputs = [o for o in outputs if o != "regime"]
+    return cfg, table, [o for o in outputs if o != "regime"]
+
+
+def full_body_costs(steps: int, repeats: int) -> dict[str, float]:
+    """Seconds per step of the full body FMU (full_body_run), native and pythonfmu, per
+    scheme, interleaved as step_costs."""
+    cfg, table, outputs = full_body_run(steps)
+    paths = {"native": native_fmu.build(cfg, OUT).path, "pythonfmu": fmu_build.build(cfg, OUT).path}
     runs = {f"{t} {sch}": (p, {"scheme": sch}, list(table), outputs, table, FULL_BODY_H)
             for sch in ("lobatto3c", "sdirk2") for t, p in paths.items()}  # fmt: skip
     return interleaved(runs, steps, repeats)
@@ -277,7 +283,7 @@ def core_costs(steps: int, repeats: int) -> dict[str, float]:
     fmi.c's CoreBinding) and of the same FMU on its Python path (CONTACT_FMU_CORE=0: the
     adapter's Python calls around the compiled step, slave_fast.py and fmi.c's Binding),
     with the native FMU beside them: Fig. 13 (case eta = 3) with each method and the full
-    body FMU (Lobatto IIIC) as full_body_costs, interleaved as step_costs."""
+    body FMU (Lobatto IIIC, full_body_run), interleaved as step_costs."""
     scene, cfgs = fig13_configs()
     case = scene.case("eta = 3")
     table = runner.input_table(scene, case)
@@ -289,13 +295,8 @@ def core_costs(steps: int, repeats: int) -> dict[str, float]:
         runs[f"fig13 {m}: pythonfmu, C core"] = (python, *io)
         runs[f"fig13 {m}: pythonfmu, {PYTHON_PATH}"] = (python, *io)
         runs[f"fig13 {m}: native"] = (native_fmu.build(cfg, OUT).path, *io)
-    cfg = ModelConfig.full("body")
-    s = np.sin(np.arange(steps + 1) / 20.0)
-    full = {"P": np.full(steps + 1, 1000.0), "Fx_ex": np.full(steps + 1, 90.0),
-            "Fy_ex": 90.0 * s, "My_ex": np.zeros(steps + 1), "Mz_ex": 0.015 * s}  # fmt: skip
-    outputs = [v.name for v in cfg.variables if v.causality["body"] == "output"]
-    io = ({"scheme": "lobatto3c"}, list(full), [o for o in outputs if o != "regime"], full,
-          FULL_BODY_H)  # fmt: skip
+    cfg, full, outputs = full_body_run(steps)
+    io = ({"scheme": "lobatto3c"}, list(full), outputs, full, FULL_BODY_H)
     python = fmu_build.build(cfg, OUT).path
     runs["full body: pythonfmu, C core"] = (python, *io)
     runs[f"full body: pythonfmu, {PYTHON_PATH}"] = (python, *io)
