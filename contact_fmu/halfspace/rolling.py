@@ -679,7 +679,6 @@ def solve_rolling(
     W = patch.rhs(xi, eta, phi)
     auto_direct = patch.direct and (patch.solves == 0 or int(C.sum()) <= DIRECT_REPEAT_MAX_ELEMENTS)
     if method == "direct" or (method == "auto" and auto_direct):
-        direct.inverse(patch)  # before the start: its calibration then uses K^-1
         guess = tau0 if tau0 is not None else patch.fastsim_guess(xi, eta, phi)
         tau, S, slip, newton = direct.newton(patch, W, guess, tol, maxit, SMALL_TRACTION)
         return _solution(patch, tau, S, slip, newton, 0, ())
