@@ -26,7 +26,7 @@ def plot_solution(sol: Any, ax: Any = None, arrows: bool = True, title: bool = T
     """Draw ``sol`` (a RollingSolution) on ``ax`` (a new figure's when None) and return
     the axes: filled contours of |tau| (MPa) over the contact (colour bar), the traction
     tau (the body's on the substrate) as one arrow per contact element (``arrows``),
-    adhesion elements as dots and slip elements as crosses (legend), the boundary of the
+    adhesion elements as dots and slip elements as crosses (legend below the axes), the boundary of the
     adhesion area as a black line, x (the rolling direction, material entering at +x)
     and y in mm, equal scales; ``title``: the forces Tx, Ty (N) and Mz (N m)."""
     import matplotlib.pyplot as plt
@@ -49,7 +49,10 @@ def plot_solution(sol: Any, ax: Any = None, arrows: bool = True, title: bool = T
     ax.set_xlabel("x (mm), rolling direction")
     ax.set_ylabel("y (mm)")
     ax.set_aspect("equal")
-    ax.legend(loc="upper right", fontsize="small")
+    # below the axes, in one row: inside, it covered the contact's corner elements
+    ax.legend(
+        loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize="small", facecolor="0.8"
+    )
     if title:
         ax.set_title(
             f"Tx = {sol.Tx:.4g} N, Ty = {sol.Ty:.4g} N, Mz = {sol.Mz:.4g} N m", fontsize="small"
