@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..halfspace.contact import HalfSpaceContact
+from ..halfspace.plotting import plot_creep_curves
 from ..halfspace.railway import wheel_on_rail
 
 # Solver grid of the figures (elements per direction; ~1 % discretisation error).
@@ -27,6 +28,11 @@ CREEPS = np.linspace(0.0, 1.2, 41)
 SPINS = np.linspace(0.0, 3.0, 41)
 # Creepage states of the traction maps: (xi, eta, phi) in the same units.
 STATES = ((0.1, 0.0, 0.0), (0.3, 0.0, 0.0), (0.2, 0.2, 0.3), (0.0, 0.0, 1.0))
+# The state of RollingSolution.plot()'s picture (same units), and the direction (xi, eta,
+# phi c) and grid of plot_creep_curves' exact and FASTSIM curves.
+SOLUTION_PLOT_STATE = (0.08, 0.04, 0.1)
+FASTSIM_DIRECTION = (1.0, 0.3, 0.5)
+N_FASTSIM = 24
 
 
 def _units(c: HalfSpaceContact) -> tuple[float, float]:
@@ -126,6 +132,20 @@ def make_figures(outdir: Path) -> list[Path]:
     p = outdir / "halfspace_adhesion_areas.png"
     fig.savefig(p, dpi=120)
     plt.close(fig)
+    paths.append(p)
+
+    # the solution's own picture and the creep curves beside FASTSIM's: what
+    # RollingSolution.plot() and plot_creep_curves draw (docs/halfspace.md shows both)
+    a, b, s = SOLUTION_PLOT_STATE
+    ax = c.solve(a * xref, b * xref, s * pref).plot()
+    p = outdir / "halfspace_solution_plot.png"
+    ax.figure.savefig(p, dpi=100, bbox_inches="tight")
+    plt.close(ax.figure)
+    paths.append(p)
+    ax = plot_creep_curves(wheel_on_rail(n=N_FASTSIM), direction=FASTSIM_DIRECTION)
+    p = outdir / "halfspace_exact_fastsim.png"
+    ax.figure.savefig(p, dpi=100, bbox_inches="tight")
+    plt.close(ax.figure)
     paths.append(p)
 
     # the numbers behind the curves

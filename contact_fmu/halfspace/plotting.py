@@ -26,9 +26,10 @@ def plot_solution(sol: Any, ax: Any = None, arrows: bool = True, title: bool = T
     """Draw ``sol`` (a RollingSolution) on ``ax`` (a new figure's when None) and return
     the axes: filled contours of |tau| (MPa) over the contact (colour bar), the traction
     tau (the body's on the substrate) as one arrow per contact element (``arrows``),
-    adhesion elements as dots and slip elements as crosses (legend below the axes), the boundary of the
-    adhesion area as a black line, x (the rolling direction, material entering at +x)
-    and y in mm, equal scales; ``title``: the forces Tx, Ty (N) and Mz (N m)."""
+    adhesion elements as dots and slip elements as crosses (legend below the axes), the
+    boundary of the adhesion area as a black line, x (the rolling direction, material
+    entering at +x) and y in mm, equal scales; ``title``: the forces Tx, Ty (N) and Mz
+    (N m)."""
     import matplotlib.pyplot as plt
 
     if ax is None:

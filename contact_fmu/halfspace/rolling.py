@@ -558,9 +558,7 @@ class RollingPatch:
         fs = march(np.stack([W[a] for a, W in loads]), C).sum(axis=(1, 2))
         # Kalker's coefficients only where used (their interpolation is 3 % of an 11 x 11
         # first solve)
-        coefficients = (
-            self.kalker_coefficients if int(C.sum()) > EXACT_START_MAX_ELEMENTS else None
-        )
+        coefficients = self.kalker_coefficients if int(C.sum()) > EXACT_START_MAX_ELEMENTS else None
         if coefficients is not None:
             # the linear theory's force sums tau over the elements: F/dA
             a1, a2 = self.ellipse  # type: ignore[misc]
