@@ -321,8 +321,12 @@ class HalfSpaceContact:
             return self._sliding(vx, vy, phi)
         aV = abs(Vx)
         sign = 1.0 if Vx > 0.0 else -1.0
-        # Omega_z of a simulation, not a user's spin: no unit check
         xi, eta, ph = sign * vx / aV, vy / aV, sign * phi / aV
+        if not (math.isfinite(xi) and math.isfinite(eta) and math.isfinite(ph)):
+            # creepages beyond double range (|v| > 1.8e308 |Vx|): the sliding limit, which
+            # full slip along the rigid slip tends to (solve_rolling's saturation)
+            return self._sliding(vx, vy, phi)
+        # Omega_z of a simulation, not a user's spin: no unit check
         if cont is None:
             sol = self.solve(xi, eta, ph, check_units=False)
         else:
@@ -403,7 +407,11 @@ class HalfSpaceContact:
         """No rolling: tau = mu p v/|v| at every element with v of Eq. (3)."""
         patch = self.patch
         X, Y = patch.grid.mesh()
-        wx, wy = vx - phi * Y, vy + phi * X
+        # the direction from velocities divided by their largest first (no overflow)
+        reach = max(float(np.abs(X).max()), float(np.abs(Y).max()))
+        m = max(abs(vx), abs(vy), abs(phi) * reach)
+        m = m if 0.0 < m < math.inf else 1.0
+        wx, wy = vx / m - (phi / m) * Y, vy / m + (phi / m) * X
         mag = np.hypot(wx, wy)
         C = patch.contact
         moving = C & (mag > 0.0)
@@ -412,7 +420,8 @@ class HalfSpaceContact:
         dA = patch.grid.area
         Tx, Ty = float(tau[0].sum() * dA), float(tau[1].sum() * dA)
         Mz = float(np.sum(X * tau[1] - Y * tau[0]) * dA)
-        S = np.stack([wx, wy])
+        with np.errstate(over="ignore"):  # a slip velocity beyond double range is inf
+            S = np.stack([wx, wy]) * m
         return RollingSolution(patch.grid, tau, S, C, C & ~moving, moving, Tx, Ty, Mz, 0, 0)
 
     def creepages_for(

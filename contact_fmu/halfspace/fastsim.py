@@ -62,7 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validate import InputError, array, count, counts, finite, flag, one_of, positive
 from .hertz import MODULUS_PLAUSIBLE, SEMI_AXIS_PLAUSIBLE, SPIN_PLAUSIBLE, unit_warning
-from .rolling import RollingPatch, RollingSolution, ellipse_patch
+from .rolling import SATURATION_RATIO, RollingPatch, RollingSolution, ellipse_patch
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -355,15 +355,27 @@ class Fastsim:
 
     def _increments(
         self, xi: FloatArray, eta: FloatArray, phi: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Traction increments (nx, B, ny) (Pa) of the creepages (B,): the integral of
-        w/L over each element's travel."""
+        w/L over each element's travel; and the factor (B,) <= 1 the creepages were
+        scaled by. Creepages whose increments would exceed SATURATION_RATIO times the
+        traction bound (rolling.saturation_scale) are brought down to it: every element
+        then slips along its increment to rounding, at any larger size alike, and the
+        increments stay finite (from creepages of about 1e300 on they overflowed: NaN
+        tractions)."""
         X, Y, length, xm = (a.T[:, None, :] for a in self._geometry)
         L1, L2, L3 = self.flexibilities
-        xi, eta, phi = (v[None, :, None] for v in (xi, eta, phi))
+        # a bound of |increment| / (SATURATION_RATIO max g), each term divided first
+        unit = float(length.max()) / (SATURATION_RATIO * float(self.patch.g.max()))
+        reach = max(float(np.abs(X).max()), float(np.abs(xm).max()), float(np.abs(Y).max()))
+        ratio = (
+            np.abs(xi) * (unit / L1) + np.abs(eta) * (unit / L2) + np.abs(phi) * (reach * unit / L3)
+        )
+        scale = np.where(ratio > 1.0, 1.0 / np.maximum(ratio, 1.0), 1.0)
+        xi, eta, phi = (v[None, :, None] * scale[None, :, None] for v in (xi, eta, phi))
         inc_x = (xi / L1 - phi * Y / L3) * length
         inc_y = (eta / L2 + phi * xm / L3) * length
-        return inc_x, inc_y
+        return inc_x, inc_y, scale
 
     # ---- public solves ---------------------------------------------------------------------
     def solve(
@@ -378,10 +390,11 @@ class Fastsim:
         xi, eta, phi = finite("xi", xi), finite("eta", eta), finite("phi", phi)
         if 0.0 < abs(phi) * self.c < SPIN_PLAUSIBLE:
             unit_warning("phi", phi, "rad/mm (here 1/m)", flag("check_units", check_units))
-        inc = self._increments(np.array([xi]), np.array([eta]), np.array([phi]))
+        *inc, scale = self._increments(np.array([xi]), np.array([eta]), np.array([phi]))
         Tx, Ty, Mz, tau, tauH, slip = self._march(*inc, self.patch.g, fields=True)
         L1, L2, _ = self.flexibilities
         S = np.stack([L1 * (tauH[0, 0] - tau[0, 0]), L2 * (tauH[0, 1] - tau[0, 1])])
+        S /= scale[0]  # the slip of the creepages asked for
         C = self.patch.contact
         return RollingSolution(
             self.patch.grid,
@@ -411,6 +424,6 @@ class Fastsim:
         # batches of at most BATCH_ELEMENTS increments per component (16 MB)
         step = max(1, BATCH_ELEMENTS // (self.patch.grid.nx * self.patch.grid.ny))
         for k in range(0, w[0].size, step):
-            inc = self._increments(*(v[k : k + step] for v in w))
+            *inc, _ = self._increments(*(v[k : k + step] for v in w))
             out[:, k : k + step] = self._march(*inc, self.patch.g)
         return out[0].reshape(shape), out[1].reshape(shape), out[2].reshape(shape)

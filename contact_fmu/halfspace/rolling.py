@@ -59,7 +59,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property, partial
 from typing import Any
 
@@ -162,6 +162,14 @@ NESTED_TOL = 1e-4
 # when it lies on the ray from zero through it (the linear theory's proportionality).
 CONTINUATION_LINE = 0.1
 CONTINUATION_REACH = 2.0
+# Creepages far into full slip (``saturation_scale``): where the rigid slip W of every
+# element exceeds the elastic displacement of the traction bound, max g/r, by more than
+# SATURATION_RATIO, each element slips along W (up to terms of relative size
+# 1/SATURATION_RATIO, below double rounding), so the tractions do not depend on the
+# creepages' size: they are solved at this ratio, the slip scaled back. Without it the
+# fixed-point variable tau + r S overflows from creepages of about 1e296 on (NaN
+# tractions).
+SATURATION_RATIO = 1e20
 
 
 @dataclass(frozen=True)
@@ -677,6 +685,10 @@ def solve_rolling(
     if tau0 is not None:
         tau0 = array("tau0", tau0, (2, *patch.grid.shape))
     one_of("method", method, ("auto", "iterative", "direct"))
+    scale = saturation_scale(patch, xi, eta, phi)
+    if scale < 1.0:  # far into full slip: solved at SATURATION_RATIO, the slip scaled back
+        sol = solve_rolling(patch, xi * scale, eta * scale, phi * scale, tau0, tol, maxit, method)
+        return replace(sol, S=sol.S / scale)
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
     auto_direct = patch.direct and (patch.solves == 0 or int(C.sum()) <= DIRECT_REPEAT_MAX_ELEMENTS)
@@ -717,6 +729,19 @@ def solve_rolling(
     return _solution(patch, tau, S, slip, newton, inner, levels)
 
 
+def saturation_scale(patch: RollingPatch, xi: float, eta: float, phi: float) -> float:
+    """The factor (<= 1) that brings the creepages (xi, eta, phi) down to
+    SATURATION_RATIO: 1 unless a bound of the rigid slip per element, (|xi| + |eta| + |phi|
+    R) dx (R: the largest |x|, |y| of the grid), exceeds SATURATION_RATIO times the
+    elastic displacement of the traction bound, max g/r. Each term is divided by that
+    product first, so that no finite creepage overflows it."""
+    X, Y = patch.grid.mesh()
+    reach = max(float(np.abs(X).max()), float(np.abs(Y).max()))
+    unit = patch.grid.dx / (SATURATION_RATIO * float(patch.g.max()) / patch.r)
+    ratio = abs(xi) * unit + abs(eta) * unit + abs(phi) * (reach * unit)
+    return 1.0 / ratio if ratio > 1.0 else 1.0
+
+
 class Continuation:
     """Initial guesses for a sequence of solves on one patch (a creep curve, a line of a
     table, a bisection along a ray): the secant predictor from the last two converged
@@ -745,27 +770,33 @@ class Continuation:
         """The predicted traction (2, ny, nx) (Pa) at (xi, eta, phi), or None."""
         if not self.points:
             return None
-        w = np.array([xi, eta, phi * self.length])
-        w2, z2 = self.points[-1]
-        step = float(np.linalg.norm(w - w2))
-        if len(self.points) == 2:
-            w1, z1 = self.points[0]
-            d = w2 - w1
-            dd = float(d @ d)
-            if dd > 0.0:
-                s = float((w - w2) @ d) / dd
-                off = float(np.linalg.norm(w - w2 - s * d))
-                if off <= CONTINUATION_LINE * step and abs(s) <= CONTINUATION_REACH:
-                    return self._bounded(z2 + s * (z2 - z1))
-        ww = float(w2 @ w2)
-        if ww > 0.0:
-            s = float(w @ w2) / ww
-            if s > 0.0 and float(np.linalg.norm(w - s * w2)) <= CONTINUATION_LINE * step:
-                return self._bounded(s * z2)
-        return None
+        # far into full slip (saturation_scale) the products may overflow: the
+        # prediction is then not finite and _bounded answers None (a cold start)
+        with np.errstate(over="ignore", invalid="ignore"):
+            w = np.array([xi, eta, phi * self.length])
+            w2, z2 = self.points[-1]
+            step = float(np.linalg.norm(w - w2))
+            if len(self.points) == 2:
+                w1, z1 = self.points[0]
+                d = w2 - w1
+                dd = float(d @ d)
+                if dd > 0.0:
+                    s = float((w - w2) @ d) / dd
+                    off = float(np.linalg.norm(w - w2 - s * d))
+                    if off <= CONTINUATION_LINE * step and abs(s) <= CONTINUATION_REACH:
+                        return self._bounded(z2 + s * (z2 - z1))
+            ww = float(w2 @ w2)
+            if ww > 0.0:
+                s = float(w @ w2) / ww
+                if s > 0.0 and float(np.linalg.norm(w - s * w2)) <= CONTINUATION_LINE * step:
+                    return self._bounded(s * z2)
+            return None
 
-    def _bounded(self, tau: FloatArray) -> FloatArray:
-        """tau (a predicted z) projected on |tau| <= g, zero off the contact."""
+    def _bounded(self, tau: FloatArray) -> FloatArray | None:
+        """tau (a predicted z) projected on |tau| <= g, zero off the contact; None where
+        the prediction is not finite (it overflowed: the cold start instead)."""
+        if not np.all(np.isfinite(tau)):
+            return None
         g = self.patch.g
         mag = np.hypot(tau[0], tau[1])
         f = np.where(mag > g, g / np.where(mag > 0.0, mag, 1.0), 1.0)
@@ -784,8 +815,13 @@ class Continuation:
                 raise
             sol = solve_rolling(self.patch, xi, eta, phi, tol=tol)
         w = np.array([xi, eta, phi * self.length])
-        z = np.where(self.patch.contact, sol.tau + self.patch.r * sol.S, 0.0)
-        if self.points and float(np.linalg.norm(w - self.points[-1][0])) == 0.0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            z = np.where(self.patch.contact, sol.tau + self.patch.r * sol.S, 0.0)
+        if not (np.all(np.isfinite(z)) and np.all(np.isfinite(w))):
+            # far into full slip (rolling.saturation_scale), z beyond double range: no
+            # history, the next point starts cold
+            self.points = []
+        elif self.points and float(np.linalg.norm(w - self.points[-1][0])) == 0.0:
             self.points[-1] = (w, z)  # a repeated point: no line through it
         else:
             self.points = [*self.points[-1:], (w, z)]
