@@ -6,8 +6,10 @@ the rigid slip W grows the elastic term K tau (bounded by the traction bound) be
 negligible: the tractions tend to g W/|W|, without spin |T| = mu P (the bound carries
 sum g dA = mu P) along (xi, eta). The exact solver solves creepages whose rigid slip
 exceeds rolling.SATURATION_RATIO = 1e20 times the elastic displacement of the bound at
-that ratio (``rolling.saturation_scale``), FASTSIM likewise; before, the fixed-point
-variable tau + r S overflowed from creepages of about 1e296 on and the tractions were NaN.
+that ratio (``rolling.saturation_scale``), FASTSIM and the transient field's step
+(``transient.solve_coulomb``) likewise; before, the fixed-point variable tau + r S
+overflowed from creepages of about 1e296 on: NaN tractions (steady) or zero ones
+(transient).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import pytest
 
 from contact_fmu.halfspace import Continuation, Fastsim, wheel_on_rail
 from contact_fmu.halfspace.rolling import saturation_scale
+from contact_fmu.halfspace.transient import HalfSpaceField
 
 HUGE = (1e300, -1.7e308, 1.7976931348623157e308)
 
@@ -103,3 +106,22 @@ def test_a_continuation_through_a_huge_creepage_starts_the_next_point_cold(conta
     cold = contact.solve(0.3 * xref)
     assert _finite(last)
     assert abs(last.Tx - cold.Tx) <= 1e-6 * muP
+
+
+@pytest.mark.parametrize("value", HUGE)
+def test_transient_steps_far_into_full_slip_give_mu_P(contact, value):
+    """The transient field (HalfSpaceField): a rolling step at slip velocity vx = value and
+    a static shift of value metres put every element of the contact into slip along x:
+    Tx = mu P sign(value) to 1e-12, Ty within 1e-12 of mu P of zero, finite tau and S
+    (before: tau + r S overflowed and the step answered zero tractions)."""
+    muP = contact.mu * contact.P
+    for step in (
+        lambda f: f.roll(1e-4, value, 0.0, 10.0),
+        lambda f: f.set_shift(value, 0.0),
+    ):
+        res = step(HalfSpaceField(contact, n=16))
+        sol = res.solution
+        assert np.all(np.isfinite(sol.tau)) and np.all(np.isfinite(sol.S))
+        assert bool(np.all(sol.slip[sol.contact]))
+        assert res.Tx == pytest.approx(math.copysign(muP, value), rel=1e-12)
+        assert abs(res.Ty) <= 1e-12 * muP

@@ -90,6 +90,7 @@ from .krylov import gmres
 from .rolling import (
     GMRES_MAXIT,
     GMRES_RESTART,
+    SATURATION_RATIO,
     RollingPatch,
     coulomb_newton,
     normalise_load,
@@ -209,9 +210,16 @@ def solve_coulomb(
         z = np.zeros_like(b)
         return CoulombSolution(z, z.copy(), C, np.zeros_like(C), z.copy(), z[0].copy(), 0, 0)
     b = np.where(C, b, 0.0)
+    # far into full slip (rolling.SATURATION_RATIO; the rigid slip of a step at 1e300
+    # m/s overflowed tau + r S and gave zero tractions): b brought down to the ratio, the
+    # slip scaled back; z and nz stay the scaled problem's (the tangent's coefficients
+    # (|z|/g - 1)/r then 1e20 instead of more: a zero response either way)
+    elastic = SATURATION_RATIO * float((patch.g / patch.r)[C].max())
+    ratio = float(np.abs(b).max()) / elastic if elastic > 0.0 else 0.0
+    scale = 1.0 / ratio if ratio > 1.0 else 1.0
     tau, S, slip, z, nz, newton, inner = coulomb_newton(
         patch,
-        b,
+        b * scale,
         np.where(C, tau0, 0.0),
         tol,
         NEWTON_MAXIT,
@@ -219,7 +227,7 @@ def solve_coulomb(
         error=StageSolveError,
     )
     tau = np.where(C, tau, 0.0)
-    return CoulombSolution(tau, S, C, slip, z, nz, newton, inner)
+    return CoulombSolution(tau, S / scale, C, slip, z, nz, newton, inner)
 
 
 def linear_response(
