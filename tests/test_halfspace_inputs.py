@@ -5,6 +5,7 @@ changed state. Randomised over wrong types and values with hypothesis."""
 from __future__ import annotations
 
 import math
+import re
 from functools import cache
 
 import numpy as np
@@ -14,6 +15,7 @@ from hypothesis import strategies as st
 
 from contact_fmu import InputError
 from contact_fmu.halfspace import (
+    Fastsim,
     HalfSpaceContact,
     Hertz,
     Material,
@@ -199,3 +201,30 @@ def test_the_issue_examples():
     assert _hsc(n=(48, 44)).patch.grid.shape == (44, 48)
     with pytest.raises(InputError, match="vx = None"):
         field().roll(1.0, None, 0.0, 1e-4)
+
+
+@pytest.mark.parametrize(
+    "make, name",
+    [
+        (lambda: Material(E=5e-324, nu=0.28), "E"),
+        (lambda: Material(E=1.7e308, nu=0.28), "E"),
+        (lambda: Material(G=1e-300, nu=0.28), "G"),
+        (lambda: HalfSpaceContact.from_ellipse(6e-3, 6e-10, STEEL, STEEL, 0.3, P=1e5), "a1/a2"),
+        (lambda: HalfSpaceContact.from_curvatures(1.0, 1e20, STEEL, STEEL, 0.3, 1e5), "A/B"),
+        (lambda: HalfSpaceContact.from_ellipse(6e-3, 4e-3, STEEL, STEEL, 1e300, P=1e5), "mu"),
+        (lambda: HalfSpaceContact.from_ellipse(6e-3, 4e-3, STEEL, STEEL, 5e-324, P=1e5), "mu"),
+        (lambda: HalfSpaceContact(1e-300, 0.46, math.inf, STEEL, STEEL, 0.3, Rsy=0.3), "a1"),
+        (lambda: Fastsim(6e-3, 4e-3, 8e10, 0.28, 1e300, P=1e5), "mu"),
+        (lambda: Fastsim(1e-300, 4e-3, 8e10, 0.28, 0.3, P=1e5), "a1"),
+        (lambda: LineContact(N=1e5, R=0.06, body=STEEL, substrate=STEEL, mu=1e300), "mu"),
+        (lambda: LineContact(N=1e-300, R=0.06, body=STEEL, substrate=STEEL, mu=0.3), "a"),
+    ],
+)
+def test_scales_beyond_the_solvers_range_are_refused_by_name(make, name):
+    """Inputs that give a modulus, a semi-axis, a peak pressure or a traction bound mu p0
+    outside hertz.SCALE_MIN .. SCALE_MAX (1e-100 .. 1e100, SI), or an ellipse beyond a
+    semi-axis ratio of 1e6: InputError naming the input or the scale (before: a
+    ZeroDivisionError, scipy's ValueError from the eccentricity's bracket, or NaN
+    forces)."""
+    with pytest.raises(InputError, match=rf"^{re.escape(name)} = "):
+        make()

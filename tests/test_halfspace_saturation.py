@@ -6,7 +6,7 @@ the rigid slip W grows the elastic term K tau (bounded by the traction bound) be
 negligible: the tractions tend to g W/|W|, without spin |T| = mu P (the bound carries
 sum g dA = mu P) along (xi, eta). The exact solver solves creepages whose rigid slip
 exceeds rolling.SATURATION_RATIO = 1e20 times the elastic displacement of the bound at
-that ratio (``rolling.saturation_scale``), FASTSIM and the transient field's step
+that ratio (``rolling.creepage_scale``), FASTSIM and the transient field's step
 (``transient.solve_coulomb``) likewise; before, the fixed-point variable tau + r S
 overflowed from creepages of about 1e296 on: NaN tractions (steady) or zero ones
 (transient).
@@ -19,8 +19,9 @@ import math
 import numpy as np
 import pytest
 
-from contact_fmu.halfspace import Continuation, Fastsim, wheel_on_rail
-from contact_fmu.halfspace.rolling import saturation_scale
+from contact_fmu.halfspace import Continuation, Fastsim, LineContact, wheel_on_rail
+from contact_fmu.halfspace.railway import STEEL
+from contact_fmu.halfspace.rolling import creepage_scale
 from contact_fmu.halfspace.transient import HalfSpaceField
 
 HUGE = (1e300, -1.7e308, 1.7976931348623157e308)
@@ -65,10 +66,10 @@ def test_a_huge_spin_gives_the_forces_of_the_largest_unscaled_spin(contact, valu
     (S = phi (-y, x) dx to 1e-12 of its largest entry on the contact)."""
     muP = contact.mu * contact.P
     patch = contact.patch
-    scale = saturation_scale(patch, 0.0, 0.0, value)
+    scale = creepage_scale(patch, 0.0, 0.0, value)
     assert scale < 1.0
     below = value * scale * 0.5
-    assert saturation_scale(patch, 0.0, 0.0, below) == 1.0
+    assert creepage_scale(patch, 0.0, 0.0, below) == 1.0
     big, ref = contact.solve(0.0, 0.0, value), contact.solve(0.0, 0.0, below)
     assert _finite(big)
     np.testing.assert_allclose([big.Tx, big.Ty], [ref.Tx, ref.Ty], rtol=0.0, atol=1e-12 * muP)
@@ -125,3 +126,25 @@ def test_transient_steps_far_into_full_slip_give_mu_P(contact, value):
         assert bool(np.all(sol.slip[sol.contact]))
         assert res.Tx == pytest.approx(math.copysign(muP, value), rel=1e-12)
         assert abs(res.Ty) <= 1e-12 * muP
+
+
+@pytest.mark.parametrize("xi", [1e-300, -1e-200])
+def test_tiny_creepages_keep_the_linear_theorys_slope(contact, xi):
+    """Creepages far below the onset of slip (rigid slip below ADHESION_RATIO of the
+    bound's elastic displacement): every element adheres and the forces are linear in
+    the creepages, so T/xi equals that of xi = 1e-12 (solved as it is) to 1e-12 relative,
+    on the railway contact and on Carter's line contact (before: the line contact's
+    Newton iteration stalled in subnormal slips, RuntimeError)."""
+    line = LineContact(N=1e5, R=0.06, body=STEEL, substrate=STEEL, mu=0.3)
+    assert creepage_scale(contact.patch, 1e-12, 0.0, 0.0) == 1.0
+    assert creepage_scale(contact.patch, xi, 0.0, 0.0) > 1.0
+    for solve in (
+        lambda x: contact.solve(x, 0.5 * x, 0.0),
+        lambda x: line.solve(x),
+    ):
+        tiny, ref = solve(xi), solve(1e-12)
+        assert tiny.adhesion_fraction == 1.0
+        assert tiny.Tx / xi == pytest.approx(ref.Tx / 1e-12, rel=1e-12)
+        assert tiny.Ty / xi == pytest.approx(
+            ref.Ty / 1e-12, rel=1e-12, abs=1e-12 * abs(ref.Tx) / 1e-12
+        )

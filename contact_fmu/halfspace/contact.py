@@ -44,7 +44,9 @@ from .hertz import (
     Material,
     ellipse_curvatures,
     relative_curvatures,
+    traction_bound,
     unit_warning,
+    within_scale,
 )
 from .rolling import (
     NEWTON_TOL,
@@ -127,6 +129,13 @@ class HalfSpaceContact:
             object.__setattr__(self, "n", counts("n", self.n, MIN_N))
         flag("coupling", self.coupling)
         relative_curvatures(self.Rx, self.Ry, self.Rsx, self.Rsy)
+        # the contact's scales within the solvers' range (hertz.SCALE_MIN .. SCALE_MAX)
+        h = self.hertz
+        source = f" (the Hertz contact of P = {self.P:g} N, Rx = {self.Rx:g} m, Ry = {self.Ry:g} m)"
+        within_scale("a1", h.a1, "m", source)
+        within_scale("a2", h.a2, "m", source)
+        within_scale("p0", h.p0, "Pa", source)
+        traction_bound(self.mu, h.p0)
 
     @classmethod
     def from_curvatures(

@@ -61,7 +61,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validate import InputError, array, count, counts, finite, flag, one_of, positive
-from .hertz import MODULUS_PLAUSIBLE, SEMI_AXIS_PLAUSIBLE, SPIN_PLAUSIBLE, unit_warning
+from .hertz import (
+    ASPECT_MAX,
+    MODULUS_PLAUSIBLE,
+    SEMI_AXIS_PLAUSIBLE,
+    SPIN_PLAUSIBLE,
+    traction_bound,
+    unit_warning,
+    within_scale,
+)
 from .rolling import SATURATION_RATIO, RollingPatch, RollingSolution, ellipse_patch
 
 FloatArray = NDArray[np.float64]
@@ -179,6 +187,13 @@ class Fastsim:
                 unit_warning(name, getattr(self, name), "mm", check)
         if positive("G", self.G) < MODULUS_PLAUSIBLE:
             unit_warning("G", self.G, "N/mm^2 (MPa)", check)
+        within_scale("G", self.G, "Pa")
+        for name in ("a1", "a2"):
+            within_scale(name, getattr(self, name), "m")
+        if max(self.a1, self.a2) / min(self.a1, self.a2) > ASPECT_MAX:
+            raise InputError(
+                "a1/a2", self.a1 / self.a2, f"within {1.0 / ASPECT_MAX:g} .. {ASPECT_MAX:g}"
+            )
         finite("nu", self.nu)
         if not -1.0 < self.nu <= 0.5:
             raise InputError("nu", self.nu, "in (-1, 0.5]")
@@ -190,6 +205,8 @@ class Fastsim:
             object.__setattr__(self, "p0", 1.5 * positive("P", self.P) / area)
         else:
             object.__setattr__(self, "P", area * positive("p0", self.p0) / 1.5)
+        within_scale("p0", self.p0, "Pa", f" (P = {self.P:g} N over pi a1 a2)")
+        traction_bound(self.mu, self.p0)
         one_of("bound", self.bound, BOUNDS)
         if isinstance(self.n, int | np.integer) and not isinstance(self.n, bool):
             count("n", self.n, MIN_N)
@@ -359,7 +376,7 @@ class Fastsim:
         """Traction increments (nx, B, ny) (Pa) of the creepages (B,): the integral of
         w/L over each element's travel; and the factor (B,) <= 1 the creepages were
         scaled by. Creepages whose increments would exceed SATURATION_RATIO times the
-        traction bound (rolling.saturation_scale) are brought down to it: every element
+        traction bound (rolling.creepage_scale) are brought down to it: every element
         then slips along its increment to rounding, at any larger size alike, and the
         increments stay finite (from creepages of about 1e300 on they overflowed: NaN
         tractions)."""

@@ -63,6 +63,34 @@ class UnitWarning(UserWarning):
 MODULUS_PLAUSIBLE = 1e6
 SEMI_AXIS_PLAUSIBLE = 0.1
 SPIN_PLAUSIBLE = 1e-5
+# The range (SI) of the scales the solvers compute with: moduli, semi-axes, peak
+# pressures and traction bounds mu p0 outside it are refused (InputError), so that the
+# products and quotients of a few of them (G c^2, p0/E*, mu P/(G c^2), the influence
+# coefficients dx/G) stay finite and normal doubles; outside it the arithmetic overflowed
+# or divided by zero. Every physical contact lies tens of orders of magnitude inside.
+SCALE_MIN, SCALE_MAX = 1e-100, 1e100
+# Largest semi-axis ratio of a contact ellipse given by its semi-axes (Hertz's own
+# bracket, M_MAX, ends there as well).
+ASPECT_MAX = 1e6
+
+
+def within_scale(name: str, value: float, unit: str, detail: str = "") -> float:
+    """``value`` if within SCALE_MIN .. SCALE_MAX, else InputError naming ``name``
+    (``detail``: what the value was derived from, for the message)."""
+    if not SCALE_MIN <= value <= SCALE_MAX:
+        raise InputError(name, value, f"within {SCALE_MIN:g} .. {SCALE_MAX:g} {unit}{detail}")
+    return value
+
+
+def traction_bound(mu: float, p0: float) -> float:
+    """mu p0 (Pa) if within SCALE_MIN .. SCALE_MAX, else InputError naming mu."""
+    g = float(mu) * float(p0)  # Python floats: an overflow is inf, without a warning
+    if not SCALE_MIN <= g <= SCALE_MAX:
+        raise InputError(
+            "mu", mu, f"such that the traction bound mu p0 lies within {SCALE_MIN:g} .. "
+            f"{SCALE_MAX:g} Pa (p0 = {p0:g} Pa)",
+        )  # fmt: skip
+    return g
 
 
 def unit_warning(name: str, value: float, looks_like: str, check_units: bool) -> None:
@@ -104,12 +132,14 @@ class Material:
         if (E is None) == (G is None):
             raise InputError("E, G", (E, G), "exactly one of them given (Pa)")
         if E is None:
-            G = positive("G", G)
+            G = within_scale("G", positive("G", G), "Pa")
             if G < MODULUS_PLAUSIBLE:
                 unit_warning("G", G, "N/mm^2 (MPa)", check_units)
             E = 2.0 * G * (1.0 + nu)
         else:
-            E = positive("E", E)
+            E = within_scale("E", positive("E", E), "Pa")
+            # G = E/(2 (1 + nu)) as well (nu near -1 makes it large)
+            within_scale("E", E / (2.0 * (1.0 + nu)), "Pa", " as the shear modulus G")
             if E < MODULUS_PLAUSIBLE:
                 unit_warning("E", E, "N/mm^2 (MPa)", check_units)
         object.__setattr__(self, "E", E)
@@ -208,6 +238,13 @@ class Hertz:
         r_lo = _ratio(M_LINEAR)
         if ratio <= r_lo:  # nearly circular: N/M - 1 is linear in m below M_LINEAR
             return M_LINEAR * (ratio - 1.0) / (r_lo - 1.0)
+        r_hi = _ratio(M_MAX)
+        if ratio >= r_hi:  # beyond the bracket: a semi-axis ratio beyond 1e6
+            raise InputError(
+                "A/B", self.A / self.B,
+                f"within {1.0 / r_hi:.4g} .. {r_hi:.4g} (an ellipse of semi-axis ratio up "
+                "to 1e6; a longer contact: LineContact)",
+            )  # fmt: skip
         return float(brentq(lambda m: _ratio(m) - ratio, M_LINEAR, M_MAX, xtol=1e-15, rtol=1e-15))
 
     @cached_property
@@ -279,6 +316,11 @@ def ellipse_curvatures(
     if (P is None) == (delta is None):
         raise InputError("P, delta", (P, delta), "exactly one of them given")
     major, minor = max(a1, a2), min(a1, a2)
+    if major / minor > ASPECT_MAX:  # 1 - e^2 = (minor/major)^2 would lose its digits
+        raise InputError(
+            "a1/a2", a1 / a2, f"within {1.0 / ASPECT_MAX:g} .. {ASPECT_MAX:g} (a longer "
+            "contact: LineContact)",
+        )  # fmt: skip
     m = 1.0 - (minor / major) ** 2
     K, E = float(ellipk(m)), float(ellipe(m))
     if m < 1e-8:  # circle: (K - E)/e^2 and ((a/b)^2 E - K)/e^2 both tend to pi/4

@@ -20,7 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from .._validate import count, finite, instance, positive
-from .hertz import CombinedElastic, Material
+from .hertz import CombinedElastic, Material, traction_bound, within_scale
 from .influence import Grid, plane_strain_operator
 from .rolling import RollingPatch, RollingSolution, normalise_load, solve_rolling
 
@@ -51,6 +51,11 @@ class LineContact:
         instance("substrate", self.substrate, Material, "a halfspace.Material")
         positive("mu", self.mu)
         count("n", self.n, 8)
+        # the strip's scales within the solvers' range (hertz.SCALE_MIN .. SCALE_MAX)
+        source = f" (the Hertz strip of N = {self.N:g} N/m, R = {self.R:g} m)"
+        within_scale("a", self.a, "m", source)
+        within_scale("p0", self.p0, "Pa", source)
+        traction_bound(self.mu, self.p0)
 
     @cached_property
     def elastic(self) -> CombinedElastic:

@@ -162,7 +162,7 @@ NESTED_TOL = 1e-4
 # when it lies on the ray from zero through it (the linear theory's proportionality).
 CONTINUATION_LINE = 0.1
 CONTINUATION_REACH = 2.0
-# Creepages far into full slip (``saturation_scale``): where the rigid slip W of every
+# Creepages far into full slip (``creepage_scale``): where the rigid slip W of every
 # element exceeds the elastic displacement of the traction bound, max g/r, by more than
 # SATURATION_RATIO, each element slips along W (up to terms of relative size
 # 1/SATURATION_RATIO, below double rounding), so the tractions do not depend on the
@@ -170,6 +170,13 @@ CONTINUATION_REACH = 2.0
 # fixed-point variable tau + r S overflows from creepages of about 1e296 on (NaN
 # tractions).
 SATURATION_RATIO = 1e20
+# Creepages within full adhesion (``creepage_scale``): where the rigid slip is below
+# ADHESION_RATIO times that displacement, every element adheres and the solution is
+# linear in the creepages (tau = K^-1 W), so it is solved at this ratio and scaled back
+# (without it creepages of 1e-300 left the line contact's slip in subnormal numbers and
+# its Newton iteration stalled). Without the pressure coupling only: its slip does not
+# scale with the creepages.
+ADHESION_RATIO = 1e-20
 
 
 @dataclass(frozen=True)
@@ -685,10 +692,17 @@ def solve_rolling(
     if tau0 is not None:
         tau0 = array("tau0", tau0, (2, *patch.grid.shape))
     one_of("method", method, ("auto", "iterative", "direct"))
-    scale = saturation_scale(patch, xi, eta, phi)
+    scale = creepage_scale(patch, xi, eta, phi)
     if scale < 1.0:  # far into full slip: solved at SATURATION_RATIO, the slip scaled back
         sol = solve_rolling(patch, xi * scale, eta * scale, phi * scale, tau0, tol, maxit, method)
         return replace(sol, S=sol.S / scale)
+    if scale > 1.0:  # within full adhesion, linear: solved at ADHESION_RATIO, scaled back
+        t0 = None if tau0 is None else tau0 * scale
+        sol = solve_rolling(patch, xi * scale, eta * scale, phi * scale, t0, tol, maxit, method)
+        return replace(
+            sol, tau=sol.tau / scale, S=sol.S / scale,
+            Tx=sol.Tx / scale, Ty=sol.Ty / scale, Mz=sol.Mz / scale,
+        )  # fmt: skip
     C = patch.contact
     W = patch.rhs(xi, eta, phi)
     auto_direct = patch.direct and (patch.solves == 0 or int(C.sum()) <= DIRECT_REPEAT_MAX_ELEMENTS)
@@ -729,17 +743,27 @@ def solve_rolling(
     return _solution(patch, tau, S, slip, newton, inner, levels)
 
 
-def saturation_scale(patch: RollingPatch, xi: float, eta: float, phi: float) -> float:
-    """The factor (<= 1) that brings the creepages (xi, eta, phi) down to
-    SATURATION_RATIO: 1 unless a bound of the rigid slip per element, (|xi| + |eta| + |phi|
-    R) dx (R: the largest |x|, |y| of the grid), exceeds SATURATION_RATIO times the
-    elastic displacement of the traction bound, max g/r. Each term is divided by that
-    product first, so that no finite creepage overflows it."""
+def creepage_scale(patch: RollingPatch, xi: float, eta: float, phi: float) -> float:
+    """The factor the creepages (xi, eta, phi) are solved at: below 1 where a bound of
+    the rigid slip per element, (|xi| + |eta| + |phi| R) dx (R: the largest |x|, |y| of
+    the grid), exceeds SATURATION_RATIO times the elastic displacement of the traction
+    bound, max g/r (it brings the bound down to that ratio: full slip along the rigid
+    slip); above 1 where it is below ADHESION_RATIO times it and not zero, without the
+    pressure coupling (it brings it up to that ratio: full adhesion, linear in the
+    creepages); 1 otherwise. The terms are divided before they are summed, so that no
+    finite creepage overflows them."""
     X, Y = patch.grid.mesh()
     reach = max(float(np.abs(X).max()), float(np.abs(Y).max()))
-    unit = patch.grid.dx / (SATURATION_RATIO * float(patch.g.max()) / patch.r)
+    elastic = float(patch.g.max()) / patch.r
+    unit = patch.grid.dx / (SATURATION_RATIO * elastic)
     ratio = abs(xi) * unit + abs(eta) * unit + abs(phi) * (reach * unit)
-    return 1.0 / ratio if ratio > 1.0 else 1.0
+    if ratio > 1.0:
+        return 1.0 / ratio
+    if patch.kappa != 0.0:  # the pressure slip does not scale with the creepages
+        return 1.0
+    unit = patch.grid.dx / elastic  # no overflow now: the creepages are bounded
+    ratio = abs(xi) * unit + abs(eta) * unit + abs(phi) * (reach * unit)
+    return ADHESION_RATIO / ratio if 0.0 < ratio < ADHESION_RATIO else 1.0
 
 
 class Continuation:
@@ -770,7 +794,7 @@ class Continuation:
         """The predicted traction (2, ny, nx) (Pa) at (xi, eta, phi), or None."""
         if not self.points:
             return None
-        # far into full slip (saturation_scale) the products may overflow: the
+        # far into full slip (creepage_scale) the products may overflow: the
         # prediction is then not finite and _bounded answers None (a cold start)
         with np.errstate(over="ignore", invalid="ignore"):
             w = np.array([xi, eta, phi * self.length])
@@ -818,7 +842,7 @@ class Continuation:
         with np.errstate(over="ignore", invalid="ignore"):
             z = np.where(self.patch.contact, sol.tau + self.patch.r * sol.S, 0.0)
         if not (np.all(np.isfinite(z)) and np.all(np.isfinite(w))):
-            # far into full slip (rolling.saturation_scale), z beyond double range: no
+            # far into full slip (creepage_scale), z beyond double range: no
             # history, the next point starts cold
             self.points = []
         elif self.points and float(np.linalg.norm(w - self.points[-1][0])) == 0.0:
