@@ -218,13 +218,18 @@ def test_the_issue_examples():
         (lambda: Fastsim(1e-300, 4e-3, 8e10, 0.28, 0.3, P=1e5), "a1"),
         (lambda: LineContact(N=1e5, R=0.06, body=STEEL, substrate=STEEL, mu=1e300), "mu"),
         (lambda: LineContact(N=1e-300, R=0.06, body=STEEL, substrate=STEEL, mu=0.3), "a"),
+        (
+            lambda: HalfSpaceContact.from_ellipse(6e-3, 4e-3, STEEL, STEEL, 0.3, P=1e5, kb=1e300),
+            "kb + ks",
+        ),
     ],
 )
 def test_scales_beyond_the_solvers_range_are_refused_by_name(make, name):
     """Inputs that give a modulus, a semi-axis, a peak pressure or a traction bound mu p0
-    outside hertz.SCALE_MIN .. SCALE_MAX (1e-100 .. 1e100, SI), or an ellipse beyond a
-    semi-axis ratio of 1e6: InputError naming the input or the scale (before: a
-    ZeroDivisionError, scipy's ValueError from the eccentricity's bracket, or NaN
-    forces)."""
+    outside hertz.SCALE_MIN .. SCALE_MAX (1e-100 .. 1e100, SI), layers whose displacement
+    under p0 exceeds SCALE_MAX m, or an ellipse beyond a semi-axis ratio of 1e6:
+    InputError naming the input or the scale (before: a
+    ZeroDivisionError, scipy's ValueError from the eccentricity's bracket, NaN forces,
+    or a Newton iteration stalled in subnormal tractions)."""
     with pytest.raises(InputError, match=rf"^{re.escape(name)} = "):
         make()

@@ -37,6 +37,7 @@ from .._validate import (
     positive,
 )
 from .hertz import (
+    SCALE_MAX,
     SEMI_AXIS_PLAUSIBLE,
     SPIN_PLAUSIBLE,
     CombinedElastic,
@@ -136,6 +137,13 @@ class HalfSpaceContact:
         within_scale("a2", h.a2, "m", source)
         within_scale("p0", h.p0, "Pa", source)
         traction_bound(self.mu, h.p0)
+        k = float(self.kb) + float(self.ks)
+        if k * float(h.p0) > SCALE_MAX:  # the layers' displacement under p0, in m
+            raise InputError(
+                "kb + ks",
+                k,
+                f"such that (kb + ks) p0 is at most {SCALE_MAX:g} m (p0 = {h.p0:g} Pa)",
+            )
 
     @classmethod
     def from_curvatures(
