@@ -1,5 +1,6 @@
-"""Creepages far into full slip, up to the largest double, and rolling speeds down to the
-smallest: the half-space solvers answer the full-slip forces, never NaN.
+"""Creepages far into full slip, up to the largest double, rolling speeds down to the
+smallest, and creepages down to the smallest: the half-space solvers answer the
+full-slip forces, the sliding limit and the linear theory's, never NaN.
 
 Beyond the onset of full slip every element slips along its slip S = W - K tau, and as
 the rigid slip W grows the elastic term K tau (bounded by the traction bound) becomes
@@ -9,7 +10,8 @@ exceeds rolling.SATURATION_RATIO = 1e20 times the elastic displacement of the bo
 that ratio (``rolling.creepage_scale``), FASTSIM and the transient field's step
 (``transient.solve_coulomb``) likewise; before, the fixed-point variable tau + r S
 overflowed from creepages of about 1e296 on: NaN tractions (steady) or zero ones
-(transient).
+(transient). At the other end, creepages below rolling.ADHESION_RATIO of it leave every
+element in adhesion, linear in the creepages: solved at that ratio and scaled back.
 """
 
 from __future__ import annotations
