@@ -337,6 +337,16 @@ class RollingPatch:
         return 1.0 / float(d[0, 0] - d[0, 1])
 
     @cached_property
+    def creepage_units(self) -> tuple[float, float]:
+        """The rigid slip per element of a unit creepage, dx, and of a unit spin, dx R (R:
+        the largest |x|, |y| of the grid), over the elastic displacement of the traction
+        bound, max g/r (``creepage_scale``)."""
+        X, Y = self.grid.mesh()
+        reach = max(float(np.abs(X).max()), float(np.abs(Y).max()))
+        unit = self.grid.dx / (float(self.g.max()) / self.r)
+        return unit, unit * reach
+
+    @cached_property
     def diag(self) -> FloatArray:
         """Diagonal of K per component (2, ny, nx) (m/Pa)."""
         d = self.op.self_coefficient
@@ -750,19 +760,23 @@ def creepage_scale(patch: RollingPatch, xi: float, eta: float, phi: float) -> fl
     bound, max g/r (it brings the bound down to that ratio: full slip along the rigid
     slip); above 1 where it is below ADHESION_RATIO times it and not zero, without the
     pressure coupling (it brings it up to that ratio: full adhesion, linear in the
-    creepages); 1 otherwise. The terms are divided before they are summed, so that no
-    finite creepage overflows them."""
-    X, Y = patch.grid.mesh()
-    reach = max(float(np.abs(X).max()), float(np.abs(Y).max()))
-    elastic = float(patch.g.max()) / patch.r
-    unit = patch.grid.dx / (SATURATION_RATIO * elastic)
-    ratio = abs(xi) * unit + abs(eta) * unit + abs(phi) * (reach * unit)
-    if ratio > 1.0:
-        return 1.0 / ratio
+    creepages); 1 otherwise."""
+    unit, spin = patch.creepage_units
+    ratio = abs(xi) * unit + abs(eta) * unit + abs(phi) * spin  # inf where it overflows
+    if ratio > SATURATION_RATIO:
+        # the terms over SATURATION_RATIO before the sum: finite for every finite
+        # creepage unless the contact's own scales are extreme (InputError then)
+        u, w = unit / SATURATION_RATIO, spin / SATURATION_RATIO
+        over = abs(xi) * u + abs(eta) * u + abs(phi) * w
+        if not math.isfinite(over):
+            raise InputError(
+                "xi, eta, phi", (xi, eta, phi),
+                f"creepages of a rigid slip within double range on this contact "
+                f"(below {SATURATION_RATIO * 1.7e308 / unit:.3g} in sum)",
+            )  # fmt: skip
+        return 1.0 / over
     if patch.kappa != 0.0:  # the pressure slip does not scale with the creepages
         return 1.0
-    unit = patch.grid.dx / elastic  # no overflow now: the creepages are bounded
-    ratio = abs(xi) * unit + abs(eta) * unit + abs(phi) * (reach * unit)
     return ADHESION_RATIO / ratio if 0.0 < ratio < ADHESION_RATIO else 1.0
 
 
