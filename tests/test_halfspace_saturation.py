@@ -135,8 +135,8 @@ def test_tiny_creepages_keep_the_linear_theorys_slope(contact, xi):
     """Creepages far below the onset of slip (rigid slip below ADHESION_RATIO of the
     bound's elastic displacement): every element adheres and the forces are linear in
     the creepages, so T/xi equals that of xi = 1e-12 (solved as it is) to 1e-12 relative,
-    on the railway contact and on Carter's line contact (before: the line contact's
-    Newton iteration stalled in subnormal slips, RuntimeError)."""
+    on the railway contact and on Carter's line contact, also from a warm start (before:
+    the line contact's Newton iteration stalled in subnormal slips, RuntimeError)."""
     line = LineContact(N=1e5, R=0.06, body=STEEL, substrate=STEEL, mu=0.3)
     assert creepage_scale(contact.patch, 1e-12, 0.0, 0.0) == 1.0
     assert creepage_scale(contact.patch, xi, 0.0, 0.0) > 1.0
@@ -150,3 +150,7 @@ def test_tiny_creepages_keep_the_linear_theorys_slope(contact, xi):
         assert tiny.Ty / xi == pytest.approx(
             ref.Ty / 1e-12, rel=1e-12, abs=1e-12 * abs(ref.Tx) / 1e-12
         )
+    # a warm start from a solution in slip is dropped there (scaled up it would overshoot
+    # the bound): the same operations as the cold solve, the same doubles
+    warm = contact.solve(xi, 0.5 * xi, 0.0, tau0=contact.solve(1e-3).tau)
+    assert warm.Tx == contact.solve(xi, 0.5 * xi, 0.0).Tx

@@ -707,8 +707,9 @@ def solve_rolling(
         sol = solve_rolling(patch, xi * scale, eta * scale, phi * scale, tau0, tol, maxit, method)
         return replace(sol, S=sol.S / scale)
     if scale > 1.0:  # within full adhesion, linear: solved at ADHESION_RATIO, scaled back
-        t0 = None if tau0 is None else tau0 * scale
-        sol = solve_rolling(patch, xi * scale, eta * scale, phi * scale, t0, tol, maxit, method)
+        # from the cold start (tau0 is dropped: a warm start scaled up would overshoot
+        # the bound, and the cold start of a full-adhesion solve converges at once)
+        sol = solve_rolling(patch, xi * scale, eta * scale, phi * scale, None, tol, maxit, method)
         return replace(
             sol, tau=sol.tau / scale, S=sol.S / scale,
             Tx=sol.Tx / scale, Ty=sol.Ty / scale, Mz=sol.Mz / scale,
