@@ -247,3 +247,23 @@ def test_table_drives_the_integrator_to_eqs_26_and_29(table):
     lat = Lateral(vy_ratio=0.001, spin_ratio=0.0)
     tr = simulate(table, body, loads, 0.5, 0.05, method="quasistationary", lateral=lat, Vx0=20.0)
     assert tr.Tx[-1] == pytest.approx(body.A2 * 0.4 * muP, rel=1e-9)
+
+
+def test_slips_beyond_double_range_and_vanishing_speeds_give_the_sliding_forces(table):
+    """Slip velocities whose table units overflow (1.7e308 m/s) and rolling speeds whose
+    product with the clamp underflows (Vx = 5e-324): the forces of pure sliding (Vx = 0)
+    along the same direction, bit for bit, finite, scalar and array paths alike (the
+    slips are taken over their largest first, the clamp onto the box is d lam without
+    |Vx|). Before: NaN, and zero forces with full adhesion."""
+    for path in (float, lambda v: np.array([v])):
+        big = table.forces(*(path(v) for v in (1.7e308, -1.7e308, 1.7e308, 1.0)))
+        unit = table.forces(*(path(v) for v in (1.0, -1.0, 1.0, 0.0)))
+        slow = table.forces(*(path(v) for v in (0.3, 0.1, 0.0, 5e-324)))
+        still = table.forces(*(path(v) for v in (0.3, 0.1, 0.0, 0.0)))
+        for a, b in ((big, unit), (slow, still)):
+            assert [float(np.ravel(x)[0]) for x in a] == [float(np.ravel(x)[0]) for x in b]
+        assert all(math.isfinite(float(np.ravel(x)[0])) for x in big)
+        assert (
+            math.hypot(float(np.ravel(slow[0])[0]), float(np.ravel(slow[1])[0]))
+            > 0.99 * table.mu * table.P
+        )

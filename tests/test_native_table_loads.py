@@ -385,3 +385,29 @@ def test_layered_tables_sources_compile_strictly_exporting_only_fmi(fmus, tmp_pa
     names = strict_build(fmus["body"][target], tmp_path)
     prefix, count = ("fmi2", 34) if target == "native" else ("fmi3", 75)
     assert len(names) == count and all(n.startswith(prefix) for n in names), names
+
+
+@pytest.mark.parametrize("target", ["native", "fmi3", "pythonfmu", "CONTACT_FMU_CORE=0"])
+def test_a_vanishing_rolling_speed_gives_the_sliding_outputs(fmus, target, monkeypatch):
+    """The contact mode on the plain table, sliding (vx = 0.92 m/s, Vy = 0.5 m/s, Omega_z =
+    1 rad/s) at the rolling speeds Vx = 5e-324 and 1e-310 (subnormal): the outputs of
+    Vx = 0, the limit (the creepages on the table's face along the slip), bit for bit,
+    |T| within 1 % of mu P; native FMI 2.0 and 3.0, the pythonfmu FMU on its C core and
+    on its Python path (the table law of CreepTable._scalar). Before, the clamp onto the
+    table's box multiplied by |Vx|, which underflowed: zero forces and full adhesion
+    served with status OK."""
+    if target == "CONTACT_FMU_CORE=0":
+        monkeypatch.setenv("CONTACT_FMU_CORE", "0")
+    path = fmus["plain"]["pythonfmu" if target.startswith("CONTACT") else target]
+    names = ("Tx", "Ty", "Mz", "adhesion")
+    outputs = []
+    for Vx in (0.0, 5e-324, 1e-310):
+        inst = Instance3(path) if target == "fmi3" else Instance(path, target)
+        with inst as b:
+            for name, value in (("Vx", Vx), ("Omega_y", -2.0), ("Vy", 0.5), ("Omega_z", 1.0)):
+                b.set(name, value)
+            assert b.step(1e-3) == OK, b.messages[-1:]
+            outputs.append(tuple(b.get(n) for n in names))
+    assert outputs[1] == outputs[0] and outputs[2] == outputs[0]
+    Tx, Ty, _, adhesion = outputs[0]
+    assert math.hypot(Tx, Ty) == pytest.approx(0.3 * 100e3, rel=0.01) and adhesion == 0.0

@@ -363,17 +363,23 @@ class CreepTable:
         sV = np.where(Vx < 0.0, -1.0, 1.0)
         aV = np.abs(Vx)
         X = self.data.extent
-        d = np.stack([sV * vx / self.xi_ref, vy / self.xi_ref, sV * phi / self.phi_ref])
-        rolling = aV > 0.0
-        safe = np.where(rolling, aV, 1.0)
-        x = np.where(rolling, d / safe, d)
-        # direction-preserving clamp onto the box (Vx = 0: the limit |x| -> inf)
-        Xb = X.reshape((3,) + (1,) * (x.ndim - 1))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratios = np.where(np.abs(x) > 0.0, Xb / np.abs(x), np.inf)
-        lam = np.min(ratios, axis=0)
-        lam = np.where(rolling, np.minimum(lam, 1.0), np.where(np.isfinite(lam), lam, 0.0))
-        return x * lam, sV
+        with np.errstate(over="ignore"):
+            d = np.stack([sV * vx / self.xi_ref, vy / self.xi_ref, sV * phi / self.phi_ref])
+        big = ~np.all(np.isfinite(d), axis=0)
+        if np.any(big):  # slips beyond double range in table units: as _scalar
+            m = np.where(big, np.maximum(np.maximum(np.abs(vx), np.abs(vy)), np.abs(phi)), 1.0)
+            aV = aV / m
+            d = np.stack([sV * (vx / m) / self.xi_ref, (vy / m) / self.xi_ref,
+                          sV * (phi / m) / self.phi_ref])  # fmt: skip
+        # direction-preserving clamp onto the box, as _scalar: inside it x = d/|Vx|, else
+        # x = d lam on its face (Vx = 0: the limit; no product lam |Vx| that underflows)
+        Xb = X.reshape((3,) + (1,) * (d.ndim - 1))
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            lam = np.min(np.where(np.abs(d) > 0.0, Xb / np.abs(d), np.inf), axis=0)
+            inside = (aV > 0.0) & (lam * aV >= 1.0) & np.isfinite(lam)
+            face = np.where(np.isfinite(lam), lam, 0.0)
+            x = np.where(inside, d / np.where(inside, aV, 1.0), d * face)
+        return x, sV
 
     def _evaluate(self, x: FloatArray) -> FloatArray:
         """Interpolated OUTPUTS (..., 4) at normalised creepages x (3, ...) inside the box."""
@@ -429,15 +435,27 @@ class CreepTable:
         sV = -1.0 if Vx < 0.0 else 1.0
         aV = abs(Vx)
         d1, d2, d3 = sV * vx / self.xi_ref, vy / self.xi_ref, sV * phi / self.phi_ref
+        if not (math.isfinite(d1) and math.isfinite(d2) and math.isfinite(d3)):
+            # slips beyond double range in table units: v and Vx over their largest
+            # (the same creepages, a direction within range)
+            m = max(abs(vx), abs(vy), abs(phi))
+            aV = aV / m
+            d1, d2, d3 = (
+                sV * (vx / m) / self.xi_ref,
+                (vy / m) / self.xi_ref,
+                sV * (phi / m) / self.phi_ref,
+            )
         X1, X2, X3 = self._extent
         lam = math.inf
         for d, Xi in ((d1, X1), (d2, X2), (d3, X3)):
             if d != 0.0:
                 lam = min(lam, Xi / abs(d))
-        if aV > 0.0:
-            lam = min(lam * aV, 1.0) / aV
-        elif lam == math.inf:
+        if lam == math.inf:  # no slip at all
             lam = 0.0
+        elif aV > 0.0 and lam * aV >= 1.0:  # inside the box: x = d/|Vx|
+            lam = 1.0 / aV
+        # else on the box's face, x = d lam, whatever Vx (lam |Vx| may underflow: no
+        # product with it; Vx = 0 is the limit)
         x1, x2, x3 = d1 * lam, d2 * lam, d3 * lam
         sg = 1.0
         if x1 < 0.0 or (x1 == 0.0 and (x2 < 0.0 or (x2 == 0.0 and x3 < 0.0))):

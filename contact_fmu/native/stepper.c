@@ -232,12 +232,23 @@ static void table_scalar(const cf_params *p, double vx, double vy, double phi, d
     }
     double sV = Vx < 0.0 ? -1.0 : 1.0, aV = fabs(Vx);
     double d[3] = {sV * vx / p->xi_ref, vy / p->xi_ref, sV * phi / p->phi_ref};
+    if (!(isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]))) {
+        /* slips beyond double range in table units: v and Vx over their largest (the
+         * same creepages, a direction within range) */
+        double m = py_max(py_max(fabs(vx), fabs(vy)), fabs(phi));
+        aV = aV / m;
+        d[0] = sV * (vx / m) / p->xi_ref;
+        d[1] = (vy / m) / p->xi_ref;
+        d[2] = sV * (phi / m) / p->phi_ref;
+    }
     double X[3] = {p->ext1, p->ext2, p->ext3};
     double lam = INFINITY;
     for (int i = 0; i < 3; i++)
         if (d[i] != 0.0) lam = py_min(lam, X[i] / fabs(d[i]));
-    if (aV > 0.0) lam = py_min(lam * aV, 1.0) / aV;
-    else if (lam == INFINITY) lam = 0.0;
+    if (lam == INFINITY) lam = 0.0;                        /* no slip at all */
+    else if (aV > 0.0 && lam * aV >= 1.0) lam = 1.0 / aV; /* inside the box: x = d/|Vx| */
+    /* else on the box's face, x = d lam, whatever Vx (lam |Vx| may underflow: no
+     * product with it; Vx = 0 is the limit) */
     double x1 = d[0] * lam, x2 = d[1] * lam, x3 = d[2] * lam, sg = 1.0;
     if (x1 < 0.0 || (x1 == 0.0 && (x2 < 0.0 || (x2 == 0.0 && x3 < 0.0)))) {
         sg = -1.0;
