@@ -171,3 +171,18 @@ def test_the_march_derivative_at_a_vanishing_speed_is_finite_and_its_slope():
                 assert np.all(np.abs(D[:, k] - fd) <= 2e-5 * scale / unit[k] + 1e-6 * np.abs(fd))
             want = ref if Vx == 1e-200 else 0.0
             assert np.all(np.abs(D[:, 2] - want) <= 1e-9 * scale / 1e-3), (Vx, D[:, 2], ref)
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-250, 1e300])
+def test_tiny_and_huge_velocities_of_one_creepage_give_its_forces(path, scale):
+    """The law is homogeneous of degree 0 in (vx, vy, phi, Vx): every slip, spin and
+    rolling speed times 1e-300, 1e-250 or 1e300 gives the forces of the
+    creepages themselves, to 1e-12 of mu P (mu P a1 for Mz). The march scales them by a
+    power of two first (stepper.c march_scale: exact); before, 1/(|Vx| k) overflowed and
+    a spin at Vx = 1e-300 gave NaN."""
+    for vx, vy, phi in SLIPS:
+        ref = LAW.forces(_a(vx), _a(vy), _a(phi), _a(1.0))
+        got = LAW.forces(_a(vx * scale), _a(vy * scale), _a(phi * scale), _a(scale))
+        assert all(np.all(np.isfinite(g)) for g in got)
+        for k, unit in ((0, MU_P), (1, MU_P), (2, MU_P * LAW.a1)):
+            assert abs(float(got[k][0]) - float(ref[k][0])) <= 1e-12 * unit, (vx, vy, phi, k)

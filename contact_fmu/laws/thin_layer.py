@@ -592,6 +592,16 @@ class _Grid:
     def _march_numpy(self, c: LayerContact, vx, vy, Vx, phi) -> tuple[NDArray, NDArray]:
         """``march`` in numpy, for every input (standstill included)."""
         vx, vy, Vx, phi = (np.asarray(a, float)[:, None, None] for a in (vx, vy, Vx, phi))
+        # homogeneous of degree 0 in the velocities: scaled by the power of two that brings
+        # the largest into [0.5, 1) (exact; stepper.c's march_scale, the same doubles), so
+        # that no gain overflows (Vx = 1e-300 with a spin of 1e-300 rad/s gave NaN)
+        m = np.maximum(np.maximum(np.abs(vx), np.abs(vy)), np.maximum(np.abs(Vx), np.abs(phi)))
+        usable = (m > 0.0) & np.isfinite(m)
+        e = np.where(usable, -np.frexp(np.where(usable, m, 1.0))[1], 0)
+        # up from below 0.5, down only from above 2^512 (as stepper.c: down from smaller
+        # sizes would round subnormals away)
+        e = np.where((e > 0) | (e < -512), e, 0)
+        vx, vy, Vx, phi = (np.ldexp(a, e) for a in (vx, vy, Vx, phi))
         s = np.sign(Vx)
         X = -np.where(s == 0, -1.0, s) * self.x  # node positions in march order
         Y = self.y[:, None]

@@ -977,12 +977,32 @@ static void march_straight(const cf_strips *g, double vx, double vy, double Vx, 
     R[2] = vy / speed * Sx - vx / speed * Sy;
 }
 
+/* The march is homogeneous of degree 0 in (vx, vy, Vx, phi): scaled by the power of two
+ * that brings the largest of them into [0.5, 1) when it is below 0.5 or above 2^512
+ * (exact: the same doubles wherever the unscaled march neither overflows nor leaves the
+ * normal range), velocities of any finite size march without 1/(|Vx| k) or the bounded
+ * gain overflowing (Vx = 1e-300 with a spin of 1e-300 rad/s gave NaN).
+ * layer._Grid._march_numpy alike. */
+static int march_scale(double vx, double vy, double Vx, double phi) {
+    const double m = fmax(fmax(fabs(vx), fabs(vy)), fmax(fabs(Vx), fabs(phi)));
+    int e = 0;
+    if (m > 0.0 && isfinite(m)) frexp(m, &e);
+    /* up from below 0.5 (exact, subnormals included); down only from above 2^512, where
+     * the march overflowed before (down from smaller sizes would round subnormals away) */
+    return e < 0 || e > 512 ? -e : 0;
+}
+
 static void march_one(const cf_strips *g, double vx, double vy, double Vx, double phi,
                       double *tau, unsigned char *slip, double R[3]) {
     if (g == NULL) { /* callers check; never a NULL grid dereferenced */
         R[0] = R[1] = R[2] = NAN;
         return;
     }
+    const int e = march_scale(vx, vy, Vx, phi);
+    vx = ldexp(vx, e);
+    vy = ldexp(vy, e);
+    Vx = ldexp(Vx, e);
+    phi = ldexp(phi, e);
     if (phi == 0.0 && tau == NULL) {
         march_straight(g, vx, vy, Vx, R);
         return;
