@@ -487,7 +487,8 @@ def main(argv: list[str] | None = None) -> int:
 def entry() -> None:
     """The console script: main, then the end of the process without the interpreter's
     finalisation. pythonfmu's native wrapper can corrupt the heap when its libraries
-    are torn down at exit (NTNU-IHB/PythonFMU issue 228; tests/conftest.py does the
+    are torn down at exit (its use-after-free in finalizePythonInterpreter, reported at
+    https://github.com/NTNU-IHB/PythonFMU/issues/228; tests/conftest.py does the
     same for the test session): the results are written by then, and the status must
     be main's, not a crash's."""
     try:

@@ -2,7 +2,8 @@
 
 The suite loads several dozen pythonfmu FMUs (fmpy and libcosim) into this one process.
 pythonfmu's native wrapper can corrupt the heap when its libraries are torn down at
-interpreter exit (NTNU-IHB/PythonFMU issue 228, "free(): corrupted unsorted chunks";
+interpreter exit (its use-after-free in finalizePythonInterpreter, reported upstream at
+https://github.com/NTNU-IHB/PythonFMU/issues/228: "free(): corrupted unsorted chunks";
 seen here once, as "corrupted double-linked list" after every test had passed). The
 results are reported by then, so the process ends without the interpreter's
 finalisation, keeping pytest's exit status: a failing test still fails the run.

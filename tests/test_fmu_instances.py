@@ -34,9 +34,10 @@ def fig13() -> fmu_build.Built:
 
 # the end of a fresh interpreter's code: its output flushed, then no finalisation, where
 # pythonfmu's wrapper reads memory its own exit handler freed (finalizePythonInterpreter,
-# NTNU-IHB/PythonFMU on GitHub, its issue 228: valgrind shows it with or without this
-# project's code; whether glibc notices, "corrupted double-linked list", depends on the
-# heap's layout); the same as conftest.py does for the test process itself
+# reported upstream at https://github.com/NTNU-IHB/PythonFMU/issues/228: valgrind
+# shows it with or without this project's code; whether glibc notices, "corrupted
+# double-linked list", depends on the heap's layout); the same as conftest.py does for
+# the test process itself
 _EXIT = "\nimport os, sys\nsys.stdout.flush()\nos._exit(0)\n"
 
 
