@@ -137,11 +137,10 @@ class HalfSpaceContact:
         within_scale("a2", h.a2, "m", source)
         within_scale("p0", h.p0, "Pa", source)
         traction_bound(self.mu, h.p0)
-        k = float(self.kb) + float(self.ks)
-        if k * float(h.p0) > SCALE_MAX:  # the layers' displacement under p0, in m
+        if self.k * float(h.p0) > SCALE_MAX:  # the layers' displacement under p0, in m
             raise InputError(
                 "kb + ks",
-                k,
+                self.k,
                 f"such that (kb + ks) p0 is at most {SCALE_MAX:g} m (p0 = {h.p0:g} Pa)",
             )
 
@@ -425,8 +424,7 @@ class HalfSpaceContact:
         patch = self.patch
         X, Y = patch.grid.mesh()
         # the direction from velocities divided by their largest first (no overflow)
-        reach = max(float(np.abs(X).max()), float(np.abs(Y).max()))
-        m = max(abs(vx), abs(vy), abs(phi) * reach)
+        m = max(abs(vx), abs(vy), abs(phi) * patch.grid.reach)
         m = m if 0.0 < m < math.inf else 1.0
         wx, wy = vx / m - (phi / m) * Y, vy / m + (phi / m) * X
         mag = np.hypot(wx, wy)

@@ -62,10 +62,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validate import InputError, array, count, counts, finite, flag, one_of, positive
 from .hertz import (
-    ASPECT_MAX,
     MODULUS_PLAUSIBLE,
     SEMI_AXIS_PLAUSIBLE,
     SPIN_PLAUSIBLE,
+    semi_axes_within_aspect,
     traction_bound,
     unit_warning,
     within_scale,
@@ -190,10 +190,7 @@ class Fastsim:
         within_scale("G", self.G, "Pa")
         for name in ("a1", "a2"):
             within_scale(name, getattr(self, name), "m")
-        if max(self.a1, self.a2) / min(self.a1, self.a2) > ASPECT_MAX:
-            raise InputError(
-                "a1/a2", self.a1 / self.a2, f"within {1.0 / ASPECT_MAX:g} .. {ASPECT_MAX:g}"
-            )
+        semi_axes_within_aspect(self.a1, self.a2)
         finite("nu", self.nu)
         if not -1.0 < self.nu <= 0.5:
             raise InputError("nu", self.nu, "in (-1, 0.5]")

@@ -82,6 +82,16 @@ def within_scale(name: str, value: float, unit: str, detail: str = "") -> float:
     return value
 
 
+def semi_axes_within_aspect(a1: float, a2: float) -> None:
+    """InputError naming a1/a2 when the semi-axes' ratio lies beyond ASPECT_MAX either
+    way (1 - e^2 = (minor/major)^2 would lose its digits)."""
+    if max(a1, a2) / min(a1, a2) > ASPECT_MAX:
+        raise InputError(
+            "a1/a2", a1 / a2, f"within {1.0 / ASPECT_MAX:g} .. {ASPECT_MAX:g} (a longer "
+            "contact: LineContact)",
+        )  # fmt: skip
+
+
 def traction_bound(mu: float, p0: float) -> float:
     """mu p0 (Pa) if within SCALE_MIN .. SCALE_MAX, else InputError naming mu."""
     g = float(mu) * float(p0)  # Python floats: an overflow is inf, without a warning
@@ -315,12 +325,8 @@ def ellipse_curvatures(
     a1, a2, Estar = positive("a1", a1), positive("a2", a2), positive("Estar", Estar)
     if (P is None) == (delta is None):
         raise InputError("P, delta", (P, delta), "exactly one of them given")
+    semi_axes_within_aspect(a1, a2)
     major, minor = max(a1, a2), min(a1, a2)
-    if major / minor > ASPECT_MAX:  # 1 - e^2 = (minor/major)^2 would lose its digits
-        raise InputError(
-            "a1/a2", a1 / a2, f"within {1.0 / ASPECT_MAX:g} .. {ASPECT_MAX:g} (a longer "
-            "contact: LineContact)",
-        )  # fmt: skip
     m = 1.0 - (minor / major) ** 2
     K, E = float(ellipk(m)), float(ellipe(m))
     if m < 1e-8:  # circle: (K - E)/e^2 and ((a/b)^2 E - K)/e^2 both tend to pi/4

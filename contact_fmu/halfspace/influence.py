@@ -90,6 +90,11 @@ class Grid:
         """Cell centres along y (m), shape (ny,)."""
         return self.y0 + (np.arange(self.ny) + 0.5) * self.dy
 
+    @property
+    def reach(self) -> float:
+        """The largest |x|, |y| of the cell centres (m)."""
+        return max(float(np.abs(self.x).max()), float(np.abs(self.y).max()))
+
     def mesh(self) -> tuple[FloatArray, FloatArray]:
         """(X, Y) of the cell centres, each of shape (ny, nx); built once per grid and
         read-only (a solve asks for it several times)."""

@@ -341,10 +341,8 @@ class RollingPatch:
         """The rigid slip per element of a unit creepage, dx, and of a unit spin, dx R (R:
         the largest |x|, |y| of the grid), over the elastic displacement of the traction
         bound, max g/r (``creepage_scale``)."""
-        X, Y = self.grid.mesh()
-        reach = max(float(np.abs(X).max()), float(np.abs(Y).max()))
         unit = self.grid.dx / (float(self.g.max()) / self.r)
-        return unit, unit * reach
+        return unit, unit * self.grid.reach
 
     @cached_property
     def diag(self) -> FloatArray:
